@@ -1,0 +1,26 @@
+"""fluidfilm: reference models and machine-learned surrogates of fluid film bearings.
+
+Public API (kept stable for scripts, notebooks and outside checks)::
+
+    from fluidfilm import JournalBearing, ReynoldsSolver
+    solver = ReynoldsSolver(bearing, n_theta=30, n_z=30, cavitation="gumbel")
+    F = solver.forces(X, V)      # (..., 2) m, (..., 2) m/s -> (..., 2) N
+
+Every force model (reference solver, graded reference, surrogates) offers
+``.forces(X, V)``, ``.bearing`` and ``.force_kernel`` (a compiled function
+and its parameters), so the rotor integrator and controllers never care
+which one they run.
+"""
+from .bearing import JournalBearing, paper_bearing
+from .reynolds import CAVITATION_MODELS, GradedReynoldsModel, ReynoldsSolver
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "JournalBearing",
+    "paper_bearing",
+    "ReynoldsSolver",
+    "GradedReynoldsModel",
+    "CAVITATION_MODELS",
+    "__version__",
+]

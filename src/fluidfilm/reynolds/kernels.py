@@ -1,0 +1,408 @@
+"""Numba kernels of the finite-difference Reynolds solver, gathered in one place.
+
+The discrete problem (CONVENTIONS.md): on the grid of ``mesh.FilmMesh``, with
+H = h/c = 1 - e1 sin(theta) - e2 cos(theta) (e = X/c) and zeta = z/R,
+
+    d/dtheta(H^3 dp/dtheta) + H^3 d2p/dzeta2
+        = K_omega dH/dtheta + K_v (-V1 sin(theta) - V2 cos(theta)),
+
+    K_omega = 6 mu omega R^2 / c^2,   K_v = 12 mu R^2 / c^3,
+
+discretised conservatively with second-order central differences (H^3 taken
+at the cell faces theta_{i+1/2}, the Couette term as a difference of face
+values), periodic in theta, p = p_supply at z = 0 and p = 0 at z = L.
+
+Why it is fast: H does not depend on z, so the discrete z-operator is the
+plain second difference, which the discrete sine transform (DST-I)
+diagonalises exactly.  In sine space every axial mode k is one periodic
+tridiagonal system in theta,
+
+    (A_theta + lambda_k diag(H^3)) p_k = rhs_k,
+
+and the right-hand sides do not depend on z either, so they transform to a
+scalar per mode times one theta-vector.  Before cavitation the pressure is
+linear in (omega, V1, V2, p_supply): one factorisation per position serves
+every velocity.  With p_supply = 0 the field is symmetric about mid-length,
+so only odd modes appear and half the axial nodes need reconstructing.  The
+result is the exact solution of the finite-difference system (tests compare
+it with a sparse direct solve), not an approximation of it.
+
+Kernels:
+
+- ``position_modes``         per position: the periodic tridiagonal systems of
+                             all axial modes solved together (vectorised over
+                             modes), scaled so that p_hat = Q0 + V1*Qs + V2*Qc
+- ``integrate_modes``        per velocity: reconstruct the field from the
+                             modes, apply Gumbel clipping (or not), Simpson-
+                             integrate the force
+- ``film_force``             one force evaluation (position, velocity) ->
+                             (F1, F2); the compiled force kernel the rotor
+                             integrator calls
+- ``forces_batch``           many (X, V) pairs, parallel over pairs
+- ``forces_product``         every velocity at every position, one
+                             factorisation per position, parallel over positions
+- ``pressure_field``         the full (n_theta, n_z) field of one state
+- ``psor_swift_stieber``     Swift-Stieber (Reynolds) cavitation as a linear
+                             complementarity problem solved by projected SOR
+- ``film_force_ss``          force with Swift-Stieber cavitation
+
+``params`` is the tuple built by ``solver.build_params``; its layout is
+documented there.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+# cavitation codes used inside kernels
+CAV_NONE = 0
+CAV_GUMBEL = 1
+CAV_SWIFT_STIEBER = 2
+
+# Let LLVM reassociate sums so the inner loops over axial modes vectorise; no
+# finite-math assumptions (NaN/inf checks must keep working).
+_FAST = {"reassoc", "contract", "arcp"}
+
+
+@njit(cache=True)
+def film_thickness(params, e1, e2, h_node, h3_node, h3_face, h_face):
+    """Dimensionless film H = h/c at the nodes and faces theta_{i+1/2}."""
+    sin_n = params[2]
+    cos_n = params[3]
+    sin_f = params[4]
+    cos_f = params[5]
+    n = sin_n.shape[0]
+    for i in range(n):
+        h = 1.0 - e1 * sin_n[i] - e2 * cos_n[i]
+        h_node[i] = h
+        h3_node[i] = h * h * h
+        hf = 1.0 - e1 * sin_f[i] - e2 * cos_f[i]
+        h_face[i] = hf
+        h3_face[i] = hf * hf * hf
+
+
+@njit(cache=True, fastmath=_FAST)
+def position_modes(params, e1, e2, q0, qs, qc):
+    """Solve every used axial mode at one position, all modes at once.
+
+    Fills ``q0, qs, qc`` (n_theta, n_modes) so that the sine coefficients of
+    the pressure at velocity (V1, V2) are ``q0 + V1*qs + V2*qc`` (q0 holds the
+    Couette and supply-pressure parts).
+
+    Each mode is a periodic tridiagonal system; they share the off-diagonals
+    and right-hand sides and differ only in the diagonal, so the Thomas
+    recurrences run over theta with the modes as the inner, vectorised loop
+    (Sherman-Morrison for the periodic corners, Numerical Recipes' ``cyclic``).
+    The systems are strictly diagonally dominant, so no pivoting is needed.
+    """
+    n = params[0]
+    sin_n = params[2]
+    cos_n = params[3]
+    inv_dth2 = params[7]
+    inv_dth = params[8]
+    lam = params[9]  # lambda_k / dzeta^2, negative
+    sig = params[10]  # transform of the z-constant right-hand side
+    tau = params[11]  # transform of the supply-pressure row (j = 1)
+    k_omega = params[14]
+    k_v = params[15]
+    supply_term = params[16]  # -p_supply / dzeta^2
+    nk = lam.shape[0]
+    with_supply = supply_term != 0.0
+    h = np.empty(n)
+    h3 = np.empty(n)
+    h3f = np.empty(n)
+    hf = np.empty(n)
+    film_thickness(params, e1, e2, h, h3, h3f, hf)
+    lo = np.empty(n)
+    up = np.empty(n)
+    r_w = np.empty(n)
+    for i in range(n):
+        im = i - 1 if i > 0 else n - 1
+        lo[i] = h3f[im] * inv_dth2
+        up[i] = h3f[i] * inv_dth2
+        r_w[i] = (hf[i] - hf[im]) * inv_dth
+    alpha = up[n - 1]  # coefficient of x[0] in the last row
+    beta = lo[0]  # coefficient of x[n-1] in the first row
+    cp = np.empty((n, nk))
+    zz = np.empty((n, nk))
+    xp = np.empty((n, nk)) if with_supply else np.empty((1, 1))
+    gamma = np.empty(nk)
+    bn = np.empty(nk)
+    d0 = -(lo[0] + up[0])
+    dn = -(lo[n - 1] + up[n - 1])
+    for k in range(nk):
+        dk = d0 + lam[k] * h3[0]
+        gamma[k] = -dk
+        bn[k] = dn + lam[k] * h3[n - 1] + alpha * beta / dk
+    # forward elimination, all right-hand sides and the correction vector together
+    for k in range(nk):
+        inv = 1.0 / (2.0 * (d0 + lam[k] * h3[0]))
+        cp[0, k] = up[0] * inv
+        zz[0, k] = gamma[k] * inv
+        q0[0, k] = r_w[0] * inv
+        qs[0, k] = -sin_n[0] * inv
+        qc[0, k] = -cos_n[0] * inv
+        if with_supply:
+            xp[0, k] = h3[0] * inv
+    for i in range(1, n):
+        di = -(lo[i] + up[i])
+        li = lo[i]
+        ui = alpha if i == n - 1 else 0.0
+        last = i == n - 1
+        for k in range(nk):
+            bi = bn[k] if last else di + lam[k] * h3[i]
+            inv = 1.0 / (bi - li * cp[i - 1, k])
+            cp[i, k] = up[i] * inv
+            zz[i, k] = (ui - li * zz[i - 1, k]) * inv
+            q0[i, k] = (r_w[i] - li * q0[i - 1, k]) * inv
+            qs[i, k] = (-sin_n[i] - li * qs[i - 1, k]) * inv
+            qc[i, k] = (-cos_n[i] - li * qc[i - 1, k]) * inv
+            if with_supply:
+                xp[i, k] = (h3[i] - li * xp[i - 1, k]) * inv
+    for i in range(n - 2, -1, -1):
+        for k in range(nk):
+            c = cp[i, k]
+            zz[i, k] -= c * zz[i + 1, k]
+            q0[i, k] -= c * q0[i + 1, k]
+            qs[i, k] -= c * qs[i + 1, k]
+            qc[i, k] -= c * qc[i + 1, k]
+            if with_supply:
+                xp[i, k] -= c * xp[i + 1, k]
+    # Sherman-Morrison correction, then the per-mode scaling of the transforms
+    f0 = np.empty(nk)
+    fs = np.empty(nk)
+    fc = np.empty(nk)
+    fp = np.zeros(nk)
+    for k in range(nk):
+        g = beta / gamma[k]
+        zden = 1.0 / (1.0 + zz[0, k] + g * zz[n - 1, k])
+        f0[k] = (q0[0, k] + g * q0[n - 1, k]) * zden
+        fs[k] = (qs[0, k] + g * qs[n - 1, k]) * zden
+        fc[k] = (qc[0, k] + g * qc[n - 1, k]) * zden
+        if with_supply:
+            fp[k] = (xp[0, k] + g * xp[n - 1, k]) * zden
+    for i in range(n):
+        for k in range(nk):
+            z = zz[i, k]
+            a = sig[k] * k_omega * (q0[i, k] - f0[k] * z)
+            if with_supply:
+                a += tau[k] * supply_term * (xp[i, k] - fp[k] * z)
+            q0[i, k] = a
+            qs[i, k] = sig[k] * k_v * (qs[i, k] - fs[k] * z)
+            qc[i, k] = sig[k] * k_v * (qc[i, k] - fc[k] * z)
+
+
+@njit(cache=True, fastmath=_FAST)
+def integrate_modes(params, q0, qs, qc, v1, v2, cavitation, phat):
+    """Force (F1, F2) from the mode solutions at velocity (V1, V2).
+
+    Reconstructs the pressure at the axial nodes that matter (half of them
+    when the field is symmetric), clips it for Gumbel cavitation, and sums
+    with the Simpson weights: F = -R * sum w_theta w_z p (sin, cos).
+    """
+    n = params[0]
+    a_sin = params[17]  # R * w_theta * sin(theta)
+    a_cos = params[18]  # R * w_theta * cos(theta)
+    basis = params[19]  # (n_rec, n_modes) sine basis at reconstructed nodes
+    w_rec = params[20]  # folded Simpson z-weights of reconstructed nodes
+    boundary = params[21]  # contribution of the prescribed end rows per unit (sum of w_z p there)
+    nk = q0.shape[1]
+    nj = basis.shape[0]
+    f1 = 0.0
+    f2 = 0.0
+    for i in range(n):
+        for k in range(nk):
+            phat[k] = q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]
+        col = boundary
+        for j in range(nj):
+            acc = 0.0
+            for k in range(nk):
+                acc += phat[k] * basis[j, k]
+            if cavitation == CAV_GUMBEL:
+                if acc > 0.0:
+                    col += w_rec[j] * acc
+            else:
+                col += w_rec[j] * acc
+        f1 -= a_sin[i] * col
+        f2 -= a_cos[i] * col
+    return f1, f2
+
+
+@njit(cache=True)
+def film_force(params, x1, x2, v1, v2):
+    """One force evaluation: journal at (x1, x2) [m] moving at (v1, v2) [m/s] -> (F1, F2) [N].
+
+    Gumbel or no cavitation (``params[1]``).  This is the compiled force
+    kernel that ``fluidfilm.rotor`` integrates; a surrogate provides a kernel
+    of the same signature.
+    """
+    n = params[0]
+    inv_c = params[6]
+    nk = params[9].shape[0]
+    q0 = np.empty((n, nk))
+    qs = np.empty((n, nk))
+    qc = np.empty((n, nk))
+    phat = np.empty(nk)
+    position_modes(params, x1 * inv_c, x2 * inv_c, q0, qs, qc)
+    return integrate_modes(params, q0, qs, qc, v1, v2, params[1], phat)
+
+
+@njit(cache=True, parallel=True)
+def forces_batch(params, x, v, out):
+    """Forces for N (position, velocity) pairs, parallel over pairs."""
+    for p in prange(x.shape[0]):
+        f1, f2 = film_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        out[p, 0] = f1
+        out[p, 1] = f2
+
+
+@njit(cache=True, parallel=True)
+def forces_product(params, x, v, out):
+    """Forces for every velocity v[q] at every position x[p] -> out[p, q, :].
+
+    One factorisation per position (the pressure is linear in the velocity
+    before cavitation), parallel over positions.
+    """
+    n = params[0]
+    inv_c = params[6]
+    nk = params[9].shape[0]
+    cav = params[1]
+    for p in prange(x.shape[0]):
+        q0 = np.empty((n, nk))
+        qs = np.empty((n, nk))
+        qc = np.empty((n, nk))
+        phat = np.empty(nk)
+        position_modes(params, x[p, 0] * inv_c, x[p, 1] * inv_c, q0, qs, qc)
+        for q in range(v.shape[0]):
+            f1, f2 = integrate_modes(params, q0, qs, qc, v[q, 0], v[q, 1], cav, phat)
+            out[p, q, 0] = f1
+            out[p, q, 1] = f2
+
+
+@njit(cache=True)
+def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
+    """Pressure before cavitation on the whole (n_theta, n_z) grid, boundaries included."""
+    n = params[0]
+    inv_c = params[6]
+    nk = params[9].shape[0]
+    q0 = np.empty((n, nk))
+    qs = np.empty((n, nk))
+    qc = np.empty((n, nk))
+    position_modes(params, x1 * inv_c, x2 * inv_c, q0, qs, qc)
+    nz = out.shape[1]
+    for i in range(n):
+        out[i, 0] = p_supply
+        out[i, nz - 1] = 0.0
+        for j in range(1, nz - 1):
+            acc = 0.0
+            for k in range(nk):
+                acc += (q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]) * full_basis[j - 1, k]
+            out[i, j] = acc
+
+
+@njit(cache=True)
+def psor_swift_stieber(params, x1, x2, v1, v2, p, omega_sor, tol, max_iter):
+    """Swift-Stieber (Reynolds) cavitation as a linear complementarity problem.
+
+    Writing the discrete Reynolds equation as ``G(p) = A p - rhs = 0`` (A the
+    negative-definite operator), the solution satisfies p >= 0, G(p) <= 0
+    where p = 0 and G(p) = 0 where p > 0: in the grid limit the film-rupture
+    conditions p = 0 and dp/dn = 0 at the cavitation boundary.
+    Projected SOR (Cryer 1971) from the initial field in ``p`` (the Gumbel
+    field is a good start).  ``p`` is the full (n_theta, n_z) array with the
+    boundary rows set; updated in place.  Returns the number of sweeps, or
+    -1 if ``max_iter`` sweeps did not reach ``tol`` (max change relative to
+    the largest pressure).
+    """
+    n = params[0]
+    sin_n = params[2]
+    cos_n = params[3]
+    inv_c = params[6]
+    inv_dth2 = params[7]
+    inv_dth = params[8]
+    inv_dz2 = params[12]
+    k_omega = params[14]
+    k_v = params[15]
+    nz = p.shape[1]
+    h = np.empty(n)
+    h3 = np.empty(n)
+    h3f = np.empty(n)
+    hf = np.empty(n)
+    film_thickness(params, x1 * inv_c, x2 * inv_c, h, h3, h3f, hf)
+    aw = np.empty(n)
+    ae = np.empty(n)
+    an = np.empty(n)
+    inv_ap = np.empty(n)
+    rhs = np.empty(n)
+    for i in range(n):
+        im = i - 1 if i > 0 else n - 1
+        aw[i] = h3f[im] * inv_dth2
+        ae[i] = h3f[i] * inv_dth2
+        an[i] = h3[i] * inv_dz2
+        inv_ap[i] = 1.0 / (aw[i] + ae[i] + 2.0 * an[i])
+        rhs[i] = k_omega * (hf[i] - hf[im]) * inv_dth + k_v * (-v1 * sin_n[i] - v2 * cos_n[i])
+    for it in range(max_iter):
+        dmax = 0.0
+        pmax = 0.0
+        for i in range(n):
+            im = i - 1 if i > 0 else n - 1
+            ip = i + 1 if i < n - 1 else 0
+            for j in range(1, nz - 1):
+                gs = (ae[i] * p[ip, j] + aw[i] * p[im, j] + an[i] * (p[i, j + 1] + p[i, j - 1]) - rhs[i]) * inv_ap[i]
+                new = p[i, j] + omega_sor * (gs - p[i, j])
+                if new < 0.0:
+                    new = 0.0
+                d = abs(new - p[i, j])
+                if d > dmax:
+                    dmax = d
+                if new > pmax:
+                    pmax = new
+                p[i, j] = new
+        if dmax <= tol * pmax or pmax == 0.0:
+            return it + 1
+    return -1
+
+
+@njit(cache=True)
+def integrate_field(params, p):
+    """Simpson integral of a full (n_theta, n_z) field: F = -R sum w_theta w_z p (sin, cos)."""
+    a_sin = params[17]
+    a_cos = params[18]
+    w_z = params[22]
+    n = p.shape[0]
+    f1 = 0.0
+    f2 = 0.0
+    for i in range(n):
+        col = 0.0
+        for j in range(p.shape[1]):
+            col += w_z[j] * p[i, j]
+        f1 -= a_sin[i] * col
+        f2 -= a_cos[i] * col
+    return f1, f2
+
+
+@njit(cache=True)
+def film_force_ss(params, x1, x2, v1, v2):
+    """One force evaluation with Swift-Stieber cavitation (same signature as ``film_force``)."""
+    n = params[0]
+    full_basis = params[26]
+    nz = full_basis.shape[0] + 2
+    p = np.empty((n, nz))
+    linear_field(params, x1, x2, v1, v2, full_basis, params[27], p)
+    for i in range(n):
+        for j in range(nz):
+            if p[i, j] < 0.0:
+                p[i, j] = 0.0
+    it = psor_swift_stieber(params, x1, x2, v1, v2, p, params[23], params[24], params[25])
+    if it < 0:
+        raise RuntimeError("projected SOR (Swift-Stieber cavitation) did not converge; raise sor_max_iter")
+    return integrate_field(params, p)
+
+
+@njit(cache=True, parallel=True)
+def forces_batch_ss(params, x, v, out):
+    """``forces_batch`` with Swift-Stieber cavitation."""
+    for p in prange(x.shape[0]):
+        f1, f2 = film_force_ss(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        out[p, 0] = f1
+        out[p, 1] = f2

@@ -1,0 +1,259 @@
+"""``ReynoldsSolver``: the finite-length Reynolds equation of a journal bearing by finite differences.
+
+The discretisation and the fast separable solve are described in
+``kernels``; this module validates input, builds the kernel parameters and
+offers the public, vectorised API shared by every force model:
+
+    solver.forces(X, V)  (..., 2) m, (..., 2) m/s -> (..., 2) N
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..bearing import JournalBearing
+from . import kernels
+from .mesh import FilmMesh
+
+CAVITATION_MODELS = ("gumbel", "swift-stieber", "none")
+_CAV_CODES = {"gumbel": kernels.CAV_GUMBEL, "none": kernels.CAV_NONE, "swift-stieber": kernels.CAV_SWIFT_STIEBER}
+
+
+def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str,
+                 sor_omega: float, sor_tol: float, sor_max_iter: int) -> tuple:
+    """Kernel parameters, a flat tuple (numba-friendly).  Layout:
+
+    0 n_theta, 1 cavitation code, 2-3 sin/cos theta at nodes, 4-5 sin/cos at
+    faces theta_{i+1/2}, 6 1/c, 7 1/dtheta^2, 8 1/dtheta, 9 lambda_k/dzeta^2,
+    10 sigma_k (transform of a z-constant vector), 11 tau_k (transform of the
+    row next to the supply end), 12 1/dzeta^2, 13 R, 14 K_omega, 15 K_v,
+    16 -p_supply/dzeta^2, 17-18 R w_theta sin/cos theta, 19 sine basis at the
+    reconstructed axial nodes, 20 their (folded) Simpson weights, 21 boundary
+    rows' contribution w_z[0] p_supply, 22 w_z, 23-25 PSOR omega, tol,
+    max_iter, 26 sine basis at every interior node, 27 p_supply.
+    """
+    r = bearing.radius
+    c = bearing.clearance
+    mu = bearing.viscosity
+    n = mesh.n_theta
+    m = mesh.n_z - 2  # interior axial nodes
+    dzeta = mesh.dz / r
+    theta_f = mesh.theta + 0.5 * mesh.dtheta
+    p_s = bearing.supply_pressure
+    symmetric = p_s == 0.0
+    k_all = np.arange(1, m + 1)
+    # with no supply pressure the field is symmetric in z: even modes vanish exactly
+    k_used = k_all[k_all % 2 == 1] if symmetric else k_all
+    j_int = np.arange(1, m + 1)
+    lam = -4.0 * np.sin(np.pi * k_used / (2.0 * (m + 1))) ** 2 / dzeta**2
+    sig = (2.0 / (m + 1)) * np.sin(np.pi * np.outer(k_used, j_int) / (m + 1)).sum(axis=1)
+    tau = (2.0 / (m + 1)) * np.sin(np.pi * k_used / (m + 1))
+    full_basis = np.ascontiguousarray(np.sin(np.pi * np.outer(j_int, k_used) / (m + 1)))
+    w_z = mesh.w_z
+    if symmetric:
+        j_rec = np.arange(1, (m + 1) // 2 + 1 + (0 if m % 2 == 0 else 0))
+        j_rec = j_rec[j_rec <= m + 1 - j_rec]
+        w_rec = np.array([w_z[j] + (w_z[m + 1 - j] if j != m + 1 - j else 0.0) for j in j_rec])
+    else:
+        j_rec = j_int
+        w_rec = w_z[1:-1].copy()
+    basis = np.ascontiguousarray(full_basis[j_rec - 1])
+    a_sin = r * mesh.w_theta * np.sin(mesh.theta)
+    a_cos = r * mesh.w_theta * np.cos(mesh.theta)
+    return (
+        n,
+        _CAV_CODES[cavitation],
+        np.sin(mesh.theta), np.cos(mesh.theta), np.sin(theta_f), np.cos(theta_f),
+        1.0 / c,
+        1.0 / mesh.dtheta**2, 1.0 / mesh.dtheta,
+        lam, sig, tau,
+        1.0 / dzeta**2,
+        r,
+        6.0 * mu * bearing.omega * r**2 / c**2,
+        12.0 * mu * r**2 / c**3,
+        -p_s / dzeta**2,
+        a_sin, a_cos,
+        basis, w_rec,
+        w_z[0] * p_s,
+        w_z.copy(),
+        float(sor_omega), float(sor_tol), int(sor_max_iter),
+        full_basis,
+        float(p_s),
+    )
+
+
+def _as_pairs(X, V, clearance: float):
+    """Validate and broadcast positions and velocities to flat (N, 2) arrays."""
+    X = np.asarray(X, dtype=np.float64)
+    V = np.asarray(V, dtype=np.float64)
+    if X.ndim == 0 or X.shape[-1] != 2:
+        raise ValueError(f"X must have a last axis of length 2 (X1, X2) in m, got shape {X.shape}")
+    if V.ndim == 0 or V.shape[-1] != 2:
+        raise ValueError(f"V must have a last axis of length 2 (V1, V2) in m/s, got shape {V.shape}")
+    try:
+        X, V = np.broadcast_arrays(X, V)
+    except ValueError as err:
+        raise ValueError(f"X of shape {X.shape} and V of shape {V.shape} do not broadcast") from err
+    shape = X.shape[:-1]
+    x = np.ascontiguousarray(X.reshape(-1, 2))
+    v = np.ascontiguousarray(V.reshape(-1, 2))
+    check_states(x, v, clearance)
+    return x, v, shape
+
+
+def check_states(x: np.ndarray, v: np.ndarray, clearance: float) -> None:
+    """Raise ``ValueError`` naming the first non-finite value or eccentricity >= 1."""
+    if not np.isfinite(x).all():
+        bad = x[~np.isfinite(x).all(axis=1)][0]
+        raise ValueError(f"position X must be finite, got {tuple(bad)}")
+    if not np.isfinite(v).all():
+        bad = v[~np.isfinite(v).all(axis=1)][0]
+        raise ValueError(f"velocity V must be finite, got {tuple(bad)}")
+    if x.size:
+        eps = np.hypot(x[:, 0], x[:, 1]) / clearance
+        k = int(np.argmax(eps))
+        if eps[k] >= 1.0:
+            raise ValueError(
+                f"eccentricity ratio {eps[k]:.6g} >= 1 at X={tuple(x[k])} m: the journal touches the "
+                f"sleeve (clearance {clearance} m)"
+            )
+
+
+class ReynoldsSolver:
+    """Finite-difference solution of the finite-length Reynolds equation.
+
+    >>> solver = ReynoldsSolver(bearing, n_theta=30, n_z=30, cavitation="gumbel")
+    >>> F = solver.forces(X, V)          # (..., 2) N, the film's force on the journal
+    >>> p = solver.pressure(x, v)        # (n_theta, n_z) Pa at solver.theta x solver.z
+
+    ``cavitation``: ``"gumbel"`` (half-Sommerfeld: negative pressures set to
+    zero after the linear solve; the paper's model, default),
+    ``"swift-stieber"`` (Reynolds condition as a complementarity problem,
+    projected SOR) or ``"none"`` (full Sommerfeld, negative pressures kept;
+    for verification).
+    """
+
+    def __init__(self, bearing: JournalBearing, n_theta: int = 30, n_z: int = 30,
+                 cavitation: str = "gumbel", sor_omega: float | None = None,
+                 sor_tol: float = 1e-10, sor_max_iter: int = 200_000):
+        if not isinstance(bearing, JournalBearing):
+            raise ValueError(f"bearing must be a JournalBearing, got {type(bearing).__name__}")
+        if cavitation not in CAVITATION_MODELS:
+            raise ValueError(f"unknown cavitation model {cavitation!r}; choose one of {CAVITATION_MODELS}")
+        self._bearing = bearing
+        self.mesh = FilmMesh(n_theta, n_z, bearing.length)
+        self.cavitation = cavitation
+        if sor_omega is None:
+            # near the optimum of SOR for a Poisson-like operator on this grid
+            sor_omega = 2.0 / (1.0 + math.sin(math.pi / max(self.mesh.n_theta, self.mesh.n_z)))
+        if not 0.0 < sor_omega < 2.0:
+            raise ValueError(f"sor_omega must lie in (0, 2), got {sor_omega!r}")
+        if not sor_tol > 0.0:
+            raise ValueError(f"sor_tol must be positive, got {sor_tol!r}")
+        self.params = build_params(bearing, self.mesh, cavitation, sor_omega, sor_tol, sor_max_iter)
+        self._c = bearing.clearance
+        ss = cavitation == "swift-stieber"
+        self._kernel = kernels.film_force_ss if ss else kernels.film_force
+        self._batch = kernels.forces_batch_ss if ss else kernels.forces_batch
+
+    # --- read-only description ---------------------------------------------
+    @property
+    def bearing(self) -> JournalBearing:
+        return self._bearing
+
+    @property
+    def n_theta(self) -> int:
+        return self.mesh.n_theta
+
+    @property
+    def n_z(self) -> int:
+        return self.mesh.n_z
+
+    @property
+    def theta(self) -> np.ndarray:
+        return self.mesh.theta.copy()
+
+    @property
+    def z(self) -> np.ndarray:
+        return self.mesh.z.copy()
+
+    @property
+    def force_kernel(self):
+        """(compiled function, params): ``fn(params, x1, x2, v1, v2) -> (F1, F2)`` for compiled callers."""
+        return self._kernel, self.params
+
+    def __repr__(self) -> str:
+        return f"ReynoldsSolver({self.n_theta}x{self.n_z}, cavitation={self.cavitation!r})"
+
+    # --- evaluation ------------------------------------------------------------
+    def forces(self, X, V) -> np.ndarray:
+        """Film force on the journal [N] at positions X [m] and velocities V [m/s], shape (..., 2)."""
+        if np.shape(X) == (2,) and np.shape(V) == (2,):
+            # single state: the path a Python-level integrator takes, kept lean
+            x1, x2 = float(X[0]), float(X[1])
+            v1, v2 = float(V[0]), float(V[1])
+            if not (math.isfinite(x1) and math.isfinite(x2)):
+                raise ValueError(f"position X must be finite, got {(x1, x2)}")
+            if not (math.isfinite(v1) and math.isfinite(v2)):
+                raise ValueError(f"velocity V must be finite, got {(v1, v2)}")
+            eps = math.hypot(x1, x2) / self._c
+            if eps >= 1.0:
+                check_states(np.array([[x1, x2]]), np.array([[v1, v2]]), self._c)
+            return np.array(self._kernel(self.params, x1, x2, v1, v2))
+        x, v, shape = _as_pairs(X, V, self._c)
+        out = np.empty_like(x)
+        if x.shape[0]:
+            self._batch(self.params, x, v, out)
+        return out.reshape(shape + (2,))
+
+    def forces_product(self, X, V) -> np.ndarray:
+        """Forces for every velocity at every position: X (P, 2), V (Q, 2) -> (P, Q, 2).
+
+        One factorisation per position serves all its velocities; positions
+        run in parallel.  This is the dataset generator's path.
+        """
+        x = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 2))
+        v = np.ascontiguousarray(np.asarray(V, dtype=np.float64).reshape(-1, 2))
+        check_states(x, v, self._c)
+        if self.cavitation == "swift-stieber":
+            xx = np.repeat(x, v.shape[0], axis=0)
+            vv = np.tile(v, (x.shape[0], 1))
+            return self.forces(xx, vv).reshape(x.shape[0], v.shape[0], 2)
+        out = np.empty((x.shape[0], v.shape[0], 2))
+        if out.size:
+            kernels.forces_product(self.params, x, v, out)
+        return out
+
+    def pressure(self, x, v) -> np.ndarray:
+        """Pressure field [Pa] of one state, shape (n_theta, n_z), after the cavitation model."""
+        xa, va, shape = _as_pairs(x, v, self._c)
+        if xa.shape[0] != 1:
+            raise ValueError(f"pressure takes one position and one velocity, got shapes {np.shape(x)}, {np.shape(v)}")
+        x1, x2 = xa[0]
+        v1, v2 = va[0]
+        p = self.linear_pressure(xa[0], va[0])
+        if self.cavitation == "none":
+            return p
+        np.maximum(p, 0.0, out=p)
+        if self.cavitation == "swift-stieber":
+            it = kernels.psor_swift_stieber(self.params, x1, x2, v1, v2, p,
+                                            self.params[23], self.params[24], self.params[25])
+            if it < 0:
+                raise RuntimeError("projected SOR did not converge; raise sor_max_iter")
+        return p
+
+    def linear_pressure(self, x, v) -> np.ndarray:
+        """Pressure field before any cavitation model (the full-Sommerfeld linear solution)."""
+        xa, va, _ = _as_pairs(x, v, self._c)
+        out = np.empty((self.n_theta, self.n_z))
+        kernels.linear_field(self.params, xa[0, 0], xa[0, 1], va[0, 0], va[0, 1],
+                             self.params[26], self.params[27], out)
+        return out
+
+    def integrate(self, p) -> np.ndarray:
+        """Force [N] of a pressure field on this grid by Simpson integration."""
+        p = np.ascontiguousarray(p, dtype=np.float64)
+        if p.shape != (self.n_theta, self.n_z):
+            raise ValueError(f"pressure field must have shape {(self.n_theta, self.n_z)}, got {p.shape}")
+        return np.array(kernels.integrate_field(self.params, p))
