@@ -1,0 +1,26 @@
+"""Build library objects from plain mappings (Hydra/OmegaConf nodes, dicts, YAML).
+
+The library imports no Hydra; entry points pass their config nodes here.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from .bearing import JournalBearing
+from .reynolds import GradedReynoldsModel, ReynoldsSolver
+
+
+def bearing_from_cfg(cfg: Mapping) -> JournalBearing:
+    return JournalBearing.from_dict(cfg)
+
+
+def solver_from_cfg(bearing: JournalBearing, cfg: Mapping) -> ReynoldsSolver:
+    return ReynoldsSolver(bearing, n_theta=cfg["n_theta"], n_z=cfg["n_z"],
+                          cavitation=cfg.get("cavitation", "gumbel"))
+
+
+def reference_from_cfg(bearing: JournalBearing, cfg: Mapping) -> GradedReynoldsModel:
+    """The paper's graded reference model (coarse grid below eps_threshold, dense above)."""
+    return GradedReynoldsModel(bearing, coarse=tuple(cfg["coarse"]), dense=tuple(cfg["dense"]),
+                               eps_threshold=cfg["eps_threshold"],
+                               cavitation=cfg.get("cavitation", "gumbel"))

@@ -1,0 +1,152 @@
+"""The reference model's studies behind the paper's Fig. 2 and Fig. 3, and the grid study.
+
+Each study returns a pandas DataFrame (what goes to CSV) and has a plotting
+function (what goes to PNG); entry points in ``experiments/`` only compose
+them.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pandas as pd
+
+from .reynolds import ReynoldsSolver
+
+
+def _direction(angle_deg: float) -> np.ndarray:
+    """Unit vector at ``angle_deg`` from +X2 towards +X1 (theta's convention)."""
+    a = math.radians(angle_deg)
+    return np.array([math.sin(a), math.cos(a)])
+
+
+def grid_comparison(solvers: dict[str, ReynoldsSolver], eccentricities, angle_deg: float = 0.0,
+                    reference: str | None = None) -> pd.DataFrame:
+    """Fig. 2: static reaction (journal at rest) against eccentricity for several grids.
+
+    Columns: eps, then for each solver ``F1_<name>, F2_<name>, F_<name>`` [N] and,
+    when ``reference`` names one of them, ``err_<name>_pct`` (relative error of |F|).
+    """
+    eps = np.asarray(eccentricities, dtype=float)
+    c = next(iter(solvers.values())).bearing.clearance
+    X = eps[:, None] * c * _direction(angle_deg)[None, :]
+    frame = pd.DataFrame({"eps": eps})
+    for name, solver in solvers.items():
+        F = solver.forces(X, np.zeros_like(X))
+        frame[f"F1_{name}"] = F[:, 0]
+        frame[f"F2_{name}"] = F[:, 1]
+        frame[f"F_{name}"] = np.hypot(F[:, 0], F[:, 1])
+    if reference is not None:
+        ref = frame[f"F_{reference}"].to_numpy()
+        for name in solvers:
+            if name != reference:
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    err = np.where(ref > 0, 100.0 * (frame[f"F_{name}"] - ref) / ref, 0.0)
+                frame[f"err_{name}_pct"] = err
+    return frame
+
+
+def velocity_response(model, eccentricities, v_max: float, n_v: int, angle_deg: float = 0.0) -> pd.DataFrame:
+    """Fig. 3: reaction against the journal's velocity at several eccentricities.
+
+    The velocity is swept along the line of centres (radial, squeeze) and
+    across it (tangential), the other component zero.  Long format: eps,
+    direction ('radial' | 'tangential'), V1, V2, v (signed speed), F1, F2.
+    """
+    c = model.bearing.clearance
+    e_r = _direction(angle_deg)
+    e_t = _direction(angle_deg + 90.0)
+    speeds = np.linspace(-v_max, v_max, n_v)
+    rows = []
+    for eps in eccentricities:
+        x = eps * c * e_r
+        for name, unit in (("radial", e_r), ("tangential", e_t)):
+            V = speeds[:, None] * unit[None, :]
+            F = model.forces(np.broadcast_to(x, V.shape), V)
+            rows.append(pd.DataFrame({"eps": eps, "direction": name, "V1": V[:, 0], "V2": V[:, 1],
+                                      "v": speeds, "F1": F[:, 0], "F2": F[:, 1]}))
+    return pd.concat(rows, ignore_index=True)
+
+
+def time_per_evaluation(model, x, v, repeats: int = 7, calls: int = 200) -> float:
+    """Median wall time [s] of one ``forces(x, v)`` call (Python call included)."""
+    model.forces(x, v)  # compile / warm up
+    samples = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(calls):
+            model.forces(x, v)
+        samples.append((time.perf_counter() - t0) / calls)
+    return float(np.median(samples))
+
+
+def grid_error_study(solver: ReynoldsSolver, converged: ReynoldsSolver, eccentricities,
+                     angle_deg: float = 0.0, repeats: int = 7, calls: int = 200) -> dict:
+    """Force error of ``solver`` against ``converged`` and its time per evaluation."""
+    c = solver.bearing.clearance
+    d = _direction(angle_deg)
+    out = {}
+    errs = []
+    for eps in eccentricities:
+        x = eps * c * d
+        f = np.hypot(*solver.forces(x, [0.0, 0.0]))
+        f_ref = np.hypot(*converged.forces(x, [0.0, 0.0]))
+        err = 100.0 * abs(f - f_ref) / f_ref
+        errs.append(err)
+        out[f"force_error_pct_eps_{eps:g}"] = err
+    out["force_error_pct_max"] = float(max(errs))
+    out["time_per_eval_us"] = 1e6 * time_per_evaluation(solver, 0.5 * c * d, [0.01, -0.01], repeats, calls)
+    return out
+
+
+# --------------------------------------------------------------------------- plots
+def plot_grid_comparison(frame: pd.DataFrame, names: list[str], labels: dict[str, str], reference: str):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax, ax_err) = plt.subplots(2, 1, figsize=(6.4, 7.0), sharex=True,
+                                     gridspec_kw={"height_ratios": [2, 1]})
+    for name in names:
+        ax.semilogy(frame["eps"], frame[f"F_{name}"], label=labels.get(name, name))
+    ax.semilogy(frame["eps"], frame[f"F_{reference}"], "k--", lw=0.8, label=labels.get(reference, reference))
+    ax.set_ylabel("|F| [N]")
+    ax.set_title("Fig. 2 - film reaction against eccentricity (journal at rest)")
+    ax.axvspan(0.9, frame["eps"].max(), color="0.9")
+    ax.legend()
+    ax.grid(True, which="both", alpha=0.3)
+    for name in names:
+        ax_err.plot(frame["eps"], frame[f"err_{name}_pct"], label=labels.get(name, name))
+    ax_err.axhline(0.0, color="k", lw=0.6)
+    ax_err.axvspan(0.9, frame["eps"].max(), color="0.9")
+    ax_err.set_xlabel("eccentricity ratio eps")
+    ax_err.set_ylabel(f"error vs {labels.get(reference, reference)} [%]")
+    ax_err.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def plot_velocity_response(frame: pd.DataFrame):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 2, figsize=(9.0, 7.0), sharex=True)
+    for col, direction in enumerate(("radial", "tangential")):
+        sub = frame[frame["direction"] == direction]
+        for eps, g in sub.groupby("eps"):
+            for row, comp in enumerate(("F1", "F2")):
+                axes[row, col].plot(g["v"], g[comp], label=f"eps = {eps:g}")
+        axes[1, col].set_xlabel(f"{direction} velocity [m/s]")
+    for row, comp in enumerate(("F1", "F2")):
+        for col in range(2):
+            axes[row, col].set_yscale("symlog", linthresh=10.0)
+            axes[row, col].grid(True, alpha=0.3)
+        axes[row, 0].set_ylabel(f"{comp} [N]")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("Fig. 3 - film reaction against journal velocity")
+    fig.tight_layout()
+    return fig
