@@ -13,6 +13,7 @@ which one they run.
 """
 from .bearing import JournalBearing, paper_bearing
 from .reynolds import CAVITATION_MODELS, GradedReynoldsModel, ReynoldsSolver
+from .rotor import LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, simulate
 
 __version__ = "0.1.0"
 
@@ -22,5 +23,11 @@ __all__ = [
     "ReynoldsSolver",
     "GradedReynoldsModel",
     "CAVITATION_MODELS",
+    "Rotor",
+    "simulate",
+    "Trajectory",
+    "LinearBearing",
+    "equilibrium",
+    "equilibrium_locus",
     "__version__",
 ]

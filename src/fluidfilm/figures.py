@@ -150,3 +150,46 @@ def plot_velocity_response(frame: pd.DataFrame):
     fig.suptitle("Fig. 3 - film reaction against journal velocity")
     fig.tight_layout()
     return fig
+
+
+def plot_orbits(panels: dict, clearance: float, t_settle: float, title: str):
+    """Fig. 4: one panel per case; each panel overlays the trajectories of several models.
+
+    ``panels``: {case_name: (label, {model_name: Trajectory})}.  The transient
+    is drawn thin, the settled orbit thick; axes in units of the clearance
+    with the clearance circle.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(panels)
+    cols = min(4, n)
+    rows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(3.3 * cols, 3.4 * rows), squeeze=False)
+    styles = {"reference": dict(color="k"), "single": dict(color="tab:red", ls="--"),
+              "split": dict(color="tab:blue", ls=":"), "best": dict(color="tab:green", ls="-.")}
+    phi = np.linspace(0, 2 * np.pi, 200)
+    for ax, (case, (label, trajs)) in zip(axes.flat, panels.items()):
+        ax.plot(np.cos(phi), np.sin(phi), color="0.7", lw=0.8)
+        for k, (name, tr) in enumerate(trajs.items()):
+            st = styles.get(name, dict(color=f"C{k}"))
+            x = tr.x / clearance
+            done = tr.t >= t_settle
+            ax.plot(x[:, 0], x[:, 1], lw=0.4, alpha=0.5, **st)
+            ax.plot(x[done, 0], x[done, 1], lw=1.6, label=name if tr.ok else f"{name} ({tr.status.split(':')[0]})",
+                    **st)
+        ax.set_title(f"{case}) {label}", fontsize=9)
+        ax.set_aspect("equal")
+        ax.set_xlim(-1.05, 1.05)
+        ax.set_ylim(1.05, -1.05)  # X2 (gravity) points down the page
+        ax.set_xlabel("X1 / c", fontsize=8)
+        ax.set_ylabel("X2 / c", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.legend(fontsize=6, loc="upper left")
+    for ax in list(axes.flat)[n:]:
+        ax.set_visible(False)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig

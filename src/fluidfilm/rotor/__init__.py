@@ -1,0 +1,16 @@
+"""Point-mass rotor in a fluid film bearing (the paper's eq. 4), its integrator and orbit metrics.
+
+- ``model``        ``Rotor``: what one bearing carries (mass, imbalance, external load)
+- ``integrate``    ``simulate``: one compiled RK4 loop for every force model
+- ``linear``       ``LinearBearing``: an isotropic spring-damper force model (analytic checks)
+- ``equilibrium``  static equilibrium position and the equilibrium locus
+- ``metrics``      settled-orbit statistics and model-vs-reference distances
+"""
+from .equilibrium import equilibrium, equilibrium_locus
+from .integrate import Trajectory, simulate
+from .linear import LinearBearing
+from .metrics import compare_orbits, orbit_stats
+from .model import Rotor
+
+__all__ = ["Rotor", "simulate", "Trajectory", "LinearBearing", "equilibrium", "equilibrium_locus",
+           "orbit_stats", "compare_orbits"]

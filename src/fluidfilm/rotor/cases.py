@@ -1,0 +1,36 @@
+"""The paper's seven trajectory cases (Fig. 4 a-g) as plain data, and running them on any force model."""
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from .integrate import Trajectory, simulate
+from .metrics import compare_orbits, is_satisfactory, orbit_stats
+from .model import Rotor
+
+
+def rotor_for_case(rotor_cfg: Mapping, case_cfg: Mapping) -> Rotor:
+    """What one bearing carries in a case: the rotor's share of mass, imbalance and external force."""
+    return Rotor.shared(total_mass=rotor_cfg["mass"], total_imbalance=case_cfg["imbalance"],
+                        total_external_force=tuple(case_cfg["external_force"]),
+                        load_share=rotor_cfg.get("load_share", 1.0), gravity=rotor_cfg.get("gravity", 9.81),
+                        imbalance_direction=int(rotor_cfg.get("imbalance_direction", 1)))
+
+
+def run_case(model, rotor_cfg: Mapping, case_cfg: Mapping, integrator_cfg: Mapping) -> Trajectory:
+    """Integrate one case with the configured integrator settings."""
+    return simulate(model, rotor_for_case(rotor_cfg, case_cfg), t_end=integrator_cfg["t_end"],
+                    dt=integrator_cfg["dt"], eps_stop=integrator_cfg["eps_stop"],
+                    eps_substep=integrator_cfg["eps_substep"], record_every=integrator_cfg["record_every"])
+
+
+def case_summary(traj: Trajectory, clearance: float, t_settle: float, ref: Trajectory | None = None,
+                 threshold_pct: float | None = None) -> dict:
+    """Orbit statistics of a case, and its distances from a reference orbit when one is given."""
+    out = {"status": traj.status, "wall_time_s": traj.wall_time_s, "n_force_evals": traj.n_force_evals}
+    out.update(orbit_stats(traj, clearance, t_settle))
+    if ref is not None:
+        d = compare_orbits(traj, ref, clearance, t_settle)
+        out.update(d)
+        if threshold_pct is not None:
+            out["satisfactory"] = is_satisfactory(d, threshold_pct)
+    return out

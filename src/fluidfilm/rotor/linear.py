@@ -1,0 +1,35 @@
+"""An isotropic linear spring-damper 'bearing': F = -K X - C V.
+
+Not a film model: an exactly solvable force model with the same interface,
+used to check the integrator against analytic responses.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..bearing import JournalBearing
+
+
+@njit(cache=True)
+def linear_force(params, x1, x2, v1, v2):
+    """Force kernel: params = (K, C)."""
+    return -params[0] * x1 - params[1] * v1, -params[0] * x2 - params[1] * v2
+
+
+@dataclass(frozen=True)
+class LinearBearing:
+    bearing: JournalBearing
+    stiffness: float
+    damping: float
+
+    @property
+    def force_kernel(self):
+        return linear_force, (float(self.stiffness), float(self.damping))
+
+    def forces(self, X, V) -> np.ndarray:
+        X = np.asarray(X, dtype=float)
+        V = np.asarray(V, dtype=float)
+        return -self.stiffness * X - self.damping * V

@@ -1,0 +1,61 @@
+"""``Rotor``: the point mass of the paper's eq. 4 as one bearing sees it."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Rotor:
+    """What one bearing carries (paper eq. 4), SI units.
+
+    ``mass`` [kg], ``imbalance`` m_u*d [kg m], ``external_force`` (F1, F2) [N]
+    constant, ``gravity`` [m/s^2] acting along +X2.  ``imbalance_direction``:
+    +1 applies the imbalance force as eq. 4 writes it, m_u d w^2 (cos wt, sin wt);
+    -1 makes it turn the other way, (cos wt, -sin wt), i.e. with the journal
+    surface, which moves towards +theta (from +X2 towards +X1) in the
+    conventions' frame.  The paper's eq. 4 is the default.
+
+    A rotor on two equal bearings is expressed by what each carries (half
+    the mass, imbalance and load), see ``Rotor.shared``.
+    """
+
+    mass: float
+    imbalance: float = 0.0
+    external_force: tuple[float, float] = (0.0, 0.0)
+    gravity: float = 9.81
+    imbalance_direction: int = 1
+
+    def __post_init__(self) -> None:
+        m = float(self.mass)
+        if not math.isfinite(m) or m <= 0.0:
+            raise ValueError(f"mass must be a positive finite number in kg, got {self.mass!r}")
+        u = float(self.imbalance)
+        if not math.isfinite(u) or u < 0.0:
+            raise ValueError(f"imbalance must be a finite m_u*d >= 0 in kg m, got {self.imbalance!r}")
+        f = tuple(float(v) for v in self.external_force)
+        if len(f) != 2 or not all(math.isfinite(v) for v in f):
+            raise ValueError(f"external_force must be two finite numbers (F1, F2) in N, got {self.external_force!r}")
+        g = float(self.gravity)
+        if not math.isfinite(g):
+            raise ValueError(f"gravity must be finite, got {self.gravity!r}")
+        if self.imbalance_direction not in (1, -1):
+            raise ValueError(f"imbalance_direction must be +1 or -1, got {self.imbalance_direction!r}")
+        object.__setattr__(self, "mass", m)
+        object.__setattr__(self, "imbalance", u)
+        object.__setattr__(self, "external_force", f)
+        object.__setattr__(self, "gravity", g)
+
+    @classmethod
+    def shared(cls, total_mass: float, total_imbalance: float = 0.0, total_external_force=(0.0, 0.0),
+               load_share: float = 1.0, **kwargs) -> "Rotor":
+        """The part of a rotor one bearing carries: ``load_share`` = 1 (one bearing) or 0.5 (two equal ones)."""
+        s = float(load_share)
+        if not 0.0 < s <= 1.0:
+            raise ValueError(f"load_share must lie in (0, 1], got {load_share!r}")
+        return cls(mass=total_mass * s, imbalance=total_imbalance * s,
+                   external_force=tuple(s * float(f) for f in total_external_force), **kwargs)
+
+    def static_load(self) -> tuple[float, float]:
+        """Constant load on the bearing: weight plus external force [N]."""
+        return (self.external_force[0], self.external_force[1] + self.mass * self.gravity)

@@ -1,0 +1,161 @@
+"""Rotor dynamics against independent truth: static balance, analytic responses, step halving."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fluidfilm import (JournalBearing, LinearBearing, ReynoldsSolver, Rotor, equilibrium, equilibrium_locus,
+                       paper_bearing, simulate)
+from fluidfilm.rotor.integrate import Trajectory
+from fluidfilm.rotor.metrics import compare_orbits, orbit_stats
+
+C = 120e-6
+
+
+@pytest.fixture(scope="module")
+def bearing():
+    return paper_bearing()
+
+
+@pytest.fixture(scope="module")
+def solver(bearing):
+    return ReynoldsSolver(bearing, 30, 30)
+
+
+@pytest.mark.parametrize("external", [(0.0, 0.0), (30.0, 0.0), (-40.0, 0.0)])
+def test_constant_load_settles_where_the_film_balances_it(solver, external):
+    """Cases a, f, g: no imbalance, the journal comes to rest where F_film + m g + F_ext = 0."""
+    rotor = Rotor(mass=2.5, external_force=external)
+    traj = simulate(solver, rotor, t_end=0.3, dt=1e-5, record_every=100)
+    assert traj.ok
+    x_end, v_end = traj.x[-1], traj.v[-1]
+    assert np.hypot(*v_end) < 1e-6  # m/s: at rest
+    load = np.array(rotor.static_load())
+    balance = solver.forces(x_end, [0.0, 0.0]) + load
+    assert np.hypot(*balance) < 1e-3 * np.hypot(*load)
+    eq = equilibrium(solver, load)
+    assert np.hypot(eq["X1"] - x_end[0], eq["X2"] - x_end[1]) < 1e-3 * C
+
+
+def test_settled_imbalance_orbit_has_the_shaft_frequency(solver, bearing):
+    traj = simulate(solver, Rotor(mass=2.5, imbalance=1e-4), t_end=0.4, dt=1e-5, record_every=10)
+    assert traj.ok
+    keep = traj.t >= 0.2
+    x = traj.x[keep, 0] - traj.x[keep, 0].mean()
+    dt = traj.t[1] - traj.t[0]
+    spec = np.abs(np.fft.rfft(x * np.hanning(len(x))))
+    freqs = np.fft.rfftfreq(len(x), dt)
+    f_shaft = bearing.omega / (2 * np.pi)
+    assert abs(freqs[np.argmax(spec)] - f_shaft) <= freqs[1]
+    # and it is periodic with the shaft period
+    period = int(round(2 * np.pi / bearing.omega / dt))
+    assert np.max(np.abs(traj.x[keep][period:] - traj.x[keep][:-period])) < 1e-3 * C
+
+
+def test_free_imbalance_response_matches_the_analytic_one():
+    """No film, no gravity: m x'' = u w^2 (cos wt, sin wt) from rest at the centre."""
+    b = JournalBearing(length=0.064, diameter=0.040, clearance=0.01, speed_rpm=3000.0, viscosity=6.53e-4)
+    rotor = Rotor(mass=2.0, imbalance=1e-4, gravity=0.0)
+    traj = simulate(LinearBearing(b, 0.0, 0.0), rotor, t_end=0.05, dt=1e-5)
+    w = b.omega
+    A = rotor.imbalance * w**2 / rotor.mass
+    t = traj.t
+    exact = np.stack([A / w**2 * (1 - np.cos(w * t)), A / w * t - A / w**2 * np.sin(w * t)], axis=1)
+    assert np.max(np.abs(traj.x - exact)) < 1e-8 * np.max(np.abs(exact))
+
+
+def test_linear_bearing_steady_state_amplitude_matches_the_analytic_one():
+    """Spring-damper bearing: circular orbit of radius u w^2 / |K - m w^2 + i C w|."""
+    b = JournalBearing(length=0.064, diameter=0.040, clearance=1e-3, speed_rpm=3000.0, viscosity=6.53e-4)
+    K, Cd, m, u = 2e6, 2e3, 2.0, 1e-4
+    traj = simulate(LinearBearing(b, K, Cd), Rotor(mass=m, imbalance=u, gravity=0.0), t_end=0.2, dt=1e-5)
+    w = b.omega
+    radius = u * w**2 / abs(K - m * w**2 + 1j * Cd * w)
+    r = np.hypot(*traj.x[traj.t > 0.15].T)
+    np.testing.assert_allclose(r, radius, rtol=1e-4)
+
+
+@pytest.mark.parametrize("rotor", [
+    Rotor(mass=2.5, imbalance=1e-3),               # case e: the largest orbit
+    Rotor(mass=2.5, external_force=(0.0, 200.0)),  # pushed to eps ~ 0.9: substeps engaged
+])
+def test_step_halving_leaves_the_settled_orbit_unchanged(solver, rotor):
+    coarse = simulate(solver, rotor, t_end=0.3, dt=1e-5, record_every=10)
+    fine = simulate(solver, rotor, t_end=0.3, dt=5e-6, record_every=20)
+    assert coarse.ok and fine.ok
+    np.testing.assert_allclose(coarse.t, fine.t, atol=1e-12)
+    d = compare_orbits(coarse, fine, C, t_settle=0.2)
+    assert d["rms_pct"] < 0.05  # % of clearance
+    if rotor.external_force[1] > 0:
+        assert orbit_stats(fine, C, 0.2)["eps_max"] > 0.85
+
+
+def test_contact_stops_cleanly(solver):
+    traj = simulate(solver, Rotor(mass=2.5, external_force=(0.0, 3000.0)), t_end=0.1, dt=1e-5, eps_stop=0.98)
+    assert traj.status.startswith("contact")
+    assert "t=" in traj.status and traj.t_stop is not None and 0 < traj.t_stop < 0.1
+    assert np.isfinite(traj.x).all() and np.isfinite(traj.v).all()
+    assert traj.t[-1] == pytest.approx(traj.t_stop)
+    assert np.hypot(*traj.x[-1]) / C < 1.0
+
+
+def test_equilibrium_matches_the_short_bearing_attitude_angle():
+    """Ocvirk: tan(attitude) = pi sqrt(1 - eps^2) / (4 eps), at L/D = 0.05."""
+    b = JournalBearing(length=0.002, diameter=0.040, clearance=C, speed_rpm=3000.0, viscosity=6.53e-4)
+    s = ReynoldsSolver(b, 240, 13)
+    locus = equilibrium_locus(s, [0.2, 1.0, 5.0])
+    for _, row in locus.iterrows():
+        eps = row["eps"]
+        expected = math.degrees(math.atan(math.pi * math.sqrt(1 - eps**2) / (4 * eps)))
+        assert abs(row["attitude_deg"]) == pytest.approx(expected, abs=0.5)
+        assert row["residual"] < 1e-8
+    assert locus["eps"].is_monotonic_increasing
+
+
+def test_equilibrium_locus_of_the_paper_bearing(solver):
+    locus = equilibrium_locus(solver, [2.0, 10.0, 25.0, 60.0, 150.0])
+    assert (locus["residual"] < 1e-8).all()
+    assert locus["eps"].is_monotonic_increasing
+    assert locus["attitude_deg"].abs().is_monotonic_decreasing  # the journal swings towards the load line
+
+
+def test_orbit_metrics_on_known_orbits():
+    t = np.linspace(0, 0.1, 1001)
+    w = 2 * np.pi * 50
+    ref = Trajectory(t=t, x=0.3 * C * np.stack([np.cos(w * t), np.sin(w * t)], 1), v=np.zeros((t.size, 2)), status="ok")
+    shifted = Trajectory(t=t, x=ref.x + np.array([0.05 * C, 0.0]), v=ref.v, status="ok")
+    d = compare_orbits(shifted, ref, C, t_settle=0.0)
+    assert d["rms_pct"] == pytest.approx(5.0, rel=1e-9)
+    assert d["hausdorff_pct"] == pytest.approx(5.0, rel=1e-3)
+    assert d["span_err_pct"] == pytest.approx(0.0, abs=1e-9)
+    lagging = Trajectory(t=t, x=0.3 * C * np.stack([np.cos(w * t + 0.5), np.sin(w * t + 0.5)], 1),
+                         v=ref.v, status="ok")
+    d = compare_orbits(lagging, ref, C, t_settle=0.0)
+    assert d["rms_pct"] > 10.0 and d["hausdorff_pct"] < 0.2  # same orbit, other phase
+    assert orbit_stats(ref, C, 0.0)["span"] == pytest.approx(0.6, rel=1e-3)
+    stopped = Trajectory(t=t[:10], x=ref.x[:10], v=ref.v[:10], status="contact: ...")
+    assert compare_orbits(stopped, ref, C, 0.0)["rms_pct"] == math.inf
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(mass=0.0), "mass"),
+    (dict(mass=1.0, imbalance=-1e-4), "imbalance"),
+    (dict(mass=1.0, external_force=(np.nan, 0.0)), "external_force"),
+    (dict(mass=1.0, imbalance_direction=2), "imbalance_direction"),
+])
+def test_bad_rotor_raises(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        Rotor(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(t_end=-1.0), "t_end"),
+    (dict(t_end=0.1, dt=0.0), "dt"),
+    (dict(t_end=0.1, x0=[0.0, 0.99 * C]), "initial eccentricity"),
+    (dict(t_end=0.1, eps_stop=1.2), "eps_stop"),
+])
+def test_bad_simulation_settings_raise(solver, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        simulate(solver, Rotor(mass=1.0), **kwargs)
