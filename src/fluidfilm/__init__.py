@@ -13,6 +13,7 @@ which one they run.
 """
 from .bearing import JournalBearing, paper_bearing
 from .reynolds import CAVITATION_MODELS, GradedReynoldsModel, ReynoldsSolver
+from .surrogate import SurrogateForceModel, load_surrogate
 from .rotor import LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, simulate
 
 __version__ = "0.1.0"
@@ -29,5 +30,7 @@ __all__ = [
     "LinearBearing",
     "equilibrium",
     "equilibrium_locus",
+    "load_surrogate",
+    "SurrogateForceModel",
     "__version__",
 ]

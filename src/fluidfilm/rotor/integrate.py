@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -56,7 +57,8 @@ class Trajectory:
 
     @property
     def ok(self) -> bool:
-        return self.status == "ok"
+        """The run reached t_end (a note after "ok;" may say it left a surrogate's training domain)."""
+        return self.status == "ok" or self.status.startswith("ok;")
 
     def eccentricity(self, clearance: float) -> np.ndarray:
         return np.hypot(self.x[:, 0], self.x[:, 1]) / clearance
@@ -209,6 +211,9 @@ def simulate(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=No
     omega = bearing.omega
     consts = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega, float(rotor.imbalance_direction),
               rotor.external_force[0], rotor.external_force[1] + rotor.mass * rotor.gravity, c * c)
+    reset = getattr(model, "reset_domain_counter", None)
+    if reset is not None:
+        reset()
     t_start = time.perf_counter()
     n_rec, status, t_stop, n_evals = _rk4_run(kernel, params, consts, x0, v0, float(t0), float(dt), n_steps,
                                               record_every, float(eps_stop), float(eps_substep),
@@ -220,6 +225,12 @@ def simulate(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=No
         text = f"contact: eccentricity reached eps_stop={eps_stop} at t={t_stop:.6g} s"
     else:
         text = f"diverged: non-finite state after t={t_stop:.6g} s"
+    report = getattr(model, "domain_report", None)
+    note = report() if report is not None else None
+    if note:
+        text = f"{text}; {note}"
+        warnings.warn(f"{getattr(model, 'name', type(model).__name__)}: {note} during the simulation",
+                      RuntimeWarning, stacklevel=2)
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
                       t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=wall,
                       meta={"dt": dt, "t_end": t_end, "record_every": record_every})

@@ -1,0 +1,270 @@
+"""Trained surrogates as force models: ``load_surrogate(path)`` and the compiled kernel behind it.
+
+A saved model (``models/<name>/``) holds ``surrogate.npz`` (weights and
+scalings as plain arrays) and ``model.json`` (architecture, regions,
+domain, bearing).  Loading needs numpy and numba only.  The network is
+evaluated by a numba kernel with the same signature as the reference
+solver's, ``fn(params, x1, x2, v1, v2) -> (F1, F2)``, so the rotor
+integrator runs a surrogate in the same compiled loop, without PyTorch's
+per-call overhead.
+
+Routing (split models): region r holds eps in [b_{r-1}, b_r).  With
+``blend_width`` w > 0 the forces of the two neighbouring networks are mixed
+with a smoothstep weight over eps in [b - w/2, b + w/2], so the force is
+continuous across a boundary; with w = 0 the switch is hard and the force
+jumps by the two networks' disagreement there.
+
+Domain: every evaluation with eps above the training data's maximum or a
+velocity component beyond the data's range at that eps counts as outside
+the training domain; ``forces`` warns once, ``simulate`` reports the count
+in the trajectory's status.
+"""
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from ..bearing import JournalBearing
+from .scaling import Scaling
+
+ACTIVATIONS = {"tanh": 0, "relu": 1, "silu": 2, "sigmoid": 3}
+
+
+@njit(cache=True, fastmath={"reassoc", "contract"})
+def _mlp(weights, table, n_layers, act, z, buf_a, buf_b):
+    """Evaluate one network on the 4 scaled inputs ``z``; returns its 2 outputs in buf_a[:2]."""
+    for k in range(4):
+        buf_a[k] = z[k]
+    cur = buf_a
+    nxt = buf_b
+    for layer in range(n_layers):
+        w_off, b_off, n_in, n_out = table[layer, 0], table[layer, 1], table[layer, 2], table[layer, 3]
+        last = layer == n_layers - 1
+        for o in range(n_out):
+            acc = weights[b_off + o]
+            base = w_off + o * n_in
+            for i in range(n_in):
+                acc += weights[base + i] * cur[i]
+            if not last:
+                if act == 0:
+                    acc = math.tanh(acc)
+                elif act == 1:
+                    acc = acc if acc > 0.0 else 0.0
+                elif act == 2:
+                    acc = acc / (1.0 + math.exp(-acc))
+                else:
+                    acc = 1.0 / (1.0 + math.exp(-acc))
+            nxt[o] = acc
+        cur, nxt = nxt, cur
+    return cur[0], cur[1]
+
+
+@njit(cache=True)
+def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
+    weights, tables, n_layers, act, scal = params[0], params[1], params[2], params[3], params[4]
+    s = scal[r]
+    physics = s[0] == 1.0
+    c, omega, fscale, power = s[1], s[2], s[3], s[4]
+    z = np.empty(4)
+    if physics:
+        raw = (x1 / c, x2 / c, v1 / (c * omega), v2 / (c * omega))
+    else:
+        raw = (x1, x2, v1, v2)
+    for k in range(4):
+        z[k] = (raw[k] - s[5 + k]) / s[9 + k]
+    y1, y2 = _mlp(weights[r], tables[r], n_layers[r], act, z, buf_a, buf_b)
+    f1 = y1 * s[15] + s[13]
+    f2 = y2 * s[16] + s[14]
+    if physics:
+        g = fscale / (1.0 - e2) ** power
+        f1 *= g
+        f2 *= g
+    return f1, f2
+
+
+@njit(cache=True)
+def surrogate_force(params, x1, x2, v1, v2):
+    """Force kernel of a (possibly split) network: same signature as the reference solver's.
+
+    params = (weights[R], tables[R], n_layers(R,), activation, scalings(R, 17),
+              boundaries(R-1,), blend_width, domain(S, 3) [eps_low, eps_high, v_max],
+              eps_max, counter(1,) int64, inv_c2, max_width)
+    """
+    bounds = params[5]
+    blend = params[6]
+    domain = params[7]
+    eps_max = params[8]
+    counter = params[9]
+    inv_c2 = params[10]
+    width = params[11]
+    e2 = (x1 * x1 + x2 * x2) * inv_c2
+    eps = math.sqrt(e2)
+    # training-domain check (counted, never fatal)
+    outside = eps > eps_max
+    if not outside:
+        for s in range(domain.shape[0]):
+            if domain[s, 0] <= eps < domain[s, 1] or (s == domain.shape[0] - 1 and eps >= domain[s, 1]):
+                if abs(v1) > domain[s, 2] or abs(v2) > domain[s, 2]:
+                    outside = True
+                break
+    if outside:
+        counter[0] += 1
+    buf_a = np.empty(width)
+    buf_b = np.empty(width)
+    nb = bounds.shape[0]
+    r = 0
+    while r < nb and eps >= bounds[r]:
+        r += 1
+    if blend > 0.0:
+        # nearest boundary within half the blend width mixes the two neighbours
+        for b in range(nb):
+            lo = bounds[b] - 0.5 * blend
+            hi = bounds[b] + 0.5 * blend
+            if lo <= eps < hi:
+                t = (eps - lo) / blend
+                w = t * t * (3.0 - 2.0 * t)
+                fa1, fa2 = _region_force(params, b, x1, x2, v1, v2, e2, buf_a, buf_b)
+                fb1, fb2 = _region_force(params, b + 1, x1, x2, v1, v2, e2, buf_a, buf_b)
+                return (1.0 - w) * fa1 + w * fb1, (1.0 - w) * fa2 + w * fb2
+    return _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b)
+
+
+@njit(cache=True)
+def _surrogate_batch(params, x, v, out):
+    # serial: numba's parallel loops take no nested parameter tuples (and a
+    # network evaluation costs well under a microsecond anyway)
+    for p in range(x.shape[0]):
+        f1, f2 = surrogate_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        out[p, 0] = f1
+        out[p, 1] = f2
+
+
+def pack_network(layers: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """[(W (out, in), b (out,)), ...] -> flat weights and a (n_layers, 4) table of offsets and sizes."""
+    flat, table, off = [], [], 0
+    for W, b in layers:
+        W = np.asarray(W, dtype=np.float64)
+        b = np.asarray(b, dtype=np.float64)
+        table.append([off, off + W.size, W.shape[1], W.shape[0]])
+        flat += [W.ravel(), b.ravel()]
+        off += W.size + b.size
+    return np.concatenate(flat), np.asarray(table, dtype=np.int64)
+
+
+class SurrogateForceModel:
+    """A trained network (or split set of networks) with the reference model's interface."""
+
+    def __init__(self, bearing: JournalBearing, networks: list[list[tuple[np.ndarray, np.ndarray]]],
+                 scalings: list[Scaling], activation: str, boundaries=(), blend_width: float = 0.0,
+                 domain=None, eps_max: float = 1.0, name: str = "surrogate", info: dict | None = None):
+        if activation not in ACTIVATIONS:
+            raise ValueError(f"unknown activation {activation!r}; choose one of {tuple(ACTIVATIONS)}")
+        if len(networks) != len(boundaries) + 1 or len(scalings) != len(networks):
+            raise ValueError(f"{len(networks)} networks need {len(networks) - 1} boundaries and as many scalings, "
+                             f"got {len(boundaries)} boundaries and {len(scalings)} scalings")
+        bounds = np.asarray(boundaries, dtype=float)
+        if bounds.size and not (np.all(np.diff(bounds) > 0) and bounds[0] > 0 and bounds[-1] < 1):
+            raise ValueError(f"split boundaries must increase strictly within (0, 1), got {list(bounds)}")
+        if blend_width < 0 or (bounds.size > 1 and blend_width >= np.diff(bounds).min()):
+            raise ValueError(f"blend_width={blend_width} must be >= 0 and narrower than the regions")
+        self._bearing = bearing
+        self.name = name
+        self.activation = activation
+        self.boundaries = bounds
+        self.blend_width = float(blend_width)
+        self.networks = networks
+        self.scalings = scalings
+        self.domain = np.asarray(domain if domain is not None else [[0.0, 1.0, np.inf]], dtype=float)
+        self.eps_max = float(eps_max)
+        self.info = info or {}
+        packed = [pack_network(n) for n in networks]
+        max_width = max(max(W.shape[0] for W, _ in n) for n in networks)
+        self._counter = np.zeros(1, dtype=np.int64)
+        self.params = (
+            tuple(p[0] for p in packed), tuple(p[1] for p in packed),
+            np.array([len(n) for n in networks], dtype=np.int64), ACTIVATIONS[activation],
+            np.stack([s.kernel_row() for s in scalings]), bounds, self.blend_width, self.domain, self.eps_max,
+            self._counter, 1.0 / bearing.clearance**2, max(max_width, 4),
+        )
+        self._warned = False
+
+    @property
+    def bearing(self) -> JournalBearing:
+        return self._bearing
+
+    @property
+    def force_kernel(self):
+        return surrogate_force, self.params
+
+    @property
+    def n_parameters(self) -> int:
+        return int(sum(W.size + b.size for n in self.networks for W, b in n))
+
+    # ------------------------------------------------------------------ domain bookkeeping
+    def reset_domain_counter(self) -> None:
+        self._counter[0] = 0
+
+    def domain_report(self) -> str | None:
+        n = int(self._counter[0])
+        if n == 0:
+            return None
+        return f"outside the training domain in {n} force evaluations"
+
+    # ------------------------------------------------------------------ evaluation
+    def forces(self, X, V) -> np.ndarray:
+        from ..reynolds.solver import _as_pairs
+
+        x, v, shape = _as_pairs(X, V, self._bearing.clearance)
+        before = int(self._counter[0])
+        out = np.empty_like(x)
+        if x.shape[0]:
+            _surrogate_batch(self.params, x, v, out)
+        if self._counter[0] > before and not self._warned:
+            self._warned = True
+            warnings.warn(f"{self.name}: {int(self._counter[0]) - before} of {len(x)} states lie outside the "
+                          f"training domain (eps <= {self.eps_max:g}, velocities within the data's range); "
+                          "forces there are extrapolated", RuntimeWarning, stacklevel=2)
+        return out.reshape(shape + (2,))
+
+    def __repr__(self) -> str:
+        return (f"SurrogateForceModel({self.name!r}, {len(self.networks)} network(s), boundaries="
+                f"{self.boundaries.tolist()}, {self.n_parameters} parameters)")
+
+    # ------------------------------------------------------------------ io
+    def save(self, directory) -> None:
+        from .. import io
+
+        d = Path(directory)
+        d.mkdir(parents=True, exist_ok=True)
+        arrays = {}
+        for r, net in enumerate(self.networks):
+            for k, (W, b) in enumerate(net):
+                arrays[f"r{r}_W{k}"] = W
+                arrays[f"r{r}_b{k}"] = b
+        with io.atomic_path(d / "surrogate.npz", suffix=".npz") as tmp:
+            np.savez(tmp, **arrays)
+        meta = {"name": self.name, "activation": self.activation, "boundaries": self.boundaries.tolist(),
+                "blend_width": self.blend_width, "domain": self.domain.tolist(), "eps_max": self.eps_max,
+                "n_layers": [len(n) for n in self.networks], "scalings": [s.to_dict() for s in self.scalings],
+                "bearing": self._bearing.to_dict(), "info": self.info}
+        io.write_json(d / "model.json", meta)
+
+
+def load_surrogate(path) -> SurrogateForceModel:
+    """Load a saved surrogate (a ``models/<name>/`` directory) as a force model."""
+    d = Path(path)
+    if not (d / "model.json").exists() or not (d / "surrogate.npz").exists():
+        raise ValueError(f"{d} holds no saved surrogate (model.json and surrogate.npz)")
+    meta = json.loads((d / "model.json").read_text())
+    arrays = np.load(d / "surrogate.npz")
+    networks = [[(arrays[f"r{r}_W{k}"], arrays[f"r{r}_b{k}"]) for k in range(n)]
+                for r, n in enumerate(meta["n_layers"])]
+    return SurrogateForceModel(JournalBearing(**meta["bearing"]), networks,
+                               [Scaling.from_dict(s) for s in meta["scalings"]], meta["activation"],
+                               meta["boundaries"], meta["blend_width"], meta["domain"], meta["eps_max"],
+                               meta["name"], meta.get("info", {}))

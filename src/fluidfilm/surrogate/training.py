@@ -1,0 +1,288 @@
+"""Training of force networks with Lightning: the module, the data module, the stopping rule.
+
+- ``ForceMLP``: fully connected (X1, X2, V1, V2) -> (F1, F2) in scaled
+  units, configurable width, depth, activation, optimiser and schedule.
+- ``ForceDataModule``: the Parquet dataset held in memory as tensors, split
+  into training and validation *by position* (whole grid positions are held
+  out, so validation measures generalisation across the grid), optionally
+  restricted to an eccentricity band (one region of a split model).
+- ``TargetStop``: stops when the validation relative RMS force error
+  reaches a target and records the wall time to get there; its state is
+  checkpointed, so an interrupted run that resumes keeps counting.
+- ``train_network``: fit one network, return its weights and timings.
+
+The validation metric is physical, the same for every network whatever its
+scaling: rel_rmse = sqrt(sum |F_pred - F|^2 / sum |F|^2) over the
+validation rows, in newtons.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import lightning as L
+import numpy as np
+import pandas as pd
+import torch
+from torch import nn
+
+from ..bearing import JournalBearing
+from .scaling import Scaling
+
+_ACT = {"tanh": nn.Tanh, "relu": nn.ReLU, "silu": nn.SiLU, "sigmoid": nn.Sigmoid}
+
+
+class ForceMLP(L.LightningModule):
+    def __init__(self, width: int = 50, depth: int = 1, activation: str = "tanh", optimizer: str = "adam",
+                 lr: float = 3e-3, weight_decay: float = 0.0, scheduler: str = "cosine", max_epochs: int = 20,
+                 out_std=(1.0, 1.0), out_mean=(0.0, 0.0)):
+        super().__init__()
+        if activation not in _ACT:
+            raise ValueError(f"unknown activation {activation!r}; choose one of {tuple(_ACT)}")
+        if int(width) < 1 or int(depth) < 1:
+            raise ValueError(f"width and depth must be >= 1, got width={width}, depth={depth}")
+        self.save_hyperparameters()
+        layers, n_in = [], 4
+        for _ in range(depth):
+            layers += [nn.Linear(n_in, width), _ACT[activation]()]
+            n_in = width
+        layers.append(nn.Linear(n_in, 2))
+        self.net = nn.Sequential(*layers)
+        self.register_buffer("out_std", torch.tensor(out_std, dtype=torch.float32))
+        self.register_buffer("out_mean", torch.tensor(out_mean, dtype=torch.float32))
+        self._sq_err = 0.0
+        self._sq_ref = 0.0
+
+    def forward(self, z):
+        return self.net(z)
+
+    def training_step(self, batch, batch_idx):
+        z, y = batch[0], batch[1]
+        loss = nn.functional.mse_loss(self(z), y)
+        self.log("train_loss", loss, on_step=False, on_epoch=True, prog_bar=True)
+        return loss
+
+    def on_validation_epoch_start(self):
+        self._sq_err = 0.0
+        self._sq_ref = 0.0
+
+    def validation_step(self, batch, batch_idx):
+        z, y, F, gain = batch
+        pred = self(z)
+        self.log("val_loss", nn.functional.mse_loss(pred, y), on_step=False, on_epoch=True)
+        F_pred = (pred * self.out_std + self.out_mean) * gain[:, None]
+        self._sq_err += float(((F_pred.double() - F.double()) ** 2).sum())
+        self._sq_ref += float((F.double() ** 2).sum())
+
+    def on_validation_epoch_end(self):
+        rel = math.sqrt(self._sq_err / max(self._sq_ref, 1e-300))
+        self.log("val_rel_rmse", rel, prog_bar=True)
+
+    def configure_optimizers(self):
+        h = self.hparams
+        if h.optimizer == "adam":
+            opt = torch.optim.Adam(self.parameters(), lr=h.lr, weight_decay=h.weight_decay)
+        elif h.optimizer == "adamw":
+            opt = torch.optim.AdamW(self.parameters(), lr=h.lr, weight_decay=h.weight_decay)
+        elif h.optimizer == "sgd":
+            opt = torch.optim.SGD(self.parameters(), lr=h.lr, momentum=0.9, weight_decay=h.weight_decay)
+        else:
+            raise ValueError(f"unknown optimizer {h.optimizer!r}; choose adam, adamw or sgd")
+        if h.scheduler == "none":
+            return opt
+        if h.scheduler == "cosine":
+            sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=max(1, h.max_epochs), eta_min=h.lr * 0.01)
+            return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "epoch"}}
+        if h.scheduler == "plateau":
+            sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=2)
+            return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": "val_rel_rmse"}}
+        raise ValueError(f"unknown scheduler {h.scheduler!r}; choose none, cosine or plateau")
+
+    def layers_numpy(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        return [(m.weight.detach().double().numpy().copy(), m.bias.detach().double().numpy().copy())
+                for m in self.net if isinstance(m, nn.Linear)]
+
+
+class _Batches(torch.utils.data.IterableDataset):
+    """Whole batches sliced from in-memory tensors (no per-sample collation), reshuffled each epoch."""
+
+    def __init__(self, tensors, batch_size: int, shuffle: bool, seed: int):
+        self.tensors = tensors
+        self.batch_size = int(batch_size)
+        self.shuffle = shuffle
+        self.seed = seed
+        self.epoch = 0
+
+    def __iter__(self):
+        n = self.tensors[0].shape[0]
+        if self.shuffle:
+            g = torch.Generator().manual_seed(self.seed + self.epoch)
+            self.epoch += 1
+            order = torch.randperm(n, generator=g)
+        for start in range(0, n, self.batch_size):
+            if self.shuffle:
+                idx = order[start:start + self.batch_size]
+                yield tuple(t[idx] for t in self.tensors)
+            else:
+                yield tuple(t[start:start + self.batch_size] for t in self.tensors)
+
+    def __len__(self):
+        return math.ceil(self.tensors[0].shape[0] / self.batch_size)
+
+
+def read_dataset(path, columns=("X1", "X2", "V1", "V2", "F1", "F2", "eps")) -> tuple[pd.DataFrame, dict]:
+    """The Parquet dataset and its metadata (bearing, config hash)."""
+    path = Path(path)
+    meta_file = path / "_metadata.json"
+    if not meta_file.exists():
+        raise ValueError(f"{path} is not a complete dataset (no _metadata.json); generate it first")
+    return pd.read_parquet(path, columns=list(columns)), json.loads(meta_file.read_text())
+
+
+class ForceDataModule(L.LightningDataModule):
+    """In-memory training/validation split by position, optionally restricted to eps in [eps_low, eps_high)."""
+
+    def __init__(self, dataset_dir, scaling: str = "standard", power: float = 1.5, eps_low: float = 0.0,
+                 eps_high: float = math.inf, val_fraction: float = 0.1, batch_size: int = 4096, seed: int = 0,
+                 frame: pd.DataFrame | None = None, meta: dict | None = None):
+        super().__init__()
+        if not 0.0 < val_fraction < 1.0:
+            raise ValueError(f"val_fraction must lie in (0, 1), got {val_fraction!r}")
+        self.dataset_dir = dataset_dir
+        self.scaling_kind = scaling
+        self.power = power
+        self.eps_low, self.eps_high = eps_low, eps_high
+        self.val_fraction = val_fraction
+        self.batch_size = batch_size
+        self.seed = seed
+        self._frame, self._meta = frame, meta
+        self.scaling: Scaling | None = None
+
+    def setup(self, stage=None):
+        if self.scaling is not None:
+            return
+        df, meta = (self._frame, self._meta) if self._frame is not None else read_dataset(self.dataset_dir)
+        self.bearing = JournalBearing(**meta["bearing"])
+        df = df[(df["eps"] >= self.eps_low) & (df["eps"] < self.eps_high)]
+        if len(df) == 0:
+            raise ValueError(f"no samples with eps in [{self.eps_low}, {self.eps_high})")
+        pos = df.groupby(["X1", "X2"], sort=True).ngroup().to_numpy()
+        rng = np.random.default_rng(self.seed)
+        n_pos = pos.max() + 1
+        val_pos = rng.random(n_pos) < self.val_fraction
+        if val_pos.all() or not val_pos.any():
+            val_pos[:] = False
+            val_pos[rng.integers(n_pos)] = n_pos > 1
+        is_val = val_pos[pos]
+        X = df[["X1", "X2"]].to_numpy()
+        V = df[["V1", "V2"]].to_numpy()
+        F = df[["F1", "F2"]].to_numpy()
+        b = self.bearing
+        self.scaling = Scaling.fit(self.scaling_kind, X[~is_val], V[~is_val], F[~is_val], b.clearance, b.omega,
+                                   b.force_scale, self.power)
+        z = self.scaling.inputs(X, V)
+        y = self.scaling.targets(X, F)
+        gain = self._gain(X)  # F = (network output unscaled) * gain
+        t = lambda a: torch.as_tensor(np.ascontiguousarray(a), dtype=torch.float32)  # noqa: E731
+        tr, va = ~is_val, is_val
+        self.train_tensors = (t(z[tr]), t(y[tr]))
+        self.val_tensors = (t(z[va]), t(y[va]), t(F[va]), t(gain[va]))
+        self.n_train, self.n_val = int(tr.sum()), int(va.sum())
+        self.eps_data_max = float(df["eps"].max())
+
+    def _gain(self, X):
+        s = self.scaling
+        if s.kind == "physics":
+            e2 = (X[:, 0] ** 2 + X[:, 1] ** 2) / s.clearance**2
+            return s.force_scale / (1.0 - e2) ** s.power
+        return np.ones(len(X))
+
+    def train_dataloader(self):
+        return torch.utils.data.DataLoader(_Batches(self.train_tensors, self.batch_size, True, self.seed),
+                                           batch_size=None)
+
+    def val_dataloader(self):
+        return torch.utils.data.DataLoader(_Batches(self.val_tensors, 65536, False, self.seed), batch_size=None)
+
+
+class TargetStop(L.Callback):
+    """Stop when ``val_rel_rmse`` <= target; record the training wall time to get there.
+
+    The clock runs from the start of fitting (validation included, as any
+    stopping rule needs it) and survives checkpoint/resume.
+    """
+
+    def __init__(self, target: float | None):
+        self.target = target
+        self.elapsed = 0.0
+        self.time_to_target: float | None = None
+        self.epoch_at_target: int | None = None
+        self._t0 = None
+
+    def on_train_start(self, trainer, pl_module):
+        self._t0 = time.perf_counter()
+
+    def _now(self):
+        return self.elapsed + (time.perf_counter() - self._t0 if self._t0 is not None else 0.0)
+
+    def on_validation_end(self, trainer, pl_module):
+        if trainer.sanity_checking or self.target is None or self.time_to_target is not None:
+            return
+        val = trainer.callback_metrics.get("val_rel_rmse")
+        if val is not None and float(val) <= self.target:
+            self.time_to_target = self._now()
+            self.epoch_at_target = trainer.current_epoch
+            trainer.should_stop = True
+
+    def on_train_end(self, trainer, pl_module):
+        self.elapsed = self._now()
+        self._t0 = None
+
+    def state_dict(self):
+        return {"elapsed": self._now(), "time_to_target": self.time_to_target,
+                "epoch_at_target": self.epoch_at_target}
+
+    def load_state_dict(self, state):
+        self.elapsed = state["elapsed"]
+        self.time_to_target = state["time_to_target"]
+        self.epoch_at_target = state["epoch_at_target"]
+
+
+def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, target: float | None,
+                  ckpt_dir=None, logger=None, seed: int = 0) -> dict:
+    """Fit one network; returns its layers (numpy), scaling and timings.
+
+    With ``ckpt_dir``, the last epoch is checkpointed there and a rerun
+    resumes from it.
+    """
+    L.seed_everything(seed, workers=True)
+    dm.setup()
+    model = ForceMLP(width=model_cfg["width"], depth=model_cfg["depth"], activation=model_cfg["activation"],
+                     optimizer=model_cfg.get("optimizer", "adam"), lr=model_cfg["lr"],
+                     weight_decay=model_cfg.get("weight_decay", 0.0), scheduler=model_cfg.get("scheduler", "cosine"),
+                     max_epochs=trainer_cfg["max_epochs"], out_std=tuple(dm.scaling.out_std),
+                     out_mean=tuple(dm.scaling.out_mean))
+    stop = TargetStop(target)
+    callbacks = [stop]
+    ckpt_path = None
+    if ckpt_dir is not None:
+        ckpt_dir = Path(ckpt_dir)
+        callbacks.append(L.pytorch.callbacks.ModelCheckpoint(dirpath=ckpt_dir, save_last=True, save_top_k=0))
+        if (ckpt_dir / "last.ckpt").exists():
+            ckpt_path = str(ckpt_dir / "last.ckpt")
+    trainer = L.Trainer(max_epochs=trainer_cfg["max_epochs"], max_time=trainer_cfg.get("max_time"),
+                        accelerator=trainer_cfg.get("accelerator", "cpu"), devices=1, logger=logger or False,
+                        callbacks=callbacks, enable_progress_bar=trainer_cfg.get("progress_bar", True),
+                        enable_model_summary=False, num_sanity_val_steps=0, deterministic=True,
+                        check_val_every_n_epoch=1, enable_checkpointing=ckpt_dir is not None)
+    t0 = time.perf_counter()
+    trainer.fit(model, datamodule=dm, ckpt_path=ckpt_path)
+    wall = time.perf_counter() - t0
+    metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
+    return {"layers": model.layers_numpy(), "scaling": dm.scaling, "module": model,
+            "time_to_target_s": stop.time_to_target, "train_time_s": stop.elapsed, "fit_wall_s": wall,
+            "epochs": trainer.current_epoch, "epoch_at_target": stop.epoch_at_target,
+            "val_rel_rmse": metrics.get("val_rel_rmse"), "n_train": dm.n_train, "n_val": dm.n_val,
+            "eps_data_max": dm.eps_data_max}
