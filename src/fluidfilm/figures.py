@@ -178,6 +178,7 @@ def plot_orbits(panels: dict, clearance: float, t_settle: float, title: str):
             x = tr.x / clearance
             done = tr.t >= t_settle
             ax.plot(x[:, 0], x[:, 1], lw=0.4, alpha=0.5, **st)
+            ax.plot(x[-1:, 0], x[-1:, 1], marker="o", ms=3, **st)  # a settled point shows too
             ax.plot(x[done, 0], x[done, 1], lw=1.6, label=name if tr.ok else f"{name} ({tr.status.split(':')[0]})",
                     **st)
         ax.set_title(f"{case}) {label}", fontsize=9)

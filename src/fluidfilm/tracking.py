@@ -63,3 +63,46 @@ def run(tracking: Mapping | None, run_name: str, params: Mapping | None = None,
         if params:
             mlflow.log_params(flatten(params))
         yield active
+
+
+class MlflowSweepCallback:
+    """Hydra callback (duck-typed, no Hydra import): one MLflow parent run per multirun.
+
+    ``on_multirun_start`` creates the store, the experiment and a parent run,
+    and exports its id in ``FLUIDFILM_PARENT_RUN_ID``; the jobs (in this
+    process or in joblib/submitit workers, which inherit the environment)
+    nest their runs under it.  Creating the SQLite store here, before any
+    job starts, avoids parallel jobs racing to create its schema.
+    """
+
+    def __init__(self, **_):
+        self.parent_id = None
+
+    def on_multirun_start(self, config, **kwargs):
+        tr = config.get("tracking")
+        if not tr or not tr.get("enabled", True):
+            return
+        import mlflow
+
+        exp_id = ensure_experiment(tr["uri"], tr["experiment"])
+        client = mlflow.tracking.MlflowClient(tr["uri"])
+        sweep = config.hydra.sweep.dir if "hydra" in config else "sweep"
+        run = client.create_run(exp_id, run_name=f"sweep {sweep}", tags={"sweep_dir": str(sweep)})
+        self.parent_id = run.info.run_id
+        self._uri = tr["uri"]
+        os.environ["FLUIDFILM_PARENT_RUN_ID"] = self.parent_id
+
+    def on_multirun_end(self, config, **kwargs):
+        if self.parent_id is None:
+            return
+        import mlflow
+
+        mlflow.tracking.MlflowClient(self._uri).set_terminated(self.parent_id)
+        os.environ.pop("FLUIDFILM_PARENT_RUN_ID", None)
+
+    # the other hooks Hydra calls
+    def on_run_start(self, config, **kwargs): ...
+    def on_run_end(self, config, **kwargs): ...
+    def on_job_start(self, config, **kwargs): ...
+    def on_job_end(self, config, job_return, **kwargs): ...
+    def on_compose_config(self, config, **kwargs): ...

@@ -67,7 +67,7 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
     return model, report
 
 
-def test_set_errors(model, testset_dir, floor_N: float = 0.1) -> dict:
+def held_out_errors(model, testset_dir, floor_N: float = 0.1) -> dict:
     """Relative force error |F_model - F| / max(|F|, floor) on the held-out set: median and 99th percentile,
     overall and per eccentricity band."""
     df = pd.read_parquet(testset_dir)

@@ -36,32 +36,56 @@ ACTIVATIONS = {"tanh": 0, "relu": 1, "silu": 2, "sigmoid": 3}
 
 
 @njit(cache=True, fastmath={"reassoc", "contract"})
+def _dense(w, b, src, dst, n_in, n_out):
+    """dst = W src + b with W stored transposed (n_in, n_out): axpy updates, vectorised over outputs."""
+    for o in range(n_out):
+        dst[o] = b[o]
+    for i in range(n_in):
+        ci = src[i]
+        base = i * n_out
+        for o in range(n_out):
+            dst[o] += w[base + o] * ci
+
+
+@njit(cache=True)
+def _activate(buf, n, act):
+    if act == 0:
+        # tanh through one exp (libm's tanh is about twice as slow); exact to rounding
+        for o in range(n):
+            x = buf[o]
+            t = math.exp(-2.0 * abs(x))
+            y = (1.0 - t) / (1.0 + t)
+            buf[o] = y if x >= 0.0 else -y
+    elif act == 1:
+        for o in range(n):
+            buf[o] = max(buf[o], 0.0)
+    elif act == 2:
+        for o in range(n):
+            buf[o] = buf[o] / (1.0 + math.exp(-buf[o]))
+    else:
+        for o in range(n):
+            buf[o] = 1.0 / (1.0 + math.exp(-buf[o]))
+
+
+@njit(cache=True)
 def _mlp(weights, table, n_layers, act, z, buf_a, buf_b):
-    """Evaluate one network on the 4 scaled inputs ``z``; returns its 2 outputs in buf_a[:2]."""
+    """Evaluate one network on the 4 scaled inputs ``z``; returns its 2 outputs.
+
+    Weights are stored transposed (n_in, n_out) so each layer is a sum of
+    axpy updates whose inner loop over outputs is independent and vectorises.
+    """
     for k in range(4):
         buf_a[k] = z[k]
-    cur = buf_a
-    nxt = buf_b
     for layer in range(n_layers):
         w_off, b_off, n_in, n_out = table[layer, 0], table[layer, 1], table[layer, 2], table[layer, 3]
-        last = layer == n_layers - 1
-        for o in range(n_out):
-            acc = weights[b_off + o]
-            base = w_off + o * n_in
-            for i in range(n_in):
-                acc += weights[base + i] * cur[i]
-            if not last:
-                if act == 0:
-                    acc = math.tanh(acc)
-                elif act == 1:
-                    acc = acc if acc > 0.0 else 0.0
-                elif act == 2:
-                    acc = acc / (1.0 + math.exp(-acc))
-                else:
-                    acc = 1.0 / (1.0 + math.exp(-acc))
-            nxt[o] = acc
-        cur, nxt = nxt, cur
-    return cur[0], cur[1]
+        # even layers read buf_a and write buf_b, odd ones the other way round
+        src = buf_a if layer % 2 == 0 else buf_b
+        dst = buf_b if layer % 2 == 0 else buf_a
+        _dense(weights[w_off:b_off], weights[b_off:b_off + n_out], src, dst, n_in, n_out)
+        if layer < n_layers - 1:
+            _activate(dst, n_out, act)
+    out = buf_b if n_layers % 2 == 1 else buf_a
+    return out[0], out[1]
 
 
 @njit(cache=True)
@@ -70,7 +94,7 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
     s = scal[r]
     physics = s[0] == 1.0
     c, omega, fscale, power = s[1], s[2], s[3], s[4]
-    z = np.empty(4)
+    z = params[12][2]
     if physics:
         raw = (x1 / c, x2 / c, v1 / (c * omega), v2 / (c * omega))
     else:
@@ -93,7 +117,7 @@ def surrogate_force(params, x1, x2, v1, v2):
 
     params = (weights[R], tables[R], n_layers(R,), activation, scalings(R, 17),
               boundaries(R-1,), blend_width, domain(S, 3) [eps_low, eps_high, v_max],
-              eps_max, counter(1,) int64, inv_c2, max_width)
+              eps_max, counter(1,) int64, inv_c2, max_width, scratch(3, max_width))
     """
     bounds = params[5]
     blend = params[6]
@@ -101,7 +125,6 @@ def surrogate_force(params, x1, x2, v1, v2):
     eps_max = params[8]
     counter = params[9]
     inv_c2 = params[10]
-    width = params[11]
     e2 = (x1 * x1 + x2 * x2) * inv_c2
     eps = math.sqrt(e2)
     # training-domain check (counted, never fatal)
@@ -114,8 +137,9 @@ def surrogate_force(params, x1, x2, v1, v2):
                 break
     if outside:
         counter[0] += 1
-    buf_a = np.empty(width)
-    buf_b = np.empty(width)
+    # preallocated scratch rows (the integrator and the batch loop are serial)
+    buf_a = params[12][0]
+    buf_b = params[12][1]
     nb = bounds.shape[0]
     r = 0
     while r < nb and eps >= bounds[r]:
@@ -145,13 +169,14 @@ def _surrogate_batch(params, x, v, out):
 
 
 def pack_network(layers: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
-    """[(W (out, in), b (out,)), ...] -> flat weights and a (n_layers, 4) table of offsets and sizes."""
+    """[(W (out, in), b (out,)), ...] -> flat weights (each W stored transposed) and a
+    (n_layers, 4) table of [weight offset, bias offset, n_in, n_out]."""
     flat, table, off = [], [], 0
     for W, b in layers:
         W = np.asarray(W, dtype=np.float64)
         b = np.asarray(b, dtype=np.float64)
         table.append([off, off + W.size, W.shape[1], W.shape[0]])
-        flat += [W.ravel(), b.ravel()]
+        flat += [W.T.ravel(), b.ravel()]
         off += W.size + b.size
     return np.concatenate(flat), np.asarray(table, dtype=np.int64)
 
@@ -190,6 +215,7 @@ class SurrogateForceModel:
             np.array([len(n) for n in networks], dtype=np.int64), ACTIVATIONS[activation],
             np.stack([s.kernel_row() for s in scalings]), bounds, self.blend_width, self.domain, self.eps_max,
             self._counter, 1.0 / bearing.clearance**2, max(max_width, 4),
+            np.zeros((3, max(max_width, 4))),
         )
         self._warned = False
 

@@ -262,8 +262,8 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
     model = ForceMLP(width=model_cfg["width"], depth=model_cfg["depth"], activation=model_cfg["activation"],
                      optimizer=model_cfg.get("optimizer", "adam"), lr=model_cfg["lr"],
                      weight_decay=model_cfg.get("weight_decay", 0.0), scheduler=model_cfg.get("scheduler", "cosine"),
-                     max_epochs=trainer_cfg["max_epochs"], out_std=tuple(dm.scaling.out_std),
-                     out_mean=tuple(dm.scaling.out_mean))
+                     max_epochs=trainer_cfg["max_epochs"], out_std=[float(s) for s in dm.scaling.out_std],
+                     out_mean=[float(s) for s in dm.scaling.out_mean])  # plain floats: checkpoints load with weights_only
     stop = TargetStop(target)
     callbacks = [stop]
     ckpt_path = None

@@ -1,0 +1,110 @@
+"""Train a surrogate (single or split by eccentricity) and save it under models/<name>/.
+
+    python experiments/train_surrogate.py experiment=paper_single
+    python experiments/train_surrogate.py experiment=paper_split
+    python experiments/train_surrogate.py -m hydra/launcher=joblib model=paper_single,mlp_2x64 split=none,paper
+Logs the config, per-epoch losses (one nested run per network), training
+times, test-set accuracy and speed to MLflow.  An interrupted run resumes
+from the last checkpoint of each network.
+"""
+import json
+import shutil
+from pathlib import Path
+
+import hydra
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig, OmegaConf
+
+from fluidfilm import GradedReynoldsModel, io, tracking
+from fluidfilm.data import config_hash
+from fluidfilm.speed import sample_states, time_per_force_eval
+from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors
+
+
+def _fmt(value, spec=".1f"):
+    return "-" if value is None else format(value, spec)
+
+
+def model_card(name: str, report: dict, metrics: dict, cfg: dict) -> str:
+    nets = "\n".join(f"| {k} | {n['eps_low']:g}-{n['eps_high']:g} | {n['n_train']:,} | {n['epochs']} | "
+                     f"{n['val_rel_rmse']:.4f} | {n['train_time_s']:.1f} | {_fmt(n['time_to_target_s'])} |"
+                     for k, n in enumerate(report["networks"]))
+    return f"""# Model card: {name}
+
+- model: `{json.dumps(cfg['model'])}`
+- split: `{json.dumps(cfg['split'])}`, scaling: `{json.dumps(cfg['scaling'])}`, seed {cfg['seed']}
+- data: {report['n_samples']:,} samples, dataset hash `{report['dataset_hash']}`
+- training time: {report['train_time_s']:.1f} s in all; to the target validation error
+  {report['target_val_rel_rmse']}: {_fmt(report['time_to_target_s'])} s
+- held-out test set: median relative force error {metrics['test_rel_err_median']:.4f},
+  99th percentile {metrics['test_rel_err_p99']:.4f}
+- speed: {metrics['time_per_eval_us']:.3f} us per force evaluation, {metrics['speedup_force_eval_vs_reference']:.1f}x
+  the reference (graded 30x30/55x55) in the same compiled loop
+
+| network | eps range | training rows | epochs | val rel. RMSE | train s | s to target |
+|---|---|---|---|---|---|---|
+{nets}
+"""
+
+
+@hydra.main(config_path="../conf", config_name="train", version_base="1.3")
+def main(cfg: DictConfig) -> dict:
+    choices = HydraConfig.get().runtime.choices
+    name = cfg.name or f"{choices['model']}-{choices['split']}-{choices['scaling']}-s{cfg.seed}"
+    c = OmegaConf.to_container(cfg, resolve=True)
+    digest = config_hash(c["model"], c["split"], c["scaling"], c["trainer"], c["seed"], c["dataset_dir"])
+    ckpt_root = Path(cfg.checkpoint_dir) / name / digest
+    with tracking.run(cfg.tracking, name, c, tags={"model_name": name}) as parent:
+        logger_for = None
+        if parent is not None:
+            import mlflow
+            from lightning.pytorch.loggers import MLFlowLogger
+
+            client = mlflow.tracking.MlflowClient(cfg.tracking.uri)
+
+            def logger_for(r):
+                child = client.create_run(parent.info.experiment_id, run_name=f"{name}/network{r}",
+                                          tags={"mlflow.parentRunId": parent.info.run_id})
+                return MLFlowLogger(experiment_name=cfg.tracking.experiment, tracking_uri=cfg.tracking.uri,
+                                    run_id=child.info.run_id)
+
+        model, report = fit_surrogate(cfg.dataset_dir, c["model"], c["split"], c["scaling"], c["trainer"],
+                                      cfg.trainer.target_val_rel_rmse, seed=cfg.seed, name=name,
+                                      ckpt_root=ckpt_root, logger_for=logger_for,
+                                      val_fraction=cfg.trainer.val_fraction, batch_size=cfg.trainer.batch_size)
+        metrics = held_out_errors(model, cfg.testset_dir, cfg.error_floor_N)
+        x, v = sample_states(model.bearing.clearance)
+        reference = GradedReynoldsModel(model.bearing)
+        t_model = time_per_force_eval(model, x, v)
+        t_ref = time_per_force_eval(reference, x, v)
+        metrics.update(time_per_eval_us=1e6 * t_model, reference_time_per_eval_us=1e6 * t_ref,
+                       speedup_force_eval_vs_reference=t_ref / t_model, train_time_s=report["train_time_s"],
+                       n_parameters=model.n_parameters)
+        if report["time_to_target_s"] is not None:
+            metrics["time_to_target_s"] = report["time_to_target_s"]
+        # write the model next to the old one, then swap, so a crash never leaves half a model
+        out = Path(cfg.out_dir) / name
+        tmp = out.with_name(out.name + ".tmp")
+        shutil.rmtree(tmp, ignore_errors=True)
+        model.save(tmp)
+        io.write_json(tmp / "report.json", {"report": report, "metrics": metrics, "config": c})
+        io.write_text(tmp / "card.md", model_card(name, report, metrics, c))
+        shutil.rmtree(out, ignore_errors=True)
+        tmp.rename(out)
+        if parent is not None:
+            import mlflow
+
+            mlflow.log_metrics({k: float(v) for k, v in metrics.items()})
+            for k, n in enumerate(report["networks"]):
+                mlflow.log_metric(f"train_time_s_network{k}", n["train_time_s"])
+                if n["time_to_target_s"] is not None:
+                    mlflow.log_metric(f"time_to_target_s_network{k}", n["time_to_target_s"])
+            mlflow.log_artifacts(str(out), artifact_path="model")
+    print(f"{name}: test median rel. error {metrics['test_rel_err_median']:.4f}, p99 {metrics['test_rel_err_p99']:.3f}, "
+          f"train {report['train_time_s']:.1f} s, to target {report['time_to_target_s']}, "
+          f"{metrics['speedup_force_eval_vs_reference']:.1f}x faster than the reference per force")
+    return metrics
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,72 @@
+"""Every config composes (as lightning-hydra-template's smoke tests), and the objects it describes build."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hydra import compose, initialize_config_dir
+from omegaconf import OmegaConf
+
+from fluidfilm.config import bearing_from_cfg, reference_from_cfg, solver_from_cfg
+from fluidfilm.data import DatasetSpec
+from fluidfilm.rotor.cases import rotor_for_case
+
+CONF = Path(__file__).resolve().parents[1] / "conf"
+PRIMARY = sorted(p.stem for p in CONF.glob("*.yaml"))
+# which primary config composes each group, and under which key it lands
+GROUPS = {
+    "bearing": ("fig2", "bearing"), "solver": ("grid_sweep", "solver"), "reference": ("make_dataset", "reference"),
+    "tracking": ("train", "tracking"), "dataset": ("make_dataset", "dataset"), "dask": ("make_dataset", "dask"),
+    "model": ("train", "model"), "split": ("train", "split"), "scaling": ("train", "scaling"),
+    "trainer": ("train", "trainer"), "experiment": ("train", None), "rotor": ("trajectories", "rotor"),
+    "integrator": ("trajectories", "integrator"), "case": ("trajectories", "cases.a"),
+    "metrics": ("compare", "metrics"),
+}
+
+
+def _compose(name, overrides=()):
+    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
+        return compose(config_name=name, overrides=list(overrides))
+
+
+@pytest.mark.parametrize("name", PRIMARY)
+def test_primary_config_composes_and_resolves(name):
+    cfg = _compose(name)
+    OmegaConf.to_container(cfg, resolve=True)
+    if "bearing" in cfg:
+        bearing = bearing_from_cfg(cfg.bearing)
+        if "reference" in cfg:
+            reference_from_cfg(bearing, cfg.reference)
+        for key in ("solver", "coarse", "dense", "converged"):
+            if key in cfg:
+                solver_from_cfg(bearing, cfg[key])
+    if "dataset" in cfg:
+        DatasetSpec.from_cfg(cfg.dataset)
+    if "cases" in cfg and "rotor" in cfg:
+        for case in cfg.cases.values():
+            rotor_for_case(cfg.rotor, case)
+
+
+def _options():
+    for group in sorted(p.name for p in CONF.iterdir() if p.is_dir() and p.name != "hydra"):
+        for option in sorted(p.stem for p in (CONF / group).glob("*.yaml")):
+            yield group, option
+
+
+def test_every_group_is_covered():
+    groups = {g for g, _ in _options()}
+    assert groups <= set(GROUPS), f"add {groups - set(GROUPS)} to GROUPS"
+
+
+@pytest.mark.parametrize("group, option", list(_options()))
+def test_every_option_composes(group, option):
+    primary, key = GROUPS[group]
+    if primary not in PRIMARY:
+        pytest.fail(f"primary config {primary}.yaml is missing")
+    package = "" if key in (None, group) else f"@{key}"
+    cfg = _compose(primary, [f"{group}{package}={option}"])
+    OmegaConf.to_container(cfg, resolve=True)
+    if group == "dataset":
+        DatasetSpec.from_cfg(cfg.dataset)
+    if group == "bearing":
+        bearing_from_cfg(cfg.bearing)

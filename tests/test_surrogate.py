@@ -1,0 +1,141 @@
+"""Surrogates: accuracy on the quick profile, one interface (Lightning = loaded = compiled), routing, domain."""
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+import torch
+
+from fluidfilm import Rotor, load_surrogate, paper_bearing, simulate
+from fluidfilm.surrogate import Scaling, SurrogateForceModel
+from fluidfilm.surrogate.fit import fit_surrogate, regions, held_out_errors
+from fluidfilm.surrogate.inference import surrogate_force
+
+C = 120e-6
+TINY = dict(width=32, depth=2, activation="tanh", lr=1e-2, optimizer="adam", scheduler="cosine")
+QUICK = dict(max_epochs=150, progress_bar=False)
+
+
+@pytest.fixture(scope="module")
+def trained(quick_data):
+    dataset, _ = quick_data
+    return fit_surrogate(dataset, TINY, {"boundaries": []}, {"kind": "physics", "power": 1.5}, QUICK, target=None,
+                         seed=1, batch_size=128, val_fraction=0.2)
+
+
+def test_small_network_beats_the_error_bound_on_the_quick_test_set(trained, quick_data):
+    """Bound from real runs (median 0.15-0.21 over seeds, 150 epochs), with margin."""
+    model, report = trained
+    err = held_out_errors(model, quick_data[1])
+    assert err["test_rel_err_median"] < 0.35
+    assert report["networks"][0]["val_rel_rmse"] < 0.25
+
+
+def test_loaded_model_equals_the_lightning_module_and_the_compiled_kernel(trained, quick_data, tmp_path):
+    model, _ = trained
+    model.save(tmp_path / "m")
+    loaded = load_surrogate(tmp_path / "m")
+    rng = np.random.default_rng(0)
+    eps, ang = 0.85 * rng.random(50), 2 * np.pi * rng.random(50)
+    X = C * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
+    V = rng.uniform(-0.2, 0.2, (50, 2))
+    F_loaded = loaded.forces(X, V)
+    np.testing.assert_array_equal(F_loaded, model.forces(X, V))
+    # the Lightning module: rebuild it from the saved layers and run it in torch (double precision)
+    from fluidfilm.surrogate.training import ForceMLP
+
+    scaling = loaded.scalings[0]
+    module = ForceMLP(width=32, depth=2, activation="tanh").double()
+    linears = [m for m in module.net if isinstance(m, torch.nn.Linear)]
+    for lin, (W, b) in zip(linears, loaded.networks[0]):
+        lin.weight.data = torch.as_tensor(W)
+        lin.bias.data = torch.as_tensor(b)
+    with torch.no_grad():
+        y = module(torch.as_tensor(scaling.inputs(X, V))).numpy()
+    np.testing.assert_allclose(F_loaded, scaling.forces(X, y), rtol=1e-9, atol=1e-9)
+    kernel, params = loaded.force_kernel
+    F_kernel = np.array([kernel(params, *x, *v) for x, v in zip(X, V)])
+    np.testing.assert_allclose(F_kernel, F_loaded, rtol=1e-12)
+
+
+def _constant_net(value: float):
+    """A network whose output is the constant (value, -value): zero weights, biases carry it."""
+    return [(np.zeros((4, 4)), np.zeros(4)), (np.zeros((2, 4)), np.array([value, -value]))]
+
+
+def _identity_scaling():
+    return Scaling("standard", C, 314.0, 1.0, 0.0, np.zeros(4), np.ones(4), np.zeros(2), np.ones(2))
+
+
+def test_split_routing_sends_each_band_to_its_network():
+    b = paper_bearing()
+    m = SurrogateForceModel(b, [_constant_net(k) for k in range(3)], [_identity_scaling()] * 3, "relu",
+                            boundaries=[0.5, 0.7])
+    # (exactly at a boundary, |X|/c may round to either side: test just off it)
+    for eps, k in [(0.0, 0), (0.3, 0), (0.4999, 0), (0.5001, 1), (0.65, 1), (0.7001, 2), (0.95, 2)]:
+        F = m.forces([0.0, eps * C], [0.0, 0.0])
+        assert F[0] == pytest.approx(k), eps
+
+
+def test_blending_makes_the_force_continuous_across_a_boundary():
+    b = paper_bearing()
+    hard = SurrogateForceModel(b, [_constant_net(k) for k in range(3)], [_identity_scaling()] * 3, "relu",
+                               boundaries=[0.5, 0.7])
+    soft = SurrogateForceModel(b, [_constant_net(k) for k in range(3)], [_identity_scaling()] * 3, "relu",
+                               boundaries=[0.5, 0.7], blend_width=0.04)
+    eps = np.linspace(0.45, 0.55, 1001)
+    X = np.stack([np.zeros_like(eps), eps * C], axis=1)
+    jump_hard = np.abs(np.diff(hard.forces(X, np.zeros_like(X))[:, 0])).max()
+    jump_soft = np.abs(np.diff(soft.forces(X, np.zeros_like(X))[:, 0])).max()
+    assert jump_hard == pytest.approx(1.0)
+    assert jump_soft < 0.01
+    F = soft.forces(X, np.zeros_like(X))[:, 0]
+    assert F[0] == 0.0 and F[-1] == 1.0 and np.all(np.diff(F) >= 0)
+    np.testing.assert_allclose(regions([0.5, 0.7], 0.04), [(0.0, 0.52), (0.48, 0.72), (0.68, math.inf)])
+
+
+def test_outside_the_training_domain_warns_once_and_the_trajectory_says_so(trained):
+    model, _ = trained
+    with pytest.warns(RuntimeWarning, match="outside the training domain"):
+        model.forces([0.0, 0.99 * C], [0.0, 0.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model.forces([0.0, 0.99 * C], [0.0, 0.0])  # once only
+    with pytest.warns(RuntimeWarning):
+        traj = simulate(model, Rotor(mass=2.5), t_end=0.01, x0=[0.0, 0.3 * C], v0=[0.0, 5.0])
+    assert "outside the training domain" in traj.status
+
+
+def test_surrogate_runs_in_the_compiled_integrator(trained):
+    model, _ = trained
+    traj = simulate(model, Rotor(mass=2.5, imbalance=1e-4), t_end=0.05, record_every=10)
+    assert traj.ok and np.isfinite(traj.x).all()
+    assert surrogate_force is model.force_kernel[0]
+
+
+def test_training_resumes_from_its_checkpoint(quick_data, tmp_path):
+    dataset, _ = quick_data
+    kw = dict(seed=0, batch_size=128, val_fraction=0.2, ckpt_root=tmp_path / "ckpt", target=None)
+    _, first = fit_surrogate(dataset, TINY, {"boundaries": []}, {"kind": "physics"}, dict(max_epochs=3,
+                             progress_bar=False), **kw)
+    assert (tmp_path / "ckpt" / "region0" / "last.ckpt").exists()
+    _, second = fit_surrogate(dataset, TINY, {"boundaries": []}, {"kind": "physics"}, dict(max_epochs=5,
+                              progress_bar=False), **kw)
+    assert first["networks"][0]["epochs"] == 3 and second["networks"][0]["epochs"] == 5
+    # the clock carries over: the resumed run's total includes the first three epochs
+    assert second["train_time_s"] > first["train_time_s"]
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(boundaries=[0.7, 0.5]), "boundaries must increase"),
+    (dict(boundaries=[0.5, 0.7], blend_width=0.3), "blend_width"),
+    (dict(activation="swish"), "unknown activation"),
+])
+def test_bad_surrogate_settings_raise(kwargs, match):
+    nets = [_constant_net(k) for k in range(3)]
+    args = dict(boundaries=[0.5, 0.7], blend_width=0.0, activation="relu") | kwargs
+    with pytest.raises(ValueError, match=match):
+        SurrogateForceModel(paper_bearing(), nets, [_identity_scaling()] * 3, args["activation"],
+                            boundaries=args["boundaries"], blend_width=args["blend_width"])

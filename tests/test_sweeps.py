@@ -1,0 +1,35 @@
+"""A Hydra multirun in parallel (joblib) logs its jobs under one MLflow parent run."""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import mlflow
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_two_job_joblib_multirun_nests_both_runs_under_one_parent(quick_data, tmp_path):
+    dataset, testset = quick_data
+    uri = f"sqlite:///{tmp_path / 'mlflow.db'}"
+    cmd = [sys.executable, "experiments/train_surrogate.py", "-m", "hydra/launcher=joblib", "hydra.launcher.n_jobs=2",
+           "seed=0,1", "model=tiny", "trainer=quick", "trainer.max_epochs=2", f"dataset_dir={dataset}",
+           f"testset_dir={testset}", f"out_dir={tmp_path / 'models'}", f"checkpoint_dir={tmp_path / 'ckpt'}",
+           f"tracking.uri={uri}", "tracking.experiment=sweep-test", f"hydra.sweep.dir={tmp_path / 'multirun'}"]
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    client = mlflow.tracking.MlflowClient(uri)
+    exp = client.get_experiment_by_name("sweep-test")
+    runs = client.search_runs([exp.experiment_id])
+    parents = [r for r in runs if "sweep_dir" in r.data.tags]
+    assert len(parents) == 1
+    jobs = [r for r in runs if r.data.tags.get("mlflow.parentRunId") == parents[0].info.run_id]
+    assert sorted(r.data.tags["model_name"] for r in jobs) == ["tiny-none-standard-s0", "tiny-none-standard-s1"]
+    for job in jobs:
+        assert "test_rel_err_median" in job.data.metrics
+        assert job.data.params["seed"] in ("0", "1")
+        networks = [r for r in runs if r.data.tags.get("mlflow.parentRunId") == job.info.run_id]
+        assert len(networks) == 1  # one network, its per-epoch losses in a nested run
+        assert client.get_metric_history(networks[0].info.run_id, "val_rel_rmse")
+    assert (tmp_path / "models" / "tiny-none-standard-s1" / "card.md").exists()
