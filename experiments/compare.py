@@ -1,0 +1,64 @@
+"""Fig. 4 a-g overlays (reference / single / split / best) and the speed comparison, measured side by side.
+
+    python experiments/compare.py
+"""
+from pathlib import Path
+
+import hydra
+import pandas as pd
+from omegaconf import DictConfig, OmegaConf
+
+from fluidfilm import ReynoldsSolver, io, load_surrogate, tracking
+from fluidfilm.comparison import machine, speed_comparison, trajectory_comparison
+from fluidfilm.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.figures import plot_orbits
+
+
+@hydra.main(config_path="../conf", config_name="compare", version_base="1.3")
+def main(cfg: DictConfig) -> None:
+    bearing = bearing_from_cfg(cfg.bearing)
+    reference = reference_from_cfg(bearing, cfg.reference)
+    surrogates = {name: load_surrogate(path) for name, path in cfg.models.items()}
+    models = {"reference": reference, **surrogates}
+    cases = {k: cfg.cases[k] for k in sorted(cfg.cases)}
+    table, trajs = trajectory_comparison(models, "reference", cfg.rotor, cases, cfg.integrator,
+                                         cfg.metrics.threshold_pct, cfg.timing_repeats)
+    for case, by_model in trajs.items():
+        for name, traj in by_model.items():
+            traj.to_npz(Path(cfg.out_dir) / name / f"{case}.npz")
+    report = Path(cfg.report_dir)
+    io.write_csv(report / "trajectory_metrics.csv", table)
+    panels = {k: (cases[k].label, trajs[k]) for k in cases}
+    fig = plot_orbits(panels, bearing.clearance, cfg.integrator.t_settle,
+                      "Fig. 4 - rotor trajectories: reference vs surrogates")
+    io.save_figure(fig, Path(cfg.figure_dir) / "fig4_comparison.png", dpi=130)
+    grids = {f"{n}x{m}": ReynoldsSolver(bearing, n, m) for n, m in cfg.paper_grids}
+    speed = speed_comparison(surrogates, {"graded": reference, **grids}, cfg.force_eval_states)
+    io.write_csv(report / "speed.csv", speed)
+    t_ref = table[table.model == "reference"].wall_time_s.sum()
+    summary = {"machine": machine(), "trajectory_wall_time_reference_s": float(t_ref)}
+    per_eval = dict(zip(speed.model, speed.time_per_eval_us))
+    for name in surrogates:
+        rows = table[table.model == name]
+        summary[f"trajectory_wall_time_{name}_s"] = float(rows.wall_time_s.sum())
+        summary[f"speedup_trajectory_{name}"] = float(t_ref / rows.wall_time_s.sum())
+        summary[f"speedup_force_eval_{name}"] = per_eval["graded"] / per_eval[name]
+        for grid in grids:
+            summary[f"speedup_force_eval_{name}_vs_{grid}"] = per_eval[grid] / per_eval[name]
+        summary[f"satisfactory_cases_{name}"] = "".join(rows[rows.satisfactory == True].case)  # noqa: E712
+        for _, r in rows.iterrows():
+            summary[f"orbit_rms_pct_{name}_{r.case}"] = float(r.rms_pct)
+            summary[f"orbit_hausdorff_pct_{name}_{r.case}"] = float(r.hausdorff_pct)
+    io.write_json(report / "comparison.json", summary)
+    with tracking.run(cfg.tracking, "compare", OmegaConf.to_container(cfg, resolve=True)):
+        if cfg.tracking.enabled:
+            import mlflow
+            mlflow.log_metrics({k: v for k, v in summary.items() if isinstance(v, float)})
+            mlflow.log_artifact(str(Path(cfg.figure_dir) / "fig4_comparison.png"))
+    pd.set_option("display.width", 200)
+    print(table[["case", "model", "status", "span", "rms_pct", "hausdorff_pct", "satisfactory", "wall_time_s"]])
+    print(speed)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,107 @@
+"""The paper's comparisons: trajectory accuracy per case, speed side by side, training time over seeds.
+
+Every model runs through the same integrator with the same settings, and
+timings of two models are taken in the same run, on the same machine.
+"""
+from __future__ import annotations
+
+import math
+import platform
+import time
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+from .rotor.cases import case_summary, run_case
+from .rotor.integrate import Trajectory
+from .speed import sample_states, time_per_force_eval
+
+
+def machine() -> str:
+    import os
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
+
+
+def trajectory_comparison(models: Mapping[str, object], reference_name: str, rotor_cfg: Mapping,
+                          cases: Mapping[str, Mapping], integrator_cfg: Mapping, threshold_pct: float,
+                          repeats: int = 3) -> tuple[pd.DataFrame, dict]:
+    """Run every case with every model; score each against the reference.
+
+    Returns a table (one row per case and model: orbit statistics, distances
+    from the reference, satisfactory or not, median wall time of ``repeats``
+    runs) and the trajectories {case: {model: Trajectory}}.
+    """
+    clearance = models[reference_name].bearing.clearance
+    t_settle = integrator_cfg["t_settle"]
+    rows, trajs = [], {}
+    for name, case in cases.items():
+        trajs[name] = {}
+        for model_name, model in models.items():
+            runs = [run_case(model, rotor_cfg, case, integrator_cfg) for _ in range(repeats)]
+            traj = runs[-1]
+            traj.wall_time_s = float(np.median([r.wall_time_s for r in runs]))
+            trajs[name][model_name] = traj
+        ref = trajs[name][reference_name]
+        for model_name, traj in trajs[name].items():
+            is_ref = model_name == reference_name
+            s = case_summary(traj, clearance, t_settle, None if is_ref else ref, None if is_ref else threshold_pct)
+            rows.append({"case": name, "model": model_name, **s})
+    return pd.DataFrame(rows), trajs
+
+
+def speed_comparison(models: Mapping[str, object], references: Mapping[str, object], n_states: int = 5000,
+                     repeats: int = 7) -> pd.DataFrame:
+    """Time per force evaluation of every model in the same compiled loop over the same states."""
+    first = next(iter(references.values()))
+    x, v = sample_states(first.bearing.clearance, n_states)
+    rows = []
+    for group, items in (("reference", references), ("surrogate", models)):
+        for name, model in items.items():
+            rows.append({"model": name, "kind": group, "time_per_eval_us": 1e6 * time_per_force_eval(model, x, v, repeats)})
+    return pd.DataFrame(rows)
+
+
+def reduction_pct(single: float, split: float) -> float:
+    """How much less time the split model took, in % of the single model's time (the paper: 26 %)."""
+    return 100.0 * (single - split) / single
+
+
+def summarise_training_times(rows: pd.DataFrame) -> dict:
+    """Per-seed times -> medians, spread and the reduction in % (median and range over seeds)."""
+    out = {}
+    piv = rows.pivot(index="seed", columns="model", values="time_s")
+    for m in ("single", "split"):
+        out[f"train_time_{m}_s"] = float(piv[m].median())
+        out[f"train_time_{m}_s_min"] = float(piv[m].min())
+        out[f"train_time_{m}_s_max"] = float(piv[m].max())
+    red = reduction_pct(piv["single"], piv["split"])
+    out["train_time_reduction_pct"] = reduction_pct(out["train_time_single_s"], out["train_time_split_s"])
+    out["train_time_reduction_pct_per_seed_min"] = float(red.min())
+    out["train_time_reduction_pct_per_seed_max"] = float(red.max())
+    out["n_seeds"] = int(len(piv))
+    return out
+
+
+def timed(fn, *args, **kwargs):
+    t0 = time.perf_counter()
+    out = fn(*args, **kwargs)
+    return out, time.perf_counter() - t0
+
+
+def finite_or_none(x):
+    return None if x is None or (isinstance(x, float) and not math.isfinite(x)) else x
+
+
+__all__ = ["trajectory_comparison", "speed_comparison", "summarise_training_times", "reduction_pct", "machine",
+           "Trajectory"]

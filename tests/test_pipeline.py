@@ -1,0 +1,81 @@
+"""The whole comparison pipeline on the quick profile, end to end, and the review notebook on its outputs.
+
+The same entry points as `dvc repro`, with overrides that point them at the
+quick dataset, tiny networks, short trajectories and a temporary directory.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import nbformat
+import pytest
+from nbclient import NotebookClient
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(script, *overrides):
+    proc = subprocess.run([sys.executable, f"experiments/{script}", *overrides], cwd=ROOT, capture_output=True,
+                          text=True, timeout=900)
+    assert proc.returncode == 0, f"{script} failed:\n{proc.stderr[-4000:]}"
+    return proc.stdout
+
+
+@pytest.fixture(scope="module")
+def quick_pipeline(quick_data, tmp_path_factory):
+    dataset, testset = quick_data
+    tmp = tmp_path_factory.mktemp("pipeline")
+    uri = f"sqlite:///{tmp / 'mlflow.db'}"
+    common = [f"dataset_dir={dataset}", f"testset_dir={testset}", f"out_dir={tmp / 'models'}",
+              f"checkpoint_dir={tmp / 'ckpt'}", f"tracking.uri={uri}", "trainer=quick", "trainer.max_epochs=20",
+              "model=tiny"]
+    for exp in ("paper_single", "paper_split", "best"):
+        run("train_surrogate.py", f"experiment={exp}", *common)
+    reports = tmp / "reports"
+    run("train_time.py", f"dataset_dir={dataset}", "seeds=[0,1]", "trainer=quick", "trainer.max_epochs=5",
+        "trainer.target_val_rel_rmse=0.9", "model=tiny", f"out={reports / 'train_time.json'}", f"tracking.uri={uri}")
+    models = tmp / "models"
+    run("compare.py", f"models.single={models / 'paper_single'}", f"models.split={models / 'paper_split'}",
+        f"models.best={models / 'best'}", "integrator.t_end=0.06", "integrator.t_settle=0.04", "timing_repeats=1",
+        "force_eval_states=500", f"out_dir={tmp / 'traj'}", f"figure_dir={reports / 'figures'}",
+        f"report_dir={reports}", f"tracking.uri={uri}")
+    run("report.py", f"report_dir={reports}", f"models_dir={models}", f"dataset_dir={dataset}", f"tracking.uri={uri}")
+    return tmp, uri
+
+
+def test_pipeline_writes_every_headline_number(quick_pipeline):
+    tmp, _ = quick_pipeline
+    metrics = json.loads((tmp / "reports" / "metrics.json").read_text())
+    for key in ("train_time_single_s", "train_time_split_s", "train_time_reduction_pct", "speedup_trajectory_single",
+                "speedup_trajectory_split", "speedup_force_eval"):
+        assert isinstance(metrics[key], float), key
+    for case in "abcdefg":
+        assert f"orbit_rms_pct_single_{case}" in metrics and f"orbit_rms_pct_split_{case}" in metrics
+    md = (tmp / "reports" / "paper_comparison.md").read_text()
+    assert "| training time reduction, split vs single | 26 % |" in md
+    assert (tmp / "reports" / "figures" / "fig4_comparison.png").stat().st_size > 10_000
+    assert metrics["speedup_trajectory_split"] > 0
+
+
+def test_review_notebook_runs_on_the_quick_profile(quick_pipeline):
+    tmp, uri = quick_pipeline
+    nb = nbformat.read(ROOT / "notebooks" / "review.ipynb", as_version=4)
+    env = {"FLUIDFILM_REPORT_DIR": str(tmp / "reports"), "FLUIDFILM_MLFLOW_URI": uri}
+    old = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    try:
+        NotebookClient(nb, timeout=300, kernel_name="python3",
+                       resources={"metadata": {"path": str(ROOT / "notebooks")}}).execute()
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
+    assert not [o for o in outputs if o.get("output_type") == "error"]
+    assert any("train_time_reduction_pct" in json.dumps(o) for o in outputs)
