@@ -37,7 +37,7 @@ def quick_pipeline(quick_data, tmp_path_factory):
         run("train_surrogate.py", f"experiment={exp}", *common)
     reports = tmp / "reports"
     run("train_time.py", f"dataset_dir={dataset}", "seeds=[0,1]", "trainer=quick", "trainer.max_epochs=5",
-        "trainer.target_val_rel_rmse=0.9", "model=tiny", f"out={reports / 'train_time.json'}", f"tracking.uri={uri}")
+        "studies.paper_setup.target_val_rel_rmse=0.95", "studies.physics_scaling.target_val_rel_rmse=0.9", "model=tiny", f"out={reports / 'train_time.json'}", f"tracking.uri={uri}")
     models = tmp / "models"
     run("compare.py", f"models.single={models / 'paper_single'}", f"models.split={models / 'paper_split'}",
         f"models.best={models / 'best'}", "integrator.t_end=0.06", "integrator.t_settle=0.04", "timing_repeats=1",

@@ -54,7 +54,7 @@ def test_loaded_model_equals_the_lightning_module_and_the_compiled_kernel(traine
         lin.bias.data = torch.as_tensor(b)
     with torch.no_grad():
         y = module(torch.as_tensor(scaling.inputs(X, V))).numpy()
-    np.testing.assert_allclose(F_loaded, scaling.forces(X, y), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(F_loaded, scaling.forces(X, V, y), rtol=1e-9, atol=1e-9)
     kernel, params = loaded.force_kernel
     F_kernel = np.array([kernel(params, *x, *v) for x, v in zip(X, V)])
     np.testing.assert_allclose(F_kernel, F_loaded, rtol=1e-12)

@@ -77,9 +77,11 @@ class VelocitySection:
     core: float
     core_fraction: float
     n_per_side: int
+    include_zero: bool = False
 
     def values(self) -> np.ndarray:
-        """Graded values of one velocity component, ascending: n_per_side negative, n_per_side positive.
+        """Graded values of one velocity component, ascending: n_per_side negative, n_per_side positive
+        (and 0 between them with ``include_zero``; the paper's layout has no zero).
 
         Per side, round(core_fraction * n) values evenly spaced in (0, core]
         and the rest evenly in (core, v_max]; the negative side mirrors it.
@@ -89,7 +91,8 @@ class VelocitySection:
         core = np.linspace(0.0, self.core, n_core + 1)[1:]
         outer = np.linspace(self.core, self.v_max, n_out + 1)[1:]
         side = np.concatenate([core, outer])
-        return np.concatenate([-side[::-1], side])
+        zero = np.zeros(1 if self.include_zero else 0)
+        return np.concatenate([-side[::-1], zero, side])
 
 
 @dataclass(frozen=True)
@@ -141,7 +144,7 @@ class DatasetSpec:
                 raise DatasetConfigError(f"{w}: core_fraction={frac} leaves no value in (core, v_max]")
             if n_core == 0 and frac > 0:
                 raise DatasetConfigError(f"{w}: core_fraction={frac} of n_per_side={n} rounds to no core value")
-            vsecs.append(VelocitySection(lo, hi, v_max, core, frac, n))
+            vsecs.append(VelocitySection(lo, hi, v_max, core, frac, n, bool(s.get("include_zero", False))))
         combine = str(cfg.get("combine", "product"))
         if combine not in ("product", "zip"):
             raise DatasetConfigError(f"{where}.combine={combine!r} must be 'product' or 'zip'")

@@ -35,7 +35,7 @@ from .scaling import Scaling
 ACTIVATIONS = {"tanh": 0, "relu": 1, "silu": 2, "sigmoid": 3}
 
 
-@njit(cache=True, fastmath={"reassoc", "contract"})
+@njit(cache=True, fastmath={"reassoc", "contract"}, inline="always")
 def _dense(w, b, src, dst, n_in, n_out):
     """dst = W src + b with W stored transposed (n_in, n_out): axpy updates, vectorised over outputs."""
     for o in range(n_out):
@@ -47,7 +47,7 @@ def _dense(w, b, src, dst, n_in, n_out):
             dst[o] += w[base + o] * ci
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _activate(buf, n, act):
     if act == 0:
         # tanh through one exp (libm's tanh is about twice as slow); exact to rounding
@@ -67,7 +67,7 @@ def _activate(buf, n, act):
             buf[o] = 1.0 / (1.0 + math.exp(-buf[o]))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mlp(weights, table, n_layers, act, z, buf_a, buf_b):
     """Evaluate one network on the 4 scaled inputs ``z``; returns its 2 outputs.
 
@@ -88,11 +88,11 @@ def _mlp(weights, table, n_layers, act, z, buf_a, buf_b):
     return out[0], out[1]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
     weights, tables, n_layers, act, scal = params[0], params[1], params[2], params[3], params[4]
     s = scal[r]
-    physics = s[0] == 1.0
+    physics = s[0] >= 1.0  # 1: physics, 2: physics_v
     c, omega, fscale, power = s[1], s[2], s[3], s[4]
     z = params[12][2]
     if physics:
@@ -105,7 +105,10 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
     f1 = y1 * s[15] + s[13]
     f2 = y2 * s[16] + s[14]
     if physics:
-        g = fscale / (1.0 - e2) ** power
+        d = 1.0 - e2
+        g = fscale / (d * math.sqrt(d) if power == 1.5 else d**power)
+        if s[0] == 2.0:
+            g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)
         f1 *= g
         f2 *= g
     return f1, f2

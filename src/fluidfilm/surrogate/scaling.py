@@ -9,6 +9,11 @@ Two kinds:
   (1 - eps^2)^p before standardising.  The forces span orders of magnitude
   across eps (squeeze damping grows like (1 - eps^2)^-1.5); the factor
   flattens that growth so one network's error is spread evenly over eps.
+- ``physics_v``: as ``physics``, and the force also divided by
+  (1 + |V|/(c omega)).  Squeeze forces grow with |V| and at |V| >> c omega
+  dwarf the static (wedge) force; without this factor the network's error
+  budget goes to them and the static load - what decides where the journal
+  settles - gets a poor relative accuracy.
 
 Pure numpy, so that inference needs no torch.
 """
@@ -18,7 +23,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-SCALINGS = ("standard", "physics")
+SCALINGS = ("standard", "physics", "physics_v")
+KIND_CODES = {"standard": 0.0, "physics": 1.0, "physics_v": 2.0}
 
 
 @dataclass
@@ -42,7 +48,7 @@ class Scaling:
         s = cls(kind, float(clearance), float(omega), float(force_scale), float(power),
                 np.zeros(4), np.ones(4), np.zeros(2), np.ones(2))
         z = s._raw_inputs(X, V)
-        y = s._raw_targets(X, F)
+        y = s._raw_targets(X, V, F)
         s.in_mean, s.in_std = z.mean(axis=0), z.std(axis=0) + 1e-12
         s.out_mean, s.out_std = y.mean(axis=0), y.std(axis=0) + 1e-12
         return s
@@ -51,28 +57,32 @@ class Scaling:
     def _eps2(self, X):
         return (X[..., 0] ** 2 + X[..., 1] ** 2) / self.clearance**2
 
+    def gain(self, X, V) -> np.ndarray:
+        """Force per unit of raw network target at each state (1 for standard scaling)."""
+        if self.kind == "standard":
+            return np.ones(np.shape(X)[:-1])
+        g = self.force_scale / (1.0 - self._eps2(X)) ** self.power
+        if self.kind == "physics_v":
+            g = g * (1.0 + np.hypot(V[..., 0], V[..., 1]) / (self.clearance * self.omega))
+        return g
+
     def _raw_inputs(self, X, V):
-        if self.kind == "physics":
+        if self.kind != "standard":
             return np.concatenate([X / self.clearance, V / (self.clearance * self.omega)], axis=-1)
         return np.concatenate([X, V], axis=-1)
 
-    def _raw_targets(self, X, F):
-        if self.kind == "physics":
-            return F / self.force_scale * (1.0 - self._eps2(X))[..., None] ** self.power
-        return F
+    def _raw_targets(self, X, V, F):
+        return F / self.gain(X, V)[..., None]
 
     def inputs(self, X, V) -> np.ndarray:
         return (self._raw_inputs(X, V) - self.in_mean) / self.in_std
 
-    def targets(self, X, F) -> np.ndarray:
-        return (self._raw_targets(X, F) - self.out_mean) / self.out_std
+    def targets(self, X, V, F) -> np.ndarray:
+        return (self._raw_targets(X, V, F) - self.out_mean) / self.out_std
 
-    def forces(self, X, y) -> np.ndarray:
+    def forces(self, X, V, y) -> np.ndarray:
         """Inverse of ``targets``: network outputs -> forces [N]."""
-        raw = y * self.out_std + self.out_mean
-        if self.kind == "physics":
-            return raw * self.force_scale / (1.0 - self._eps2(X))[..., None] ** self.power
-        return raw
+        return (y * self.out_std + self.out_mean) * self.gain(X, V)[..., None]
 
     # ------------------------------------------------------------------ io
     def to_dict(self) -> dict:
@@ -90,6 +100,6 @@ class Scaling:
 
     def kernel_row(self) -> np.ndarray:
         """Flat parameters for the compiled kernel: kind, c, omega, force_scale, power, means, stds."""
-        return np.concatenate([[1.0 if self.kind == "physics" else 0.0, self.clearance, self.omega,
+        return np.concatenate([[KIND_CODES[self.kind], self.clearance, self.omega,
                                 self.force_scale, self.power], self.in_mean, self.in_std, self.out_mean,
                                self.out_std])

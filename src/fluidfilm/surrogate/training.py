@@ -183,21 +183,14 @@ class ForceDataModule(L.LightningDataModule):
         self.scaling = Scaling.fit(self.scaling_kind, X[~is_val], V[~is_val], F[~is_val], b.clearance, b.omega,
                                    b.force_scale, self.power)
         z = self.scaling.inputs(X, V)
-        y = self.scaling.targets(X, F)
-        gain = self._gain(X)  # F = (network output unscaled) * gain
+        y = self.scaling.targets(X, V, F)
+        gain = self.scaling.gain(X, V)  # F = (network output unscaled) * gain
         t = lambda a: torch.as_tensor(np.ascontiguousarray(a), dtype=torch.float32)  # noqa: E731
         tr, va = ~is_val, is_val
         self.train_tensors = (t(z[tr]), t(y[tr]))
         self.val_tensors = (t(z[va]), t(y[va]), t(F[va]), t(gain[va]))
         self.n_train, self.n_val = int(tr.sum()), int(va.sum())
         self.eps_data_max = float(df["eps"].max())
-
-    def _gain(self, X):
-        s = self.scaling
-        if s.kind == "physics":
-            e2 = (X[:, 0] ** 2 + X[:, 1] ** 2) / s.clearance**2
-            return s.force_scale / (1.0 - e2) ** s.power
-        return np.ones(len(X))
 
     def train_dataloader(self):
         return torch.utils.data.DataLoader(_Batches(self.train_tensors, self.batch_size, True, self.seed),
