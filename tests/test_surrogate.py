@@ -139,3 +139,33 @@ def test_bad_surrogate_settings_raise(kwargs, match):
     with pytest.raises(ValueError, match=match):
         SurrogateForceModel(paper_bearing(), nets, [_identity_scaling()] * 3, args["activation"],
                             boundaries=args["boundaries"], blend_width=args["blend_width"])
+
+
+def test_damping_structure_equals_its_module_and_rests_on_the_static_network(quick_data, tmp_path):
+    """F = S(X) + C(X, V) v: the loaded kernel equals the torch module, and at V = 0 only S acts."""
+    from fluidfilm.surrogate.training import ForceMLP
+
+    dataset, _ = quick_data
+    model_cfg = dict(TINY, width=8, structure="damping")
+    model, _ = fit_surrogate(dataset, model_cfg, {"boundaries": []}, {"kind": "physics", "power": 1.5},
+                             dict(max_epochs=2, progress_bar=False), target=None, seed=0, batch_size=128)
+    model.save(tmp_path / "d")
+    loaded = load_surrogate(tmp_path / "d")
+    assert loaded.structure == "damping"
+    sc = loaded.scalings[0]
+    module = ForceMLP(width=8, depth=2, activation="tanh", structure="damping", v_mean=list(sc.in_mean[2:]),
+                      v_std=list(sc.in_std[2:])).double()
+    static, damping = loaded.networks[0]
+    for seq, layers in ((module.static, static), (module.damping, damping)):
+        for lin, (W, b) in zip([m for m in seq if isinstance(m, torch.nn.Linear)], layers):
+            lin.weight.data, lin.bias.data = torch.as_tensor(W), torch.as_tensor(b)
+    rng = np.random.default_rng(1)
+    eps, ang = 0.8 * rng.random(20), 2 * np.pi * rng.random(20)
+    X = C * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
+    V = rng.uniform(-0.05, 0.05, (20, 2))
+    with torch.no_grad():
+        y = module(torch.as_tensor(sc.inputs(X, V))).numpy()
+        y_rest = module.static(torch.as_tensor(sc.inputs(X, 0 * V))[:, :2]).numpy()
+    # (the module keeps its velocity scaling in float32 buffers: agreement to ~1e-8)
+    np.testing.assert_allclose(loaded.forces(X, V), sc.forces(X, V, y), rtol=1e-6)
+    np.testing.assert_allclose(loaded.forces(X, 0 * V), sc.forces(X, 0 * V, y_rest), rtol=1e-12)

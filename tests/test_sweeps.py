@@ -33,3 +33,19 @@ def test_two_job_joblib_multirun_nests_both_runs_under_one_parent(quick_data, tm
         assert len(networks) == 1  # one network, its per-epoch losses in a nested run
         assert client.get_metric_history(networks[0].info.run_id, "val_rel_rmse")
     assert (tmp_path / "models" / "tiny-none-standard-s1" / "card.md").exists()
+
+
+def test_grid_density_sweep_logs_error_and_time_per_evaluation(tmp_path):
+    uri = f"sqlite:///{tmp_path / 'mlflow.db'}"
+    cmd = [sys.executable, "experiments/grid_sweep.py", "-m", "solver.n_theta=20,40", "solver.n_z=21",
+           "converged.n_theta=80", "converged.n_z=81", "timing_calls=20", "timing_repeats=3",
+           f"tracking.uri={uri}", "tracking.experiment=grid", f"hydra.sweep.dir={tmp_path / 'multirun'}"]
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    client = mlflow.tracking.MlflowClient(uri)
+    runs = client.search_runs([client.get_experiment_by_name("grid").experiment_id])
+    jobs = {r.data.tags["mlflow.runName"]: r.data.metrics for r in runs if "mlflow.parentRunId" in r.data.tags}
+    assert set(jobs) == {"grid_20x21", "grid_40x21"}
+    # the finer grid is closer to the converged one, and both report a time per evaluation
+    assert jobs["grid_40x21"]["force_error_pct_eps_0.9"] < jobs["grid_20x21"]["force_error_pct_eps_0.9"]
+    assert all(m["time_per_eval_us"] > 0 for m in jobs.values())

@@ -63,7 +63,8 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
     model = SurrogateForceModel(bearing, nets, scalings, model_cfg["activation"], boundaries, blend, domain,
                                 eps_max=float(frame["eps"].max()), name=name,
                                 info={"model": dict(model_cfg), "split": dict(split_cfg),
-                                      "scaling": dict(scaling_cfg), "seed": seed})
+                                      "scaling": dict(scaling_cfg), "seed": seed},
+                                structure=model_cfg.get("structure", "plain"))
     return model, report
 
 

@@ -69,12 +69,12 @@ def _activate(buf, n, act):
 
 @njit(cache=True, inline="always")
 def _mlp(weights, table, n_layers, act, z, buf_a, buf_b):
-    """Evaluate one network on the 4 scaled inputs ``z``; returns its 2 outputs.
+    """Evaluate one network on the first n_in scaled inputs ``z``; returns the buffer holding its outputs.
 
     Weights are stored transposed (n_in, n_out) so each layer is a sum of
     axpy updates whose inner loop over outputs is independent and vectorises.
     """
-    for k in range(4):
+    for k in range(table[0, 2]):
         buf_a[k] = z[k]
     for layer in range(n_layers):
         w_off, b_off, n_in, n_out = table[layer, 0], table[layer, 1], table[layer, 2], table[layer, 3]
@@ -84,8 +84,7 @@ def _mlp(weights, table, n_layers, act, z, buf_a, buf_b):
         _dense(weights[w_off:b_off], weights[b_off:b_off + n_out], src, dst, n_in, n_out)
         if layer < n_layers - 1:
             _activate(dst, n_out, act)
-    out = buf_b if n_layers % 2 == 1 else buf_a
-    return out[0], out[1]
+    return buf_b if n_layers % 2 == 1 else buf_a
 
 
 @njit(cache=True, inline="always")
@@ -101,7 +100,16 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         raw = (x1, x2, v1, v2)
     for k in range(4):
         z[k] = (raw[k] - s[5 + k]) / s[9 + k]
-    y1, y2 = _mlp(weights[r], tables[r], n_layers[r], act, z, buf_a, buf_b)
+    out = _mlp(weights[r], tables[r], n_layers[r], act, z, buf_a, buf_b)
+    y1 = out[0]
+    y2 = out[1]
+    if params[13] == 1:
+        # damping structure: y = S(X) + C(X, V) v, v the velocity in units of c omega
+        out = _mlp(weights[r], params[14][r], params[15][r], act, z, buf_a, buf_b)
+        w1 = z[2] * s[11] + s[7]
+        w2 = z[3] * s[12] + s[8]
+        y1 += out[0] * w1 + out[1] * w2
+        y2 += out[2] * w1 + out[3] * w2
     f1 = y1 * s[15] + s[13]
     f2 = y2 * s[16] + s[14]
     if physics:
@@ -120,7 +128,8 @@ def surrogate_force(params, x1, x2, v1, v2):
 
     params = (weights[R], tables[R], n_layers(R,), activation, scalings(R, 17),
               boundaries(R-1,), blend_width, domain(S, 3) [eps_low, eps_high, v_max],
-              eps_max, counter(1,) int64, inv_c2, max_width, scratch(3, max_width))
+              eps_max, counter(1,) int64, inv_c2, max_width, scratch(3, max_width),
+              structure (0 plain, 1 damping), damping tables[R], damping n_layers(R,))
     """
     bounds = params[5]
     blend = params[6]
@@ -187,9 +196,11 @@ def pack_network(layers: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarra
 class SurrogateForceModel:
     """A trained network (or split set of networks) with the reference model's interface."""
 
-    def __init__(self, bearing: JournalBearing, networks: list[list[tuple[np.ndarray, np.ndarray]]],
-                 scalings: list[Scaling], activation: str, boundaries=(), blend_width: float = 0.0,
-                 domain=None, eps_max: float = 1.0, name: str = "surrogate", info: dict | None = None):
+    def __init__(self, bearing: JournalBearing, networks: list, scalings: list[Scaling], activation: str,
+                 boundaries=(), blend_width: float = 0.0, domain=None, eps_max: float = 1.0,
+                 name: str = "surrogate", info: dict | None = None, structure: str = "plain"):
+        """``networks``: one per region, each a list of (W (out, in), b) layers, or with
+        ``structure="damping"`` a pair (static layers, damping-matrix layers)."""
         if activation not in ACTIVATIONS:
             raise ValueError(f"unknown activation {activation!r}; choose one of {tuple(ACTIVATIONS)}")
         if len(networks) != len(boundaries) + 1 or len(scalings) != len(networks):
@@ -210,15 +221,34 @@ class SurrogateForceModel:
         self.domain = np.asarray(domain if domain is not None else [[0.0, 1.0, np.inf]], dtype=float)
         self.eps_max = float(eps_max)
         self.info = info or {}
-        packed = [pack_network(n) for n in networks]
-        max_width = max(max(W.shape[0] for W, _ in n) for n in networks)
+        if structure not in ("plain", "damping"):
+            raise ValueError(f"unknown structure {structure!r}; choose 'plain' or 'damping'")
+        self.structure = structure
+        if structure == "plain":
+            packed = [pack_network(n) for n in networks]
+            damp = [(np.zeros((1, 4), dtype=np.int64), 0) for _ in networks]
+            all_layers = [layer for n in networks for layer in n]
+        else:
+            packed, damp = [], []
+            for static, damping in networks:
+                ws, ts = pack_network(static)
+                wd, td = pack_network(damping)
+                td = td.copy()
+                td[:, :2] += ws.size  # damping weights follow the static ones in one flat array
+                packed.append((np.concatenate([ws, wd]), ts))
+                damp.append((td, len(damping)))
+            all_layers = [layer for pair in networks for n in pair for layer in n]
+        max_width = max(W.shape[0] for W, _ in all_layers)
+        self._n_parameters = int(sum(W.size + b.size for W, b in all_layers))
         self._counter = np.zeros(1, dtype=np.int64)
         self.params = (
             tuple(p[0] for p in packed), tuple(p[1] for p in packed),
-            np.array([len(n) for n in networks], dtype=np.int64), ACTIVATIONS[activation],
+            np.array([t.shape[0] for _, t in packed], dtype=np.int64), ACTIVATIONS[activation],
             np.stack([s.kernel_row() for s in scalings]), bounds, self.blend_width, self.domain, self.eps_max,
             self._counter, 1.0 / bearing.clearance**2, max(max_width, 4),
             np.zeros((3, max(max_width, 4))),
+            1 if structure == "damping" else 0,
+            tuple(t for t, _ in damp), np.array([n for _, n in damp], dtype=np.int64),
         )
         self._warned = False
 
@@ -232,7 +262,7 @@ class SurrogateForceModel:
 
     @property
     def n_parameters(self) -> int:
-        return int(sum(W.size + b.size for n in self.networks for W, b in n))
+        return self._n_parameters
 
     # ------------------------------------------------------------------ domain bookkeeping
     def reset_domain_counter(self) -> None:
@@ -272,14 +302,21 @@ class SurrogateForceModel:
         d.mkdir(parents=True, exist_ok=True)
         arrays = {}
         for r, net in enumerate(self.networks):
-            for k, (W, b) in enumerate(net):
+            static, damping = (net, []) if self.structure == "plain" else net
+            for k, (W, b) in enumerate(static):
                 arrays[f"r{r}_W{k}"] = W
                 arrays[f"r{r}_b{k}"] = b
+            for k, (W, b) in enumerate(damping):
+                arrays[f"r{r}_dW{k}"] = W
+                arrays[f"r{r}_db{k}"] = b
         with io.atomic_path(d / "surrogate.npz", suffix=".npz") as tmp:
             np.savez(tmp, **arrays)
         meta = {"name": self.name, "activation": self.activation, "boundaries": self.boundaries.tolist(),
                 "blend_width": self.blend_width, "domain": self.domain.tolist(), "eps_max": self.eps_max,
-                "n_layers": [len(n) for n in self.networks], "scalings": [s.to_dict() for s in self.scalings],
+                "structure": self.structure,
+                "n_layers": [len(n if self.structure == "plain" else n[0]) for n in self.networks],
+                "n_layers_damping": [0 if self.structure == "plain" else len(n[1]) for n in self.networks],
+                "scalings": [s.to_dict() for s in self.scalings],
                 "bearing": self._bearing.to_dict(), "info": self.info}
         io.write_json(d / "model.json", meta)
 
@@ -291,9 +328,13 @@ def load_surrogate(path) -> SurrogateForceModel:
         raise ValueError(f"{d} holds no saved surrogate (model.json and surrogate.npz)")
     meta = json.loads((d / "model.json").read_text())
     arrays = np.load(d / "surrogate.npz")
+    structure = meta.get("structure", "plain")
     networks = [[(arrays[f"r{r}_W{k}"], arrays[f"r{r}_b{k}"]) for k in range(n)]
                 for r, n in enumerate(meta["n_layers"])]
+    if structure == "damping":
+        networks = [(net, [(arrays[f"r{r}_dW{k}"], arrays[f"r{r}_db{k}"]) for k in range(meta["n_layers_damping"][r])])
+                    for r, net in enumerate(networks)]
     return SurrogateForceModel(JournalBearing(**meta["bearing"]), networks,
                                [Scaling.from_dict(s) for s in meta["scalings"]], meta["activation"],
                                meta["boundaries"], meta["blend_width"], meta["domain"], meta["eps_max"],
-                               meta["name"], meta.get("info", {}))
+                               meta["name"], meta.get("info", {}), structure)

@@ -34,29 +34,59 @@ from .scaling import Scaling
 _ACT = {"tanh": nn.Tanh, "relu": nn.ReLU, "silu": nn.SiLU, "sigmoid": nn.Sigmoid}
 
 
+def _mlp(n_in: int, n_out: int, width: int, depth: int, activation: str) -> nn.Sequential:
+    layers = []
+    for _ in range(depth):
+        layers += [nn.Linear(n_in, width), _ACT[activation]()]
+        n_in = width
+    layers.append(nn.Linear(n_in, n_out))
+    return nn.Sequential(*layers)
+
+
+STRUCTURES = ("plain", "damping")
+
+
 class ForceMLP(L.LightningModule):
+    """Fully connected force network in scaled units.
+
+    ``structure="plain"``: y = net(z), z the four standardised inputs.
+    ``structure="damping"``: y = S(z_X) + C(z) v, a static-load network S of
+    the position alone plus a learned 2x2 matrix C times the velocity v in
+    units of c omega (unstandardised, so v = 0 is the static state).  The
+    force at rest is then S alone, whatever the squeeze errors are, and the
+    film's damping appears as C at small velocities.
+    """
+
     def __init__(self, width: int = 50, depth: int = 1, activation: str = "tanh", optimizer: str = "adam",
                  lr: float = 3e-3, weight_decay: float = 0.0, scheduler: str = "cosine", max_epochs: int = 20,
-                 out_std=(1.0, 1.0), out_mean=(0.0, 0.0)):
+                 out_std=(1.0, 1.0), out_mean=(0.0, 0.0), structure: str = "plain", v_mean=(0.0, 0.0),
+                 v_std=(1.0, 1.0)):
         super().__init__()
         if activation not in _ACT:
             raise ValueError(f"unknown activation {activation!r}; choose one of {tuple(_ACT)}")
         if int(width) < 1 or int(depth) < 1:
             raise ValueError(f"width and depth must be >= 1, got width={width}, depth={depth}")
+        if structure not in STRUCTURES:
+            raise ValueError(f"unknown structure {structure!r}; choose one of {STRUCTURES}")
         self.save_hyperparameters()
-        layers, n_in = [], 4
-        for _ in range(depth):
-            layers += [nn.Linear(n_in, width), _ACT[activation]()]
-            n_in = width
-        layers.append(nn.Linear(n_in, 2))
-        self.net = nn.Sequential(*layers)
+        if structure == "plain":
+            self.net = _mlp(4, 2, width, depth, activation)
+        else:
+            self.static = _mlp(2, 2, width, depth, activation)
+            self.damping = _mlp(4, 4, width, depth, activation)
         self.register_buffer("out_std", torch.tensor(out_std, dtype=torch.float32))
         self.register_buffer("out_mean", torch.tensor(out_mean, dtype=torch.float32))
+        self.register_buffer("v_mean", torch.tensor(v_mean, dtype=torch.float32))
+        self.register_buffer("v_std", torch.tensor(v_std, dtype=torch.float32))
         self._sq_err = 0.0
         self._sq_ref = 0.0
 
     def forward(self, z):
-        return self.net(z)
+        if self.hparams.structure == "plain":
+            return self.net(z)
+        v = z[:, 2:4] * self.v_std + self.v_mean  # velocity in units of c omega, 0 at rest
+        C = self.damping(z).view(-1, 2, 2)
+        return self.static(z[:, :2]) + torch.bmm(C, v.unsqueeze(-1)).squeeze(-1)
 
     def training_step(self, batch, batch_idx):
         z, y = batch[0], batch[1]
@@ -100,9 +130,14 @@ class ForceMLP(L.LightningModule):
             return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": "val_rel_rmse"}}
         raise ValueError(f"unknown scheduler {h.scheduler!r}; choose none, cosine or plateau")
 
-    def layers_numpy(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        return [(m.weight.detach().double().numpy().copy(), m.bias.detach().double().numpy().copy())
-                for m in self.net if isinstance(m, nn.Linear)]
+    def layers_numpy(self):
+        """Plain: [(W, b), ...]; damping: ([(W, b), ...] of S, [(W, b), ...] of C)."""
+        def grab(seq):
+            return [(m.weight.detach().double().numpy().copy(), m.bias.detach().double().numpy().copy())
+                    for m in seq if isinstance(m, nn.Linear)]
+        if self.hparams.structure == "plain":
+            return grab(self.net)
+        return grab(self.static), grab(self.damping)
 
 
 class _Batches(torch.utils.data.IterableDataset):
@@ -256,7 +291,9 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
                      optimizer=model_cfg.get("optimizer", "adam"), lr=model_cfg["lr"],
                      weight_decay=model_cfg.get("weight_decay", 0.0), scheduler=model_cfg.get("scheduler", "cosine"),
                      max_epochs=trainer_cfg["max_epochs"], out_std=[float(s) for s in dm.scaling.out_std],
-                     out_mean=[float(s) for s in dm.scaling.out_mean])  # plain floats: checkpoints load with weights_only
+                     out_mean=[float(s) for s in dm.scaling.out_mean],  # plain floats: checkpoints load with weights_only
+                     structure=model_cfg.get("structure", "plain"),
+                     v_mean=[float(s) for s in dm.scaling.in_mean[2:]], v_std=[float(s) for s in dm.scaling.in_std[2:]])
     stop = TargetStop(target)
     callbacks = [stop]
     ckpt_path = None
