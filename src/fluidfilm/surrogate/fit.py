@@ -39,8 +39,9 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
     nets, scalings, per_net = [], [], []
     for r, (lo, hi) in enumerate(regions(boundaries, blend)):
         dm = ForceDataModule(dataset_dir, scaling=scaling_cfg["kind"], power=scaling_cfg.get("power", 1.5),
+                             frame=scaling_cfg.get("frame", "cartesian"),
                              eps_low=lo, eps_high=hi, val_fraction=val_fraction, batch_size=batch_size, seed=seed,
-                             frame=frame, meta=meta)
+                             table=frame, meta=meta)
         res = train_network(dm, dict(model_cfg), dict(trainer_cfg), target,
                             ckpt_dir=None if ckpt_root is None else Path(ckpt_root) / f"region{r}",
                             logger=logger_for(r) if logger_for else None, seed=seed + r)

@@ -93,21 +93,36 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
     s = scal[r]
     physics = s[0] >= 1.0  # 1: physics, 2: physics_v
     c, omega, fscale, power = s[1], s[2], s[3], s[4]
+    polar = s[17] == 1.0
     z = params[12][2]
-    if physics:
-        raw = (x1 / c, x2 / c, v1 / (c * omega), v2 / (c * omega))
+    er1, er2 = 0.0, 1.0
+    if polar:
+        # the journal's frame: along (e_r) and across (e_t) the line of centres
+        rr = math.sqrt(x1 * x1 + x2 * x2)
+        if rr > 0.0:
+            er1, er2 = x1 / rr, x2 / rr
+        cw = c * omega
+        z[0] = rr / c
+        z[1] = (v1 * er1 + v2 * er2) / cw
+        z[2] = (v1 * er2 - v2 * er1) / cw
+        n_in = 3
     else:
-        raw = (x1, x2, v1, v2)
-    for k in range(4):
-        z[k] = (raw[k] - s[5 + k]) / s[9 + k]
+        if physics:
+            z[0], z[1], z[2], z[3] = x1 / c, x2 / c, v1 / (c * omega), v2 / (c * omega)
+        else:
+            z[0], z[1], z[2], z[3] = x1, x2, v1, v2
+        n_in = 4
+    for k in range(n_in):
+        z[k] = (z[k] - s[5 + k]) / s[9 + k]
     out = _mlp(weights[r], tables[r], n_layers[r], act, z, buf_a, buf_b)
     y1 = out[0]
     y2 = out[1]
     if params[13] == 1:
-        # damping structure: y = S(X) + C(X, V) v, v the velocity in units of c omega
+        # damping structure: y = S(position) + C(position, velocity) v, v the velocity in units of c omega
         out = _mlp(weights[r], params[14][r], params[15][r], act, z, buf_a, buf_b)
-        w1 = z[2] * s[11] + s[7]
-        w2 = z[3] * s[12] + s[8]
+        vo = n_in - 2
+        w1 = z[vo] * s[9 + vo] + s[5 + vo]
+        w2 = z[vo + 1] * s[10 + vo] + s[6 + vo]
         y1 += out[0] * w1 + out[1] * w2
         y2 += out[2] * w1 + out[3] * w2
     f1 = y1 * s[15] + s[13]
@@ -119,6 +134,9 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
             g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)
         f1 *= g
         f2 *= g
+    if polar:
+        # back to (X1, X2): F = f_r e_r + f_t e_t, e_t = (e_r2, -e_r1)
+        return f1 * er1 + f2 * er2, f1 * er2 - f2 * er1
     return f1, f2
 
 

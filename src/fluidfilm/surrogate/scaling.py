@@ -15,6 +15,16 @@ Two kinds:
   budget goes to them and the static load - what decides where the journal
   settles - gets a poor relative accuracy.
 
+Two frames for the inputs and outputs:
+
+- ``cartesian``: (X1, X2, V1, V2) -> (F1, F2);
+- ``polar``: the journal's own frame.  A cylindrical bearing is
+  rotationally symmetric, so F(X, V) = R(phi) G(eps, v_r, v_t) exactly, with
+  v_r, v_t the velocity along and across the line of centres (in units of
+  c omega) and G the force in that frame.  Learning G is a 3-D problem
+  instead of 4-D, the static force is a function of eps alone, and the
+  symmetry holds exactly for the surrogate too.
+
 Pure numpy, so that inference needs no torch.
 """
 from __future__ import annotations
@@ -24,6 +34,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 SCALINGS = ("standard", "physics", "physics_v")
+FRAMES = ("cartesian", "polar")
 KIND_CODES = {"standard": 0.0, "physics": 1.0, "physics_v": 2.0}
 
 
@@ -38,15 +49,19 @@ class Scaling:
     in_std: np.ndarray
     out_mean: np.ndarray
     out_std: np.ndarray
+    frame: str = "cartesian"
 
     # ------------------------------------------------------------------ fit
     @classmethod
     def fit(cls, kind: str, X: np.ndarray, V: np.ndarray, F: np.ndarray, clearance: float, omega: float,
-            force_scale: float, power: float = 1.5) -> "Scaling":
+            force_scale: float, power: float = 1.5, frame: str = "cartesian") -> "Scaling":
         if kind not in SCALINGS:
             raise ValueError(f"unknown scaling {kind!r}; choose one of {SCALINGS}")
+        if frame not in FRAMES:
+            raise ValueError(f"unknown frame {frame!r}; choose one of {FRAMES}")
+        n = 3 if frame == "polar" else 4
         s = cls(kind, float(clearance), float(omega), float(force_scale), float(power),
-                np.zeros(4), np.ones(4), np.zeros(2), np.ones(2))
+                np.zeros(n), np.ones(n), np.zeros(2), np.ones(2), frame)
         z = s._raw_inputs(X, V)
         y = s._raw_targets(X, V, F)
         s.in_mean, s.in_std = z.mean(axis=0), z.std(axis=0) + 1e-12
@@ -66,13 +81,42 @@ class Scaling:
             g = g * (1.0 + np.hypot(V[..., 0], V[..., 1]) / (self.clearance * self.omega))
         return g
 
+    @property
+    def n_inputs(self) -> int:
+        return 3 if self.frame == "polar" else 4
+
+    def _axes(self, X):
+        """Unit vectors along (e_r) and across (e_t) the line of centres; e_r = +X2 at the centre."""
+        r = np.hypot(X[..., 0], X[..., 1])
+        safe = np.where(r > 0, r, 1.0)
+        er = np.stack([np.where(r > 0, X[..., 0] / safe, 0.0), np.where(r > 0, X[..., 1] / safe, 1.0)], axis=-1)
+        et = np.stack([er[..., 1], -er[..., 0]], axis=-1)
+        return er, et
+
+    def to_frame(self, X, F) -> np.ndarray:
+        """Forces (or velocities) in the model's frame."""
+        if self.frame == "cartesian":
+            return F
+        er, et = self._axes(X)
+        return np.stack([(F * er).sum(-1), (F * et).sum(-1)], axis=-1)
+
+    def from_frame(self, X, G) -> np.ndarray:
+        if self.frame == "cartesian":
+            return G
+        er, et = self._axes(X)
+        return G[..., :1] * er + G[..., 1:2] * et
+
     def _raw_inputs(self, X, V):
+        if self.frame == "polar":
+            eps = np.hypot(X[..., 0], X[..., 1]) / self.clearance
+            vf = self.to_frame(X, V) / (self.clearance * self.omega)
+            return np.concatenate([eps[..., None], vf], axis=-1)
         if self.kind != "standard":
             return np.concatenate([X / self.clearance, V / (self.clearance * self.omega)], axis=-1)
         return np.concatenate([X, V], axis=-1)
 
     def _raw_targets(self, X, V, F):
-        return F / self.gain(X, V)[..., None]
+        return self.to_frame(X, F) / self.gain(X, V)[..., None]
 
     def inputs(self, X, V) -> np.ndarray:
         return (self._raw_inputs(X, V) - self.in_mean) / self.in_std
@@ -82,7 +126,7 @@ class Scaling:
 
     def forces(self, X, V, y) -> np.ndarray:
         """Inverse of ``targets``: network outputs -> forces [N]."""
-        return (y * self.out_std + self.out_mean) * self.gain(X, V)[..., None]
+        return self.from_frame(X, (y * self.out_std + self.out_mean) * self.gain(X, V)[..., None])
 
     # ------------------------------------------------------------------ io
     def to_dict(self) -> dict:
@@ -94,12 +138,16 @@ class Scaling:
     @classmethod
     def from_dict(cls, d: dict) -> "Scaling":
         d = dict(d)
+        d.setdefault("frame", "cartesian")
         for k in ("in_mean", "in_std", "out_mean", "out_std"):
             d[k] = np.asarray(d[k], dtype=float)
         return cls(**d)
 
     def kernel_row(self) -> np.ndarray:
-        """Flat parameters for the compiled kernel: kind, c, omega, force_scale, power, means, stds."""
-        return np.concatenate([[KIND_CODES[self.kind], self.clearance, self.omega,
-                                self.force_scale, self.power], self.in_mean, self.in_std, self.out_mean,
-                               self.out_std])
+        """Flat parameters for the compiled kernel (18): kind, c, omega, force_scale, power,
+        input means (4, padded), input stds (4, padded), output means, output stds, frame."""
+        pad = 4 - len(self.in_mean)
+        return np.concatenate([[KIND_CODES[self.kind], self.clearance, self.omega, self.force_scale, self.power],
+                               np.concatenate([self.in_mean, np.zeros(pad)]),
+                               np.concatenate([self.in_std, np.ones(pad)]), self.out_mean, self.out_std,
+                               [1.0 if self.frame == "polar" else 0.0]])

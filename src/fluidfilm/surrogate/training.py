@@ -60,7 +60,7 @@ class ForceMLP(L.LightningModule):
     def __init__(self, width: int = 50, depth: int = 1, activation: str = "tanh", optimizer: str = "adam",
                  lr: float = 3e-3, weight_decay: float = 0.0, scheduler: str = "cosine", max_epochs: int = 20,
                  out_std=(1.0, 1.0), out_mean=(0.0, 0.0), structure: str = "plain", v_mean=(0.0, 0.0),
-                 v_std=(1.0, 1.0)):
+                 v_std=(1.0, 1.0), n_inputs: int = 4):
         super().__init__()
         if activation not in _ACT:
             raise ValueError(f"unknown activation {activation!r}; choose one of {tuple(_ACT)}")
@@ -70,10 +70,10 @@ class ForceMLP(L.LightningModule):
             raise ValueError(f"unknown structure {structure!r}; choose one of {STRUCTURES}")
         self.save_hyperparameters()
         if structure == "plain":
-            self.net = _mlp(4, 2, width, depth, activation)
-        else:
-            self.static = _mlp(2, 2, width, depth, activation)
-            self.damping = _mlp(4, 4, width, depth, activation)
+            self.net = _mlp(n_inputs, 2, width, depth, activation)
+        else:  # the last two inputs are the velocity, the others the position
+            self.static = _mlp(n_inputs - 2, 2, width, depth, activation)
+            self.damping = _mlp(n_inputs, 4, width, depth, activation)
         self.register_buffer("out_std", torch.tensor(out_std, dtype=torch.float32))
         self.register_buffer("out_mean", torch.tensor(out_mean, dtype=torch.float32))
         self.register_buffer("v_mean", torch.tensor(v_mean, dtype=torch.float32))
@@ -84,9 +84,9 @@ class ForceMLP(L.LightningModule):
     def forward(self, z):
         if self.hparams.structure == "plain":
             return self.net(z)
-        v = z[:, 2:4] * self.v_std + self.v_mean  # velocity in units of c omega, 0 at rest
+        v = z[:, -2:] * self.v_std + self.v_mean  # velocity in units of c omega, 0 at rest
         C = self.damping(z).view(-1, 2, 2)
-        return self.static(z[:, :2]) + torch.bmm(C, v.unsqueeze(-1)).squeeze(-1)
+        return self.static(z[:, :-2]) + torch.bmm(C, v.unsqueeze(-1)).squeeze(-1)
 
     def training_step(self, batch, batch_idx):
         z, y = batch[0], batch[1]
@@ -179,26 +179,28 @@ def read_dataset(path, columns=("X1", "X2", "V1", "V2", "F1", "F2", "eps")) -> t
 class ForceDataModule(L.LightningDataModule):
     """In-memory training/validation split by position, optionally restricted to eps in [eps_low, eps_high)."""
 
-    def __init__(self, dataset_dir, scaling: str = "standard", power: float = 1.5, eps_low: float = 0.0,
+    def __init__(self, dataset_dir, scaling: str = "standard", power: float = 1.5, frame: str = "cartesian",
+                 eps_low: float = 0.0,
                  eps_high: float = math.inf, val_fraction: float = 0.1, batch_size: int = 4096, seed: int = 0,
-                 frame: pd.DataFrame | None = None, meta: dict | None = None):
+                 table: pd.DataFrame | None = None, meta: dict | None = None):
         super().__init__()
         if not 0.0 < val_fraction < 1.0:
             raise ValueError(f"val_fraction must lie in (0, 1), got {val_fraction!r}")
         self.dataset_dir = dataset_dir
         self.scaling_kind = scaling
         self.power = power
+        self.frame = frame
         self.eps_low, self.eps_high = eps_low, eps_high
         self.val_fraction = val_fraction
         self.batch_size = batch_size
         self.seed = seed
-        self._frame, self._meta = frame, meta
+        self._table, self._meta = table, meta
         self.scaling: Scaling | None = None
 
     def setup(self, stage=None):
         if self.scaling is not None:
             return
-        df, meta = (self._frame, self._meta) if self._frame is not None else read_dataset(self.dataset_dir)
+        df, meta = (self._table, self._meta) if self._table is not None else read_dataset(self.dataset_dir)
         self.bearing = JournalBearing(**meta["bearing"])
         df = df[(df["eps"] >= self.eps_low) & (df["eps"] < self.eps_high)]
         if len(df) == 0:
@@ -216,14 +218,15 @@ class ForceDataModule(L.LightningDataModule):
         F = df[["F1", "F2"]].to_numpy()
         b = self.bearing
         self.scaling = Scaling.fit(self.scaling_kind, X[~is_val], V[~is_val], F[~is_val], b.clearance, b.omega,
-                                   b.force_scale, self.power)
+                                   b.force_scale, self.power, self.frame)
         z = self.scaling.inputs(X, V)
         y = self.scaling.targets(X, V, F)
         gain = self.scaling.gain(X, V)  # F = (network output unscaled) * gain
         t = lambda a: torch.as_tensor(np.ascontiguousarray(a), dtype=torch.float32)  # noqa: E731
         tr, va = ~is_val, is_val
         self.train_tensors = (t(z[tr]), t(y[tr]))
-        self.val_tensors = (t(z[va]), t(y[va]), t(F[va]), t(gain[va]))
+        # validation compares forces in the model's frame (a rotation keeps the RMS error)
+        self.val_tensors = (t(z[va]), t(y[va]), t(self.scaling.to_frame(X[va], F[va])), t(gain[va]))
         self.n_train, self.n_val = int(tr.sum()), int(va.sum())
         self.eps_data_max = float(df["eps"].max())
 
@@ -293,7 +296,8 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
                      max_epochs=trainer_cfg["max_epochs"], out_std=[float(s) for s in dm.scaling.out_std],
                      out_mean=[float(s) for s in dm.scaling.out_mean],  # plain floats: checkpoints load with weights_only
                      structure=model_cfg.get("structure", "plain"),
-                     v_mean=[float(s) for s in dm.scaling.in_mean[2:]], v_std=[float(s) for s in dm.scaling.in_std[2:]])
+                     v_mean=[float(s) for s in dm.scaling.in_mean[-2:]], v_std=[float(s) for s in dm.scaling.in_std[-2:]],
+                     n_inputs=dm.scaling.n_inputs)
     stop = TargetStop(target)
     callbacks = [stop]
     ckpt_path = None
