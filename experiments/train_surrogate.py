@@ -27,7 +27,7 @@ def _fmt(value, spec=".1f"):
 
 def model_card(name: str, report: dict, metrics: dict, cfg: dict) -> str:
     nets = "\n".join(f"| {k} | {n['eps_low']:g}-{n['eps_high']:g} | {n['n_train']:,} | {n['epochs']} | "
-                     f"{n['val_rel_rmse']:.4f} | {n['train_time_s']:.1f} | {_fmt(n['time_to_target_s'])} |"
+                     f"{_fmt(n['val_rel_rmse'], '.4f')} | {n['train_time_s']:.1f} | {_fmt(n['time_to_target_s'])} |"
                      for k, n in enumerate(report["networks"]))
     return f"""# Model card: {name}
 

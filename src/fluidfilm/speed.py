@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit  # not cached: numba's on-disk cache cannot always pickle a specialisation on a function argument
 def _kernel_loop(kernel, params, x, v):
     acc = 0.0
     for p in range(x.shape[0]):

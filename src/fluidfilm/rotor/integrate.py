@@ -92,6 +92,16 @@ def _acceleration(kernel, params, x1, x2, v1, v2, t, consts):
     return (f1 + unb * math.cos(ph) + g1) * inv_m, (f2 + sgn * unb * math.sin(ph) + g2) * inv_m, True
 
 
+@njit(cache=True, inline="always")
+def _record(out_t, out_x, out_v, n, t, x1, x2, v1, v2):
+    out_t[n] = t
+    out_x[n, 0] = x1
+    out_x[n, 1] = x2
+    out_v[n, 0] = v1
+    out_v[n, 1] = v2
+    return n + 1
+
+
 @njit(cache=True)
 def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop, eps_substep,
              max_substeps, out_t, out_x, out_v):
@@ -102,14 +112,8 @@ def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_
     x1, x2 = x0[0], x0[1]
     v1, v2 = v0[0], v0[1]
     t = t0
-    n_rec = 0
     n_evals = 0
-    out_t[0] = t
-    out_x[0, 0] = x1
-    out_x[0, 1] = x2
-    out_v[0, 0] = v1
-    out_v[0, 1] = v2
-    n_rec = 1
+    n_rec = _record(out_t, out_x, out_v, 0, t, x1, x2, v1, v2)
     status = 0
     for step in range(n_steps):
         e2 = (x1 * x1 + x2 * x2) / c2
@@ -152,20 +156,10 @@ def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_
         if status != 0:
             break
         if (step + 1) % record_every == 0:
-            out_t[n_rec] = t
-            out_x[n_rec, 0] = x1
-            out_x[n_rec, 1] = x2
-            out_v[n_rec, 0] = v1
-            out_v[n_rec, 1] = v2
-            n_rec += 1
+            n_rec = _record(out_t, out_x, out_v, n_rec, t, x1, x2, v1, v2)
     if status != 0:
         # last valid state, so the trajectory ends where it stopped
-        out_t[n_rec] = t
-        out_x[n_rec, 0] = x1
-        out_x[n_rec, 1] = x2
-        out_v[n_rec, 0] = v1
-        out_v[n_rec, 1] = v2
-        n_rec += 1
+        n_rec = _record(out_t, out_x, out_v, n_rec, t, x1, x2, v1, v2)
     return n_rec, status, t, n_evals
 
 

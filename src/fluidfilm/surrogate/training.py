@@ -314,6 +314,9 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
     t0 = time.perf_counter()
     trainer.fit(model, datamodule=dm, ckpt_path=ckpt_path)
     wall = time.perf_counter() - t0
+    if "val_rel_rmse" not in trainer.callback_metrics:
+        # resumed from a checkpoint of a finished run: nothing was trained, so measure it once
+        trainer.validate(model, datamodule=dm, verbose=False)
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
     return {"layers": model.layers_numpy(), "scaling": dm.scaling, "module": model,
             "time_to_target_s": stop.time_to_target, "train_time_s": stop.elapsed, "fit_wall_s": wall,
