@@ -10,7 +10,10 @@ from omegaconf import DictConfig, OmegaConf
 
 from fluidfilm import io, tracking
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
-from fluidfilm.figures import plot_orbits
+import numpy as np
+
+from fluidfilm.figures import plot_equilibrium_locus, plot_orbits
+from fluidfilm.rotor import equilibrium_locus
 from fluidfilm.rotor.cases import case_summary, run_case
 
 
@@ -35,6 +38,11 @@ def main(cfg: DictConfig) -> None:
                       f"Fig. 4 - rotor trajectories, {cfg.model_name} model "
                       f"(m = {cfg.rotor.mass} kg, load share {cfg.rotor.load_share})")
     io.save_figure(fig, Path(cfg.figure_dir) / f"fig4_{cfg.model_name}.png", dpi=130)
+    # the static equilibrium locus: where the film carries a growing load along gravity
+    locus = equilibrium_locus(model, np.geomspace(cfg.locus.load_min, cfg.locus.load_max, cfg.locus.n))
+    io.write_csv(Path(cfg.figure_dir) / f"equilibrium_locus_{cfg.model_name}.csv", locus)
+    io.save_figure(plot_equilibrium_locus(locus, bearing.clearance),
+                   Path(cfg.figure_dir) / f"equilibrium_locus_{cfg.model_name}.png", dpi=130)
     with tracking.run(cfg.tracking, f"trajectories_{cfg.model_name}", OmegaConf.to_container(cfg, resolve=True)):
         if cfg.tracking.enabled:
             import mlflow

@@ -194,3 +194,31 @@ def plot_orbits(panels: dict, clearance: float, t_settle: float, title: str):
     fig.suptitle(title)
     fig.tight_layout()
     return fig
+
+
+def plot_equilibrium_locus(locus: pd.DataFrame, clearance: float):
+    """The journal-centre locus of static equilibria for growing load (X2 down the page: gravity)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(9.0, 4.2))
+    phi = np.linspace(0, 2 * np.pi, 200)
+    ax.plot(np.cos(phi), np.sin(phi), color="0.7", lw=0.8)
+    ax.plot(locus["X1"] / clearance, locus["X2"] / clearance, "o-", ms=3)
+    ax.set_aspect("equal")
+    ax.set_xlim(-1.05, 1.05)
+    ax.set_ylim(1.05, -1.05)
+    ax.set_xlabel("X1 / c")
+    ax.set_ylabel("X2 / c")
+    ax.set_title("equilibrium locus (load along +X2)")
+    ax2.semilogx(locus["sommerfeld"], locus["eps"], label="eccentricity ratio")
+    ax2b = ax2.twinx()
+    ax2b.semilogx(locus["sommerfeld"], locus["attitude_deg"].abs(), "C1--", label="attitude angle")
+    ax2.set_xlabel("Sommerfeld number S")
+    ax2.set_ylabel("eps")
+    ax2b.set_ylabel("attitude angle [deg]")
+    ax2.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    return fig
