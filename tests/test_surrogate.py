@@ -25,6 +25,12 @@ def trained(quick_data):
                          seed=1, batch_size=128, val_fraction=0.2)
 
 
+def _load_into(seq, layers):
+    """Copy saved (W, b) layers into the Linear layers of a torch Sequential."""
+    for lin, (W, b) in zip([m for m in seq if isinstance(m, torch.nn.Linear)], layers):
+        lin.weight.data, lin.bias.data = torch.as_tensor(W), torch.as_tensor(b)
+
+
 def test_small_network_beats_the_error_bound_on_the_quick_test_set(trained, quick_data):
     """Bound from real runs (median 0.15-0.21 over seeds, 150 epochs), with margin."""
     model, report = trained
@@ -48,10 +54,7 @@ def test_loaded_model_equals_the_lightning_module_and_the_compiled_kernel(traine
 
     scaling = loaded.scalings[0]
     module = ForceMLP(width=32, depth=2, activation="tanh").double()
-    linears = [m for m in module.net if isinstance(m, torch.nn.Linear)]
-    for lin, (W, b) in zip(linears, loaded.networks[0]):
-        lin.weight.data = torch.as_tensor(W)
-        lin.bias.data = torch.as_tensor(b)
+    _load_into(module.net, loaded.networks[0])
     with torch.no_grad():
         y = module(torch.as_tensor(scaling.inputs(X, V))).numpy()
     np.testing.assert_allclose(F_loaded, scaling.forces(X, V, y), rtol=1e-9, atol=1e-9)
@@ -156,9 +159,8 @@ def test_damping_structure_equals_its_module_and_rests_on_the_static_network(qui
     module = ForceMLP(width=8, depth=2, activation="tanh", structure="damping", v_mean=list(sc.in_mean[2:]),
                       v_std=list(sc.in_std[2:])).double()
     static, damping = loaded.networks[0]
-    for seq, layers in ((module.static, static), (module.damping, damping)):
-        for lin, (W, b) in zip([m for m in seq if isinstance(m, torch.nn.Linear)], layers):
-            lin.weight.data, lin.bias.data = torch.as_tensor(W), torch.as_tensor(b)
+    _load_into(module.static, static)
+    _load_into(module.damping, damping)
     rng = np.random.default_rng(1)
     eps, ang = 0.8 * rng.random(20), 2 * np.pi * rng.random(20)
     X = C * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
@@ -193,8 +195,7 @@ def test_polar_frame_makes_the_surrogate_exactly_rotation_equivariant(quick_data
     sc = loaded.scalings[0]
     rows = eps < 0.5
     module = ForceMLP(width=8, depth=2, activation="tanh", n_inputs=3).double()
-    for lin, (W, b) in zip([m for m in module.net if isinstance(m, torch.nn.Linear)], loaded.networks[0]):
-        lin.weight.data, lin.bias.data = torch.as_tensor(W), torch.as_tensor(b)
+    _load_into(module.net, loaded.networks[0])
     with torch.no_grad():
         y = module(torch.as_tensor(sc.inputs(X[rows], V[rows]))).numpy()
     np.testing.assert_allclose(F[rows], sc.forces(X[rows], V[rows], y), rtol=1e-9, atol=1e-9)
