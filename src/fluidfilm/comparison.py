@@ -5,16 +5,13 @@ timings of two models are taken in the same run, on the same machine.
 """
 from __future__ import annotations
 
-import math
 import platform
-import time
 from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
 
 from .rotor.cases import case_summary, run_case
-from .rotor.integrate import Trajectory
 from .speed import sample_states, time_per_force_eval
 
 
@@ -91,17 +88,3 @@ def summarise_training_times(rows: pd.DataFrame) -> dict:
     out["train_time_reduction_pct_per_seed_max"] = float(red.max())
     out["n_seeds"] = int(len(piv))
     return out
-
-
-def timed(fn, *args, **kwargs):
-    t0 = time.perf_counter()
-    out = fn(*args, **kwargs)
-    return out, time.perf_counter() - t0
-
-
-def finite_or_none(x):
-    return None if x is None or (isinstance(x, float) and not math.isfinite(x)) else x
-
-
-__all__ = ["trajectory_comparison", "speed_comparison", "summarise_training_times", "reduction_pct", "machine",
-           "Trajectory"]
