@@ -25,6 +25,14 @@ def trained(quick_data):
                          seed=1, batch_size=128, val_fraction=0.2)
 
 
+def _random_states(n, eps_max, v_max, seed):
+    """n journal states: eps uniform below eps_max, any angle, velocities uniform in +-v_max."""
+    rng = np.random.default_rng(seed)
+    eps, ang = eps_max * rng.random(n), 2 * np.pi * rng.random(n)
+    X = C * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
+    return X, rng.uniform(-v_max, v_max, (n, 2)), eps
+
+
 def _load_into(seq, layers):
     """Copy saved (W, b) layers into the Linear layers of a torch Sequential."""
     for lin, (W, b) in zip([m for m in seq if isinstance(m, torch.nn.Linear)], layers):
@@ -43,10 +51,7 @@ def test_loaded_model_equals_the_lightning_module_and_the_compiled_kernel(traine
     model, _ = trained
     model.save(tmp_path / "m")
     loaded = load_surrogate(tmp_path / "m")
-    rng = np.random.default_rng(0)
-    eps, ang = 0.85 * rng.random(50), 2 * np.pi * rng.random(50)
-    X = C * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
-    V = rng.uniform(-0.2, 0.2, (50, 2))
+    X, V, eps = _random_states(50, 0.85, 0.2, seed=0)
     F_loaded = loaded.forces(X, V)
     np.testing.assert_array_equal(F_loaded, model.forces(X, V))
     # the Lightning module: rebuild it from the saved layers and run it in torch (double precision)
@@ -161,10 +166,7 @@ def test_damping_structure_equals_its_module_and_rests_on_the_static_network(qui
     static, damping = loaded.networks[0]
     _load_into(module.static, static)
     _load_into(module.damping, damping)
-    rng = np.random.default_rng(1)
-    eps, ang = 0.8 * rng.random(20), 2 * np.pi * rng.random(20)
-    X = C * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
-    V = rng.uniform(-0.05, 0.05, (20, 2))
+    X, V, eps = _random_states(20, 0.8, 0.05, seed=1)
     with torch.no_grad():
         y = module(torch.as_tensor(sc.inputs(X, V))).numpy()
         y_rest = module.static(torch.as_tensor(sc.inputs(X, 0 * V))[:, :2]).numpy()
@@ -183,10 +185,7 @@ def test_polar_frame_makes_the_surrogate_exactly_rotation_equivariant(quick_data
                              dict(max_epochs=2, progress_bar=False), target=None, seed=0, batch_size=128)
     model.save(tmp_path / "p")
     loaded = load_surrogate(tmp_path / "p")
-    rng = np.random.default_rng(2)
-    eps, ang = 0.9 * rng.random(30), 2 * np.pi * rng.random(30)
-    X = C * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
-    V = rng.uniform(-0.05, 0.05, (30, 2))
+    X, V, eps = _random_states(30, 0.9, 0.05, seed=2)
     F = loaded.forces(X, V)
     for a in (0.3, 2.0, -1.1):
         R = np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])

@@ -12,7 +12,8 @@ from numba import njit
 
 from ..bearing import JournalBearing
 from . import kernels
-from .solver import ReynoldsSolver, _as_pairs
+from ..states import as_state_pairs
+from .solver import ReynoldsSolver
 
 
 @njit(cache=True)
@@ -62,7 +63,7 @@ class GradedReynoldsModel:
         return n_theta, n_z
 
     def forces(self, X, V) -> np.ndarray:
-        x, v, shape = _as_pairs(X, V, self.bearing.clearance)
+        x, v, shape = as_state_pairs(X, V, self.bearing.clearance)
         out = np.empty_like(x)
         dense = x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] >= self.params[2] * self.params[2]
         # each sub-batch runs the solvers' own parallel kernels (numba's parallel

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from ..bearing import JournalBearing
+from ..states import as_state_pairs, check_states
 from . import kernels
 from .mesh import FilmMesh
 
@@ -81,43 +82,6 @@ def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str,
         full_basis,
         float(p_s),
     )
-
-
-def _as_pairs(X, V, clearance: float):
-    """Validate and broadcast positions and velocities to flat (N, 2) arrays."""
-    X = np.asarray(X, dtype=np.float64)
-    V = np.asarray(V, dtype=np.float64)
-    if X.ndim == 0 or X.shape[-1] != 2:
-        raise ValueError(f"X must have a last axis of length 2 (X1, X2) in m, got shape {X.shape}")
-    if V.ndim == 0 or V.shape[-1] != 2:
-        raise ValueError(f"V must have a last axis of length 2 (V1, V2) in m/s, got shape {V.shape}")
-    try:
-        X, V = np.broadcast_arrays(X, V)
-    except ValueError as err:
-        raise ValueError(f"X of shape {X.shape} and V of shape {V.shape} do not broadcast") from err
-    shape = X.shape[:-1]
-    x = np.ascontiguousarray(X.reshape(-1, 2))
-    v = np.ascontiguousarray(V.reshape(-1, 2))
-    check_states(x, v, clearance)
-    return x, v, shape
-
-
-def check_states(x: np.ndarray, v: np.ndarray, clearance: float) -> None:
-    """Raise ``ValueError`` naming the first non-finite value or eccentricity >= 1."""
-    if not np.isfinite(x).all():
-        bad = x[~np.isfinite(x).all(axis=1)][0]
-        raise ValueError(f"position X must be finite, got {tuple(bad)}")
-    if not np.isfinite(v).all():
-        bad = v[~np.isfinite(v).all(axis=1)][0]
-        raise ValueError(f"velocity V must be finite, got {tuple(bad)}")
-    if x.size:
-        eps = np.hypot(x[:, 0], x[:, 1]) / clearance
-        k = int(np.argmax(eps))
-        if eps[k] >= 1.0:
-            raise ValueError(
-                f"eccentricity ratio {eps[k]:.6g} >= 1 at X={tuple(x[k])} m: the journal touches the "
-                f"sleeve (clearance {clearance} m)"
-            )
 
 
 class ReynoldsSolver:
@@ -201,7 +165,7 @@ class ReynoldsSolver:
             if eps >= 1.0:
                 check_states(np.array([[x1, x2]]), np.array([[v1, v2]]), self._c)
             return np.array(self._kernel(self.params, x1, x2, v1, v2))
-        x, v, shape = _as_pairs(X, V, self._c)
+        x, v, shape = as_state_pairs(X, V, self._c)
         out = np.empty_like(x)
         if x.shape[0]:
             self._batch(self.params, x, v, out)
@@ -227,7 +191,7 @@ class ReynoldsSolver:
 
     def pressure(self, x, v) -> np.ndarray:
         """Pressure field [Pa] of one state, shape (n_theta, n_z), after the cavitation model."""
-        xa, va, shape = _as_pairs(x, v, self._c)
+        xa, va, shape = as_state_pairs(x, v, self._c)
         if xa.shape[0] != 1:
             raise ValueError(f"pressure takes one position and one velocity, got shapes {np.shape(x)}, {np.shape(v)}")
         x1, x2 = xa[0]
@@ -245,7 +209,7 @@ class ReynoldsSolver:
 
     def linear_pressure(self, x, v) -> np.ndarray:
         """Pressure field before any cavitation model (the full-Sommerfeld linear solution)."""
-        xa, va, _ = _as_pairs(x, v, self._c)
+        xa, va, _ = as_state_pairs(x, v, self._c)
         out = np.empty((self.n_theta, self.n_z))
         kernels.linear_field(self.params, xa[0, 0], xa[0, 1], va[0, 0], va[0, 1],
                              self.params[26], self.params[27], out)

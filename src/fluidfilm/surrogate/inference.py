@@ -30,6 +30,7 @@ import numpy as np
 from numba import njit
 
 from ..bearing import JournalBearing
+from ..states import as_state_pairs
 from .scaling import Scaling
 
 ACTIVATIONS = {"tanh": 0, "relu": 1, "silu": 2, "sigmoid": 3}
@@ -294,9 +295,7 @@ class SurrogateForceModel:
 
     # ------------------------------------------------------------------ evaluation
     def forces(self, X, V) -> np.ndarray:
-        from ..reynolds.solver import _as_pairs
-
-        x, v, shape = _as_pairs(X, V, self._bearing.clearance)
+        x, v, shape = as_state_pairs(X, V, self._bearing.clearance)
         before = int(self._counter[0])
         out = np.empty_like(x)
         if x.shape[0]:

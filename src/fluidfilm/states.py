@@ -1,0 +1,45 @@
+"""Journal states (positions X, velocities V) as every force model takes them: shapes and validation.
+
+Shared by the reference solver and the surrogates, so that bad input gets the
+same error, naming the bad value, whichever model is asked.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def as_state_pairs(X, V, clearance: float):
+    """Validate and broadcast positions and velocities to flat (N, 2) arrays."""
+    X = np.asarray(X, dtype=np.float64)
+    V = np.asarray(V, dtype=np.float64)
+    if X.ndim == 0 or X.shape[-1] != 2:
+        raise ValueError(f"X must have a last axis of length 2 (X1, X2) in m, got shape {X.shape}")
+    if V.ndim == 0 or V.shape[-1] != 2:
+        raise ValueError(f"V must have a last axis of length 2 (V1, V2) in m/s, got shape {V.shape}")
+    try:
+        X, V = np.broadcast_arrays(X, V)
+    except ValueError as err:
+        raise ValueError(f"X of shape {X.shape} and V of shape {V.shape} do not broadcast") from err
+    shape = X.shape[:-1]
+    x = np.ascontiguousarray(X.reshape(-1, 2))
+    v = np.ascontiguousarray(V.reshape(-1, 2))
+    check_states(x, v, clearance)
+    return x, v, shape
+
+
+def check_states(x: np.ndarray, v: np.ndarray, clearance: float) -> None:
+    """Raise ``ValueError`` naming the first non-finite value or eccentricity >= 1."""
+    if not np.isfinite(x).all():
+        bad = x[~np.isfinite(x).all(axis=1)][0]
+        raise ValueError(f"position X must be finite, got {tuple(bad)}")
+    if not np.isfinite(v).all():
+        bad = v[~np.isfinite(v).all(axis=1)][0]
+        raise ValueError(f"velocity V must be finite, got {tuple(bad)}")
+    if x.size:
+        eps = np.hypot(x[:, 0], x[:, 1]) / clearance
+        k = int(np.argmax(eps))
+        if eps[k] >= 1.0:
+            raise ValueError(
+                f"eccentricity ratio {eps[k]:.6g} >= 1 at X={tuple(x[k])} m: the journal touches the "
+                f"sleeve (clearance {clearance} m)"
+            )
