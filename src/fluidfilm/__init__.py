@@ -11,8 +11,8 @@ Every force model (reference solver, graded reference, surrogates) offers
 and its parameters), so the rotor integrator and controllers never care
 which one they run.
 """
-from .bearing import JournalBearing, paper_bearing
-from .reynolds import CAVITATION_MODELS, GradedReynoldsModel, ReynoldsSolver
+from .bearing import ConicalBearing, JournalBearing, bearing_from_dict, paper_bearing
+from .reynolds import CAVITATION_MODELS, ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
 from .surrogate import SurrogateForceModel, load_surrogate
 from .rotor import LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, simulate
 
@@ -20,6 +20,9 @@ __version__ = "0.1.0"
 
 __all__ = [
     "JournalBearing",
+    "ConicalBearing",
+    "bearing_from_dict",
+    "ConicalReynoldsSolver",
     "paper_bearing",
     "ReynoldsSolver",
     "GradedReynoldsModel",

@@ -115,3 +115,142 @@ def paper_bearing(supply_pressure: float = 0.0) -> JournalBearing:
         supply_pressure=supply_pressure,
         density=992.0,
     )
+
+
+@dataclass(frozen=True)
+class ConicalBearing:
+    """An adjustable conical journal bearing: the film lies between two coaxial cones.
+
+    The journal radius grows linearly along the axis, from ``diameter_small/2``
+    at the supply end z = 0 to ``diameter_large/2`` at z = L (half-cone angle
+    alpha = atan((r1 - r0)/L)).  The sleeve can slide axially by ``s``: moving
+    it towards the small end (s < 0) closes the radial clearance by |s| tan(alpha),
+    moving it towards the large end opens it,
+
+        c_r(s) = clearance + s tan(alpha),
+
+    which is how the active bearing changes its average film thickness.
+    ``clearance_taper`` is the radial clearance at z = L minus that at z = 0
+    (a sleeve cone angle slightly off the journal's); 0 for matched cones,
+    where the film thickness does not depend on z.  ``sleeve_min`` and
+    ``sleeve_max`` bound the sleeve travel [m].
+    """
+
+    length: float
+    diameter_small: float
+    diameter_large: float
+    clearance: float
+    speed_rpm: float
+    viscosity: float
+    supply_pressure: float = 0.0
+    density: float = 992.0
+    clearance_taper: float = 0.0
+    sleeve_min: float = 0.0
+    sleeve_max: float = 0.0
+
+    kind = "conical"
+
+    def __post_init__(self) -> None:
+        for name in ("length", "diameter_small", "diameter_large", "clearance", "viscosity", "density"):
+            object.__setattr__(self, name, _require_positive(name, getattr(self, name)))
+        for name in ("speed_rpm", "supply_pressure"):
+            v = float(getattr(self, name))
+            if not math.isfinite(v) or v < 0.0:
+                raise ValueError(f"{name} must be a finite number >= 0, got {v!r}")
+            object.__setattr__(self, name, v)
+        for name in ("clearance_taper", "sleeve_min", "sleeve_max"):
+            v = float(getattr(self, name))
+            if not math.isfinite(v):
+                raise ValueError(f"{name} must be finite, got {v!r}")
+            object.__setattr__(self, name, v)
+        if self.diameter_large < self.diameter_small:
+            raise ValueError(f"diameter_large {self.diameter_large!r} m must be >= diameter_small "
+                             f"{self.diameter_small!r} m (the cone opens towards z = L)")
+        if self.sleeve_min > self.sleeve_max:
+            raise ValueError(f"sleeve_min {self.sleeve_min!r} must not exceed sleeve_max {self.sleeve_max!r}")
+        for s in (self.sleeve_min, self.sleeve_max):
+            c0 = self.clearance_at(s, check_travel=False)
+            if min(c0, c0 + self.clearance_taper) <= 0.0:
+                raise ValueError(f"sleeve position {s!r} m closes the film (radial clearance {c0!r} m, "
+                                 f"taper {self.clearance_taper!r} m)")
+        if self.clearance >= 0.5 * self.diameter_small:
+            raise ValueError(f"clearance {self.clearance!r} m must be far smaller than the radius")
+
+    # --- derived quantities -------------------------------------------------
+    @property
+    def radius_small(self) -> float:
+        return 0.5 * self.diameter_small
+
+    @property
+    def radius_large(self) -> float:
+        return 0.5 * self.diameter_large
+
+    @property
+    def radius(self) -> float:
+        """Mean journal radius [m] (used for scales, not by the solver)."""
+        return 0.25 * (self.diameter_small + self.diameter_large)
+
+    @property
+    def diameter(self) -> float:
+        return 2.0 * self.radius
+
+    @property
+    def tan_half_angle(self) -> float:
+        return (self.radius_large - self.radius_small) / self.length
+
+    @property
+    def half_angle(self) -> float:
+        """Half-cone angle alpha [rad]."""
+        return math.atan(self.tan_half_angle)
+
+    @property
+    def omega(self) -> float:
+        return self.speed_rpm * 2.0 * math.pi / 60.0
+
+    @property
+    def force_scale(self) -> float:
+        """mu*omega*R*L*(R/c)^2 [N] with the mean radius and the nominal clearance."""
+        r = self.radius
+        return self.viscosity * self.omega * r * self.length * (r / self.clearance) ** 2
+
+    @property
+    def couette_reynolds(self) -> float:
+        return self.density * self.omega * self.radius_large * self.clearance / self.viscosity
+
+    @property
+    def taylor_limit(self) -> float:
+        return 41.3 * math.sqrt(self.radius / self.clearance)
+
+    def clearance_at(self, sleeve: float, check_travel: bool = True) -> float:
+        """Radial clearance at the supply end [m] with the sleeve displaced axially by ``sleeve`` [m]."""
+        s = float(sleeve)
+        if not math.isfinite(s):
+            raise ValueError(f"sleeve displacement must be finite, got {s!r}")
+        if check_travel and not (self.sleeve_min - 1e-12 <= s <= self.sleeve_max + 1e-12):
+            raise ValueError(f"sleeve displacement {s!r} m lies outside the travel "
+                             f"[{self.sleeve_min!r}, {self.sleeve_max!r}] m")
+        return self.clearance + s * self.tan_half_angle
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["kind"] = self.kind
+        return d
+
+    @classmethod
+    def from_dict(cls, cfg) -> "ConicalBearing":
+        keys = ("length", "diameter_small", "diameter_large", "clearance", "speed_rpm", "viscosity",
+                "supply_pressure", "density", "clearance_taper", "sleeve_min", "sleeve_max")
+        missing = [k for k in keys[:6] if k not in cfg]
+        if missing:
+            raise ValueError(f"conical bearing config is missing keys: {missing}")
+        return cls(**{k: cfg[k] for k in keys if k in cfg})
+
+
+def bearing_from_dict(cfg):
+    """A bearing from a mapping: ``kind: conical`` gives a ``ConicalBearing``, otherwise a ``JournalBearing``."""
+    kind = cfg.get("kind", "journal") if hasattr(cfg, "get") else "journal"
+    if kind == "conical":
+        return ConicalBearing.from_dict(cfg)
+    if kind != "journal":
+        raise ValueError(f"unknown bearing kind {kind!r}; choose 'journal' or 'conical'")
+    return JournalBearing.from_dict(cfg)

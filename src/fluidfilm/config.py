@@ -6,17 +6,17 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from .bearing import JournalBearing
-from .reynolds import GradedReynoldsModel, ReynoldsSolver
+from .bearing import JournalBearing, bearing_from_dict
+from .reynolds import GradedReynoldsModel, ReynoldsSolver, make_solver
 
 
-def bearing_from_cfg(cfg: Mapping) -> JournalBearing:
-    return JournalBearing.from_dict(cfg)
+def bearing_from_cfg(cfg: Mapping):
+    """A ``JournalBearing``, or a ``ConicalBearing`` for ``kind: conical``."""
+    return bearing_from_dict(cfg)
 
 
-def solver_from_cfg(bearing: JournalBearing, cfg: Mapping) -> ReynoldsSolver:
-    return ReynoldsSolver(bearing, n_theta=cfg["n_theta"], n_z=cfg["n_z"],
-                          cavitation=cfg.get("cavitation", "gumbel"))
+def solver_from_cfg(bearing, cfg: Mapping) -> ReynoldsSolver:
+    return make_solver(bearing, cfg["n_theta"], cfg["n_z"], cavitation=cfg.get("cavitation", "gumbel"))
 
 
 def reference_from_cfg(bearing: JournalBearing, cfg: Mapping) -> GradedReynoldsModel:

@@ -15,6 +15,11 @@ as ``part-NNNNN.parquet`` atomically (temporary file + rename), so
 - ``_metadata.json`` is written last, so its presence means the dataset is
   complete.
 
+With ``sleeve_positions`` (an active conical bearing) every chunk is
+computed at every sleeve position, the eccentricity grid taken relative
+to that position's clearance c_r(s), and a column ``S`` holds the sleeve
+displacement [m].
+
 Within a chunk, positions sharing a velocity section and a grid are solved
 together: one factorisation per position serves all its velocities (the
 pressure is linear in the velocity before cavitation).  Results do not
@@ -35,7 +40,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .. import __version__, io
-from ..bearing import JournalBearing
+from ..bearing import JournalBearing, bearing_from_dict
 from ..reynolds import GradedReynoldsModel
 from .spec import DatasetSpec, config_hash
 
@@ -46,14 +51,15 @@ FORMAT_VERSION = 1
 @functools.lru_cache(maxsize=4)
 def _reference(bearing_json: str, reference_json: str) -> GradedReynoldsModel:
     """Reference model, built once per process (workers reuse it across chunks)."""
-    b = JournalBearing(**json.loads(bearing_json))
+    b = bearing_from_dict(json.loads(bearing_json))
     r = json.loads(reference_json)
     return GradedReynoldsModel(b, coarse=tuple(r["coarse"]), dense=tuple(r["dense"]),
                                eps_threshold=r["eps_threshold"], cavitation=r.get("cavitation", "gumbel"))
 
 
 def _table(cols: dict) -> pa.Table:
-    return pa.table({
+    extra = {"S": cols["S"]} if "S" in cols else {}
+    return pa.table({**extra,
         "X1": cols["X1"], "X2": cols["X2"], "V1": cols["V1"], "V2": cols["V2"],
         "F1": cols["F1"], "F2": cols["F2"], "eps": cols["eps"],
         "section": np.asarray(cols["section"], dtype=np.int8),
@@ -70,7 +76,20 @@ def compute_chunk(job: dict) -> dict:
         numba.set_num_threads(int(job["numba_threads"]))
     model = _reference(job["bearing"], job["reference"])
     spec: DatasetSpec = job["spec"]
-    c = model.bearing.clearance
+    if not spec.sleeve_positions:
+        return {"index": job["index"], "columns": _chunk_at(model, spec, job)}
+    parts = []
+    for s in spec.sleeve_positions:
+        model.set_sleeve(s)
+        cols = _chunk_at(model, spec, job)
+        cols["S"] = np.full(len(cols["X1"]), s)
+        parts.append(cols)
+    return {"index": job["index"], "columns": {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}}
+
+
+def _chunk_at(model, spec: DatasetSpec, job: dict) -> dict:
+    """Rows of one chunk at the model's current setting (eccentricities relative to its clearance)."""
+    c = float(getattr(model, "clearance", model.bearing.clearance))
     x_all, sec_all, eps_all = spec.positions(c)
     x = x_all[job["start"]:job["stop"]]
     sec = sec_all[job["start"]:job["stop"]]
@@ -102,7 +121,7 @@ def compute_chunk(job: dict) -> dict:
         cols["section"].append(np.full(n, sec[i], dtype=np.int8))
         cols["n_theta"].append(np.full(n, solver.n_theta, dtype=np.int16))
         cols["n_z"].append(np.full(n, solver.n_z, dtype=np.int16))
-    return {"index": job["index"], "columns": {k: np.concatenate(v) for k, v in cols.items()}}
+    return {k: np.concatenate(v) for k, v in cols.items()}
 
 
 def _write_part(path: Path, columns: dict) -> None:
@@ -175,8 +194,10 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
     meta_path = out / "_metadata.json"
     if meta_path.exists() and not pending:
         return json.loads(meta_path.read_text())
+    columns = (["S"] if spec.sleeve_positions else []) + list(COLUMNS)
     meta = {"n_samples": int(n_rows), "n_positions": n_pos, "n_chunks": len(jobs), "config_hash": digest,
-            "fluidfilm_version": __version__, "format_version": FORMAT_VERSION, "columns": list(COLUMNS),
+            "fluidfilm_version": __version__, "format_version": FORMAT_VERSION, "columns": columns,
+            "sleeve_positions": list(spec.sleeve_positions),
             "bearing": bearing.to_dict(), "reference": dict(reference), "spec": spec.to_dict(),
             "config": config or {}, "generation_seconds_last_run": elapsed,
             "chunks_computed_last_run": len(pending), "scheduler": scheduler}
@@ -226,7 +247,17 @@ def random_test_set(bearing: JournalBearing, reference: dict, spec: DatasetSpec,
     seed = spec.test_seed if seed is None else int(seed)
     rng = np.random.default_rng(seed)
     model = _reference(json.dumps(bearing.to_dict(), sort_keys=True), json.dumps(dict(reference), sort_keys=True))
-    c = bearing.clearance
+    if spec.sleeve_positions:
+        return _random_test_set_sleeve(model, spec, out_dir, n, seed, rng, bearing, reference)
+    x, v, eps, k_sec = _random_states(spec, bearing.clearance, n, rng)
+    F = model.forces(x, v)
+    n_theta, n_z = model.grid_for(eps)
+    cols = {"X1": x[:, 0], "X2": x[:, 1], "V1": v[:, 0], "V2": v[:, 1], "F1": F[:, 0], "F2": F[:, 1],
+            "eps": eps, "section": k_sec, "n_theta": n_theta, "n_z": n_z}
+    return _write_test_set(out_dir, cols, n, seed, bearing, reference, spec)
+
+
+def _random_states(spec: DatasetSpec, c: float, n: int, rng):
     k_sec = np.arange(n) % len(spec.position_sections)
     lo = np.array([spec.position_sections[k].eps_start for k in k_sec])
     hi = np.array([spec.position_sections[k].eps_stop for k in k_sec])
@@ -235,16 +266,43 @@ def random_test_set(bearing: JournalBearing, reference: dict, spec: DatasetSpec,
     x = c * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
     vmax = np.array([spec.velocity_sections[spec.velocity_section_index(e)].v_max for e in eps])
     v = vmax[:, None] * (2 * rng.random((n, 2)) - 1)
-    F = model.forces(x, v)
-    n_theta, n_z = model.grid_for(eps)
-    cols = {"X1": x[:, 0], "X2": x[:, 1], "V1": v[:, 0], "V2": v[:, 1], "F1": F[:, 0], "F2": F[:, 1],
-            "eps": eps, "section": k_sec, "n_theta": n_theta, "n_z": n_z}
+    return x, v, eps, k_sec
+
+
+N_TEST_SLEEVES = 33  # sleeve levels of the test set: between the grid's, so the test checks interpolation in s
+
+
+def _random_test_set_sleeve(model, spec, out_dir, n, seed, rng, bearing, reference) -> dict:
+    """Test set of an active bearing: each sample at a sleeve position drawn from 33 levels spanning the grid's."""
+    levels = np.linspace(min(spec.sleeve_positions), max(spec.sleeve_positions), N_TEST_SLEEVES)
+    s_all = levels[rng.integers(0, N_TEST_SLEEVES, n)]
+    keep = model.sleeve
+    parts = []
+    try:
+        for s in levels:
+            idx = np.flatnonzero(s_all == s)
+            if not idx.size:
+                continue
+            model.set_sleeve(s)
+            x, v, eps, k_sec = _random_states(spec, model.clearance, idx.size, rng)
+            F = model.forces(x, v)
+            n_theta, n_z = model.grid_for(eps)
+            parts.append({"S": np.full(idx.size, s), "X1": x[:, 0], "X2": x[:, 1], "V1": v[:, 0], "V2": v[:, 1],
+                          "F1": F[:, 0], "F2": F[:, 1], "eps": eps, "section": k_sec, "n_theta": n_theta,
+                          "n_z": n_z})
+    finally:
+        model.set_sleeve(keep)
+    cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    return _write_test_set(out_dir, cols, n, seed, bearing, reference, spec)
+
+
+def _write_test_set(out_dir, cols, n, seed, bearing, reference, spec) -> dict:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     for old in out.glob("part-*.parquet"):
         old.unlink()
     _write_part(out / _part_name(0), cols)
-    meta = {"n_samples": n, "seed": seed, "fluidfilm_version": __version__, "columns": list(COLUMNS),
+    meta = {"n_samples": n, "seed": seed, "fluidfilm_version": __version__, "columns": list(cols),
             "config_hash": config_hash(FORMAT_VERSION, bearing.to_dict(), dict(reference), spec.to_dict(), n, seed)}
     io.write_json(out / "_metadata.json", meta)
     return meta

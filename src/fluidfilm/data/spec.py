@@ -103,6 +103,7 @@ class DatasetSpec:
     positions_per_chunk: int
     n_test: int
     test_seed: int
+    sleeve_positions: tuple[float, ...] = ()
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -148,9 +149,16 @@ class DatasetSpec:
         combine = str(cfg.get("combine", "product"))
         if combine not in ("product", "zip"):
             raise DatasetConfigError(f"{where}.combine={combine!r} must be 'product' or 'zip'")
+        sleeves = cfg.get("sleeve_positions", None) or ()
+        try:
+            sleeves = tuple(float(v) for v in sleeves)
+        except (TypeError, ValueError):
+            raise DatasetConfigError(f"{where}.sleeve_positions={sleeves!r} must be a list of numbers (m)") from None
+        if not all(math.isfinite(v) for v in sleeves) or len(set(sleeves)) != len(sleeves):
+            raise DatasetConfigError(f"{where}.sleeve_positions={list(sleeves)} must be distinct finite values (m)")
         spec = cls(tuple(psecs), tuple(vsecs), combine,
                    _count(cfg, "positions_per_chunk", where), _count(cfg, "n_test", where, minimum=0),
-                   _count(cfg, "test_seed", where, minimum=0))
+                   _count(cfg, "test_seed", where, minimum=0), tuple(sorted(sleeves)))
         for p in psecs:  # every position needs a velocity section
             for e in p.eccentricities():
                 spec.velocity_section_index(e)
@@ -188,8 +196,10 @@ class DatasetSpec:
         return np.concatenate(xs), np.concatenate(sec), np.concatenate(eps)
 
     def n_samples(self, clearance: float) -> int:
+        """Samples planned: per position its velocity pairs, times the sleeve positions (if any)."""
         _, _, eps = self.positions(clearance)
-        return int(sum(len(self.velocity_pairs(self.velocity_section_index(e))) for e in eps))
+        per_sleeve = int(sum(len(self.velocity_pairs(self.velocity_section_index(e))) for e in eps))
+        return per_sleeve * max(1, len(self.sleeve_positions))
 
     @property
     def eps_max(self) -> float:

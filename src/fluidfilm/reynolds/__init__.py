@@ -6,9 +6,12 @@ One responsibility per module:
 - ``kernels``    the numba kernels: separable fast solve, Gumbel clipping and
                  force integration, projected SOR for Swift-Stieber cavitation
 - ``solver``     ``ReynoldsSolver``: validation, the public API, batching
+- ``conical``    the adjustable conical bearing: eigenbasis fast path, general
+                 h(theta, z) path, axial force, sleeve displacement
 - ``policy``     the paper's grid policy (coarse grid at low, dense at high eccentricity)
 """
-from .policy import GradedReynoldsModel
+from .conical import ConicalReynoldsSolver
+from .policy import GradedReynoldsModel, make_solver
 from .solver import CAVITATION_MODELS, ReynoldsSolver
 
-__all__ = ["ReynoldsSolver", "GradedReynoldsModel", "CAVITATION_MODELS"]
+__all__ = ["ReynoldsSolver", "ConicalReynoldsSolver", "GradedReynoldsModel", "CAVITATION_MODELS", "make_solver"]

@@ -45,6 +45,18 @@ Kernels:
 - ``psor_swift_stieber``     Swift-Stieber (Reynolds) cavitation as a linear
                              complementarity problem solved by projected SOR
 - ``film_force_ss``          force with Swift-Stieber cavitation
+- ``general_linear_field``   the general path: film thickness h(theta, z)
+                             and radius R(z) (conical bearings, tapered or
+                             misfit sleeves), one block-cyclic-tridiagonal
+                             direct solve (theta blocks of axial lines)
+- ``general_force``          force of the general path (same signature)
+- ``axial_integral``         sum w_theta w_z R(z) p: the cone's axial force
+                             is tan(alpha) times it
+
+The conical bearing's fast path reuses ``film_force`` unchanged: with
+matched cones h does not depend on z, and the axial operator
+R(z) d/dz(R(z) d/dz) is diagonalised by a precomputed eigenbasis instead of
+the sine transform (``conical.build_conical_params``).
 
 ``params`` is the tuple built by ``solver.build_params``; its layout is
 documented there.
@@ -406,3 +418,152 @@ def forces_batch_ss(params, x, v, out):
         f1, f2 = film_force_ss(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
         out[p, 0] = f1
         out[p, 1] = f2
+
+
+@njit(cache=True)
+def general_linear_field(gp, x1, x2, v1, v2, out):
+    """Pressure before cavitation for a film h(theta, z) on a surface of revolution R(z).
+
+    The equation (``conical`` derives it), with H = h_r / c_ref the radial
+    gap in units of a reference clearance:
+
+        d/dtheta(H^3 dp/dtheta) + cos^2(alpha) R d/dz(R H^3 dp/dz)
+            = R^2 [K_omega dH/dtheta + K_v (-V1 sin(theta) - V2 cos(theta))],
+
+    conservative central differences (H^3 at theta-faces and z-half nodes),
+    periodic in theta, p = p_supply at z = 0, 0 at z = L.  The unknowns of
+    each angle form one axial line, so the matrix is block tridiagonal with
+    cyclic corner blocks: tridiagonal diagonal blocks, diagonal off-diagonal
+    blocks.  Solved directly: block Thomas over angles 1..n-1 with the first
+    angle's line as a border unknown (P_i = x_i + Y_i P_0), then the first
+    angle's equation for P_0.  O(n_theta n_z^3); used when h depends on z.
+
+    gp layout (``conical.build_general_params``): 0 n_theta, 1 cavitation,
+    2-5 sin/cos at nodes and faces, 6 c(z) at nodes, 7 c(z) at half nodes,
+    8 R(z) at nodes, 9 R(z) at half nodes, 10 1/c_ref, 11 1/dtheta^2,
+    12 1/dtheta, 13 cos^2(alpha)/dz^2, 14 K_omega, 15 K_v, 16 p_supply,
+    17-18 w_theta sin/cos, 19 w_z R(z), 20 w_theta.
+    """
+    n = gp[0]
+    sin_n, cos_n, sin_f, cos_f = gp[2], gp[3], gp[4], gp[5]
+    c_node, c_half, r_node, r_half = gp[6], gp[7], gp[8], gp[9]
+    inv_cr, inv_dth2, inv_dth, cz = gp[10], gp[11], gp[12], gp[13]
+    k_omega, k_v, p_s = gp[14], gp[15], gp[16]
+    nz = c_node.shape[0]
+    m = nz - 2
+    # block coefficients
+    D = np.zeros((n, m, m))
+    Lw = np.empty((n, m))
+    Ue = np.empty((n, m))
+    B = np.empty((n, m))
+    for i in range(n):
+        im = i - 1 if i > 0 else n - 1
+        vterm = k_v * (-v1 * sin_n[i] - v2 * cos_n[i])
+        for jj in range(m):
+            j = jj + 1
+            hf = (c_node[j] - x1 * sin_f[i] - x2 * cos_f[i]) * inv_cr
+            hfm = (c_node[j] - x1 * sin_f[im] - x2 * cos_f[im]) * inv_cr
+            hn = (c_half[j] - x1 * sin_n[i] - x2 * cos_n[i]) * inv_cr  # at z_{j+1/2}
+            hs = (c_half[j - 1] - x1 * sin_n[i] - x2 * cos_n[i]) * inv_cr  # at z_{j-1/2}
+            ue = hf * hf * hf * inv_dth2
+            lw = hfm * hfm * hfm * inv_dth2
+            an = cz * r_node[j] * r_half[j] * hn * hn * hn
+            as_ = cz * r_node[j] * r_half[j - 1] * hs * hs * hs
+            Ue[i, jj] = ue
+            Lw[i, jj] = lw
+            D[i, jj, jj] = -(ue + lw + an + as_)
+            rhs = r_node[j] * r_node[j] * (k_omega * (hf - hfm) * inv_dth + vterm)
+            if jj > 0:
+                D[i, jj, jj - 1] = as_
+            else:
+                rhs -= as_ * p_s
+            if jj < m - 1:
+                D[i, jj, jj + 1] = an
+            B[i, jj] = rhs
+    # block Thomas over i = 1..n-1; column 0 of F carries x, columns 1..m carry Y
+    E = np.zeros((n, m, m))
+    F = np.zeros((n, m, m + 1))
+    rhs_blk = np.zeros((m, 2 * m + 1))
+    for i in range(1, n):
+        G = D[i].copy()
+        rhs_blk[:, :] = 0.0
+        for a in range(m):
+            rhs_blk[a, m] = B[i, a]
+        if i == 1:
+            for a in range(m):
+                rhs_blk[a, m + 1 + a] -= Lw[1, a]
+        if i == n - 1:
+            for a in range(m):
+                rhs_blk[a, m + 1 + a] -= Ue[n - 1, a]
+        else:
+            for a in range(m):
+                rhs_blk[a, a] = Ue[i, a]
+        if i > 1:
+            for a in range(m):
+                la = Lw[i, a]
+                for b in range(m):
+                    G[a, b] -= la * E[i - 1, a, b]
+                for b in range(m + 1):
+                    rhs_blk[a, m + b] -= la * F[i - 1, a, b]
+        sol = np.linalg.solve(G, rhs_blk)
+        if i < n - 1:
+            E[i] = sol[:, :m]
+        F[i] = sol[:, m:]
+    # back substitution: S_i = F_i - E_i S_{i+1}
+    for i in range(n - 2, 0, -1):
+        F[i] -= E[i] @ F[i + 1]
+    # the first angle's equation for its own line P_0
+    A0 = D[0].copy()
+    b0 = B[0].copy()
+    for a in range(m):
+        la = Lw[0, a]
+        ua = Ue[0, a]
+        for b in range(m):
+            A0[a, b] += la * F[n - 1, a, 1 + b] + ua * F[1, a, 1 + b]
+        b0[a] -= la * F[n - 1, a, 0] + ua * F[1, a, 0]
+    p0 = np.linalg.solve(A0, b0)
+    for i in range(n):
+        out[i, 0] = p_s
+        out[i, nz - 1] = 0.0
+        for a in range(m):
+            if i == 0:
+                out[i, a + 1] = p0[a]
+            else:
+                acc = F[i, a, 0]
+                for b in range(m):
+                    acc += F[i, a, 1 + b] * p0[b]
+                out[i, a + 1] = acc
+
+
+@njit(cache=True)
+def general_force(gp, x1, x2, v1, v2):
+    """Force (F1, F2) of the general path; Gumbel clipping or none (``gp[1]``)."""
+    n = gp[0]
+    nz = gp[6].shape[0]
+    p = np.empty((n, nz))
+    general_linear_field(gp, x1, x2, v1, v2, p)
+    a_sin, a_cos, w_zr = gp[17], gp[18], gp[19]
+    f1 = 0.0
+    f2 = 0.0
+    for i in range(n):
+        col = 0.0
+        for j in range(nz):
+            pij = p[i, j]
+            if gp[1] == CAV_GUMBEL and pij < 0.0:
+                pij = 0.0
+            col += w_zr[j] * pij
+        f1 -= a_sin[i] * col
+        f2 -= a_cos[i] * col
+    return f1, f2
+
+
+@njit(cache=True)
+def axial_integral(w_theta, w_zr, p):
+    """Simpson sum of p R(z) over the film: sum_i sum_j w_theta[i] w_zr[j] p[i, j]."""
+    acc = 0.0
+    for i in range(p.shape[0]):
+        col = 0.0
+        for j in range(p.shape[1]):
+            col += w_zr[j] * p[i, j]
+        acc += w_theta[i] * col
+    return acc

@@ -10,10 +10,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..bearing import JournalBearing
+from ..bearing import ConicalBearing, JournalBearing
 from . import kernels
 from ..states import as_state_pairs
+from .conical import ConicalReynoldsSolver
 from .solver import ReynoldsSolver
+
+
+def make_solver(bearing, n_theta: int, n_z: int, cavitation: str = "gumbel"):
+    """The finite-difference solver for this kind of bearing (cylindrical or conical)."""
+    if isinstance(bearing, ConicalBearing):
+        return ConicalReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation)
+    return ReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation)
 
 
 @njit(cache=True)
@@ -33,19 +41,46 @@ def graded_force_ss(params, x1, x2, v1, v2):
 
 
 class GradedReynoldsModel:
-    """Reference force model with the paper's grid policy (same interface as ``ReynoldsSolver``)."""
+    """Reference force model with the paper's grid policy (same interface as ``ReynoldsSolver``).
 
-    def __init__(self, bearing: JournalBearing, coarse=(30, 30), dense=(55, 55),
+    For a conical bearing (matched cones) the sub-solvers run the conical
+    fast path and ``set_sleeve`` moves the sleeve of both; eccentricities are
+    then relative to the current clearance c_r(s).
+    """
+
+    def __init__(self, bearing: JournalBearing | ConicalBearing, coarse=(30, 30), dense=(55, 55),
                  eps_threshold: float = 0.9, cavitation: str = "gumbel"):
         if not 0.0 < float(eps_threshold) <= 1.0:
             raise ValueError(f"eps_threshold must lie in (0, 1], got {eps_threshold!r}")
-        self.coarse = ReynoldsSolver(bearing, *coarse, cavitation=cavitation)
-        self.dense = ReynoldsSolver(bearing, *dense, cavitation=cavitation)
+        self.coarse = make_solver(bearing, *coarse, cavitation=cavitation)
+        self.dense = make_solver(bearing, *dense, cavitation=cavitation)
+        if getattr(self.coarse, "method", "fast") != "fast":
+            raise ValueError("the graded model needs the fast solver path (a conical bearing with matched cones)")
         self.eps_threshold = float(eps_threshold)
         self.cavitation = cavitation
-        self.params = (self.coarse.params, self.dense.params, self.eps_threshold * bearing.clearance)
+        self._rebuild()
         ss = cavitation == "swift-stieber"
         self._kernel = graded_force_ss if ss else graded_force
+
+    def _rebuild(self) -> None:
+        self.params = (self.coarse.params, self.dense.params, self.eps_threshold * self.clearance)
+
+    @property
+    def clearance(self) -> float:
+        """Radial clearance at the current setting [m]."""
+        return float(getattr(self.coarse, "clearance", self.coarse.bearing.clearance))
+
+    @property
+    def sleeve(self) -> float:
+        return float(getattr(self.coarse, "sleeve", 0.0))
+
+    def set_sleeve(self, sleeve: float) -> None:
+        """Move the sleeve of an active (conical) bearing [m]."""
+        if not hasattr(self.coarse, "set_sleeve"):
+            raise ValueError(f"{type(self.bearing).__name__} has no sleeve to move")
+        self.coarse.set_sleeve(sleeve)
+        self.dense.set_sleeve(sleeve)
+        self._rebuild()
 
     @property
     def bearing(self) -> JournalBearing:
@@ -63,7 +98,7 @@ class GradedReynoldsModel:
         return n_theta, n_z
 
     def forces(self, X, V) -> np.ndarray:
-        x, v, shape = as_state_pairs(X, V, self.bearing.clearance)
+        x, v, shape = as_state_pairs(X, V, self.clearance)
         out = np.empty_like(x)
         dense = x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] >= self.params[2] * self.params[2]
         # each sub-batch runs the solvers' own parallel kernels (numba's parallel

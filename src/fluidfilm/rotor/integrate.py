@@ -84,10 +84,13 @@ class Trajectory:
 @njit(cache=True)
 def _acceleration(kernel, params, x1, x2, v1, v2, t, consts):
     """(a1, a2, inside): inside is False when the state lies outside the clearance."""
-    inv_m, unb, omega, sgn, g1, g2, c2 = consts
+    inv_m, unb, omega, sgn, g1, g2, c2, unb_final, ramp_time = consts
     if x1 * x1 + x2 * x2 >= c2:
         return 0.0, 0.0, False
     f1, f2 = kernel(params, x1, x2, v1, v2)
+    if ramp_time > 0.0:
+        # imbalance growing uniformly over the ramp (Fig. 5's developing fault)
+        unb += (unb_final - unb) * min(t / ramp_time, 1.0)
     ph = omega * t
     return (f1 + unb * math.cos(ph) + g1) * inv_m, (f2 + sgn * unb * math.sin(ph) + g2) * inv_m, True
 
@@ -178,7 +181,8 @@ def simulate(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=No
         raise ValueError(f"{type(model).__name__} offers no compiled force_kernel; the integrator needs one")
     kernel, params = kernel_spec
     bearing = model.bearing
-    c = bearing.clearance
+    # an active bearing reports the clearance of its current control setting
+    c = float(getattr(model, "clearance", bearing.clearance))
     for name, value in (("t_end", t_end), ("dt", dt)):
         if not (math.isfinite(value) and value > 0.0):
             raise ValueError(f"{name} must be a positive finite time in s, got {value!r}")
@@ -203,8 +207,10 @@ def simulate(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=No
     out_x = np.empty((n_out, 2))
     out_v = np.empty((n_out, 2))
     omega = bearing.omega
+    u_final = rotor.imbalance if rotor.imbalance_final is None else rotor.imbalance_final
     consts = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega, float(rotor.imbalance_direction),
-              rotor.external_force[0], rotor.external_force[1] + rotor.mass * rotor.gravity, c * c)
+              rotor.external_force[0], rotor.external_force[1] + rotor.mass * rotor.gravity, c * c,
+              u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0)
     reset = getattr(model, "reset_domain_counter", None)
     if reset is not None:
         reset()

@@ -16,6 +16,11 @@ class Rotor:
     surface, which moves towards +theta (from +X2 towards +X1) in the
     conventions' frame.  The paper's eq. 4 is the default.
 
+    ``imbalance_final`` and ``ramp_time``: the imbalance grows uniformly from
+    ``imbalance`` at t = 0 to ``imbalance_final`` at t = ``ramp_time`` and stays
+    there (the paper's Fig. 5 scenario, a fault developing over 5 s); by
+    default it is constant.
+
     A rotor on two equal bearings is expressed by what each carries (half
     the mass, imbalance and load), see ``Rotor.shared``.
     """
@@ -25,6 +30,8 @@ class Rotor:
     external_force: tuple[float, float] = (0.0, 0.0)
     gravity: float = 9.81
     imbalance_direction: int = 1
+    imbalance_final: float | None = None
+    ramp_time: float = 0.0
 
     def __post_init__(self) -> None:
         m = float(self.mass)
@@ -45,6 +52,23 @@ class Rotor:
         object.__setattr__(self, "imbalance", u)
         object.__setattr__(self, "external_force", f)
         object.__setattr__(self, "gravity", g)
+        if self.imbalance_final is not None:
+            u1 = float(self.imbalance_final)
+            if not math.isfinite(u1) or u1 < 0.0:
+                raise ValueError(f"imbalance_final must be a finite m_u*d >= 0 in kg m, got {self.imbalance_final!r}")
+            object.__setattr__(self, "imbalance_final", u1)
+        rt = float(self.ramp_time)
+        if not math.isfinite(rt) or rt < 0.0:
+            raise ValueError(f"ramp_time must be a finite time >= 0 s, got {self.ramp_time!r}")
+        if self.imbalance_final is not None and self.imbalance_final != u and rt == 0.0:
+            raise ValueError("an imbalance ramp (imbalance_final != imbalance) needs ramp_time > 0 s")
+        object.__setattr__(self, "ramp_time", rt)
+
+    def imbalance_at(self, t) -> float:
+        """m_u*d at time t [kg m] (the ramp, if any)."""
+        if self.imbalance_final is None or self.ramp_time == 0.0:
+            return self.imbalance
+        return self.imbalance + (self.imbalance_final - self.imbalance) * min(max(t / self.ramp_time, 0.0), 1.0)
 
     @classmethod
     def shared(cls, total_mass: float, total_imbalance: float = 0.0, total_external_force=(0.0, 0.0),

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..bearing import JournalBearing
+from ..bearing import bearing_from_dict
 from .inference import SurrogateForceModel
 from .training import ForceDataModule, read_dataset, train_network
 
@@ -33,7 +33,7 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
     training times (to the target validation error, and in all).
     """
     frame, meta = read_dataset(dataset_dir)
-    bearing = JournalBearing(**meta["bearing"])
+    bearing = bearing_from_dict(meta["bearing"])
     boundaries = list(split_cfg.get("boundaries", []))
     blend = float(split_cfg.get("blend_width", 0.0))
     nets, scalings, per_net = [], [], []
@@ -80,7 +80,17 @@ def held_out_errors(model, testset_dir, floor_N: float = 0.1) -> dict:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        P = model.forces(X, V)
+        if "S" in df.columns:  # an active bearing: evaluate at each sample's sleeve position
+            P = np.empty_like(F)
+            S = df["S"].to_numpy()
+            keep = model.sleeve
+            for s in np.unique(S):
+                m = S == s
+                model.set_sleeve(s)
+                P[m] = model.forces(X[m], V[m])
+            model.set_sleeve(keep)
+        else:
+            P = model.forces(X, V)
     rel = np.hypot(*(P - F).T) / np.maximum(np.hypot(*F.T), floor_N)
     out = {"test_rel_err_median": float(np.median(rel)), "test_rel_err_p99": float(np.quantile(rel, 0.99))}
     eps = df["eps"].to_numpy()

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..bearing import JournalBearing
+from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
 from ..states import as_state_pairs
 from .scaling import Scaling
 
@@ -94,7 +94,7 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
     s = scal[r]
     physics = s[0] >= 1.0  # 1: physics, 2: physics_v
     c, omega, fscale, power = s[1], s[2], s[3], s[4]
-    polar = s[17] == 1.0
+    polar = s[19] == 1.0
     z = params[12][2]
     er1, er2 = 0.0, 1.0
     if polar:
@@ -113,8 +113,12 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         else:
             z[0], z[1], z[2], z[3] = x1, x2, v1, v2
         n_in = 4
+    # extra inputs (the sleeve displacement of an active bearing) come from the control array
+    for k in range(int(s[20])):
+        z[n_in] = params[10][1 + k]
+        n_in += 1
     for k in range(n_in):
-        z[k] = (z[k] - s[5 + k]) / s[9 + k]
+        z[k] = (z[k] - s[5 + k]) / s[10 + k]
     out = _mlp(weights[r], tables[r], n_layers[r], act, z, buf_a, buf_b)
     y1 = out[0]
     y2 = out[1]
@@ -122,12 +126,12 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         # damping structure: y = S(position) + C(position, velocity) v, v the velocity in units of c omega
         out = _mlp(weights[r], params[14][r], params[15][r], act, z, buf_a, buf_b)
         vo = n_in - 2
-        w1 = z[vo] * s[9 + vo] + s[5 + vo]
-        w2 = z[vo + 1] * s[10 + vo] + s[6 + vo]
+        w1 = z[vo] * s[10 + vo] + s[5 + vo]
+        w2 = z[vo + 1] * s[11 + vo] + s[6 + vo]
         y1 += out[0] * w1 + out[1] * w2
         y2 += out[2] * w1 + out[3] * w2
-    f1 = y1 * s[15] + s[13]
-    f2 = y2 * s[16] + s[14]
+    f1 = y1 * s[17] + s[15]
+    f2 = y2 * s[18] + s[16]
     if physics:
         d = 1.0 - e2
         g = fscale / (d * math.sqrt(d) if power == 1.5 else d**power)
@@ -145,9 +149,10 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
 def surrogate_force(params, x1, x2, v1, v2):
     """Force kernel of a (possibly split) network: same signature as the reference solver's.
 
-    params = (weights[R], tables[R], n_layers(R,), activation, scalings(R, 17),
+    params = (weights[R], tables[R], n_layers(R,), activation, scalings(R, 21),
               boundaries(R-1,), blend_width, domain(S, 3) [eps_low, eps_high, v_max],
-              eps_max, counter(1,) int64, inv_c2, max_width, scratch(3, max_width),
+              eps_max, counter(1,) int64, setting(2,) [1/c^2 of the current clearance, sleeve],
+              max_width, scratch(3, max_width),
               structure (0 plain, 1 damping), damping tables[R], damping n_layers(R,))
     """
     bounds = params[5]
@@ -155,7 +160,7 @@ def surrogate_force(params, x1, x2, v1, v2):
     domain = params[7]
     eps_max = params[8]
     counter = params[9]
-    inv_c2 = params[10]
+    inv_c2 = params[10][0]
     e2 = (x1 * x1 + x2 * x2) * inv_c2
     eps = math.sqrt(e2)
     # training-domain check (counted, never fatal)
@@ -260,12 +265,22 @@ class SurrogateForceModel:
         max_width = max(W.shape[0] for W, _ in all_layers)
         self._n_parameters = int(sum(W.size + b.size for W, b in all_layers))
         self._counter = np.zeros(1, dtype=np.int64)
+        # the current setting, read by the kernel: 1/c^2 (eccentricity for routing and domain) and the
+        # sleeve displacement; mutable, so a controller moves the sleeve without rebuilding anything
+        self._setting = np.array([1.0 / bearing.clearance**2, 0.0])
+        self._n_extra = len(scalings[0].extras)
+        if any(len(sc.extras) != self._n_extra for sc in scalings):
+            raise ValueError("all networks of a split model must take the same extra inputs")
+        if self._n_extra and structure == "damping":
+            raise ValueError("the damping structure takes no extra inputs")
+        if self._n_extra and not isinstance(bearing, ConicalBearing):
+            raise ValueError(f"extra inputs {scalings[0].extras} need an active (conical) bearing")
         self.params = (
             tuple(p[0] for p in packed), tuple(p[1] for p in packed),
             np.array([t.shape[0] for _, t in packed], dtype=np.int64), ACTIVATIONS[activation],
             np.stack([s.kernel_row() for s in scalings]), bounds, self.blend_width, self.domain, self.eps_max,
-            self._counter, 1.0 / bearing.clearance**2, max(max_width, 4),
-            np.zeros((3, max(max_width, 4))),
+            self._counter, self._setting, max(max_width, 5),
+            np.zeros((3, max(max_width, 5))),
             1 if structure == "damping" else 0,
             tuple(t for t, _ in damp), np.array([n for _, n in damp], dtype=np.int64),
         )
@@ -278,6 +293,24 @@ class SurrogateForceModel:
     @property
     def force_kernel(self):
         return surrogate_force, self.params
+
+    # ------------------------------------------------------------------ the control input (active bearings)
+    @property
+    def sleeve(self) -> float:
+        return float(self._setting[1])
+
+    @property
+    def clearance(self) -> float:
+        """Radial clearance at the current sleeve position [m]."""
+        return float(self._setting[0] ** -0.5)
+
+    def set_sleeve(self, sleeve: float) -> None:
+        """Move the sleeve [m] (a surrogate of an active bearing takes it as an input)."""
+        if not self._n_extra:
+            raise ValueError(f"{self.name} takes no sleeve input")
+        c = self._bearing.clearance_at(sleeve)
+        self._setting[0] = 1.0 / c**2
+        self._setting[1] = float(sleeve)
 
     @property
     def n_parameters(self) -> int:
@@ -295,7 +328,7 @@ class SurrogateForceModel:
 
     # ------------------------------------------------------------------ evaluation
     def forces(self, X, V) -> np.ndarray:
-        x, v, shape = as_state_pairs(X, V, self._bearing.clearance)
+        x, v, shape = as_state_pairs(X, V, self.clearance)
         before = int(self._counter[0])
         out = np.empty_like(x)
         if x.shape[0]:
@@ -351,7 +384,7 @@ def load_surrogate(path) -> SurrogateForceModel:
     if structure == "damping":
         networks = [(net, [(arrays[f"r{r}_dW{k}"], arrays[f"r{r}_db{k}"]) for k in range(meta["n_layers_damping"][r])])
                     for r, net in enumerate(networks)]
-    return SurrogateForceModel(JournalBearing(**meta["bearing"]), networks,
+    return SurrogateForceModel(bearing_from_dict(meta["bearing"]), networks,
                                [Scaling.from_dict(s) for s in meta["scalings"]], meta["activation"],
                                meta["boundaries"], meta["blend_width"], meta["domain"], meta["eps_max"],
                                meta["name"], meta.get("info", {}), structure)

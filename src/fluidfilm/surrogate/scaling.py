@@ -25,6 +25,11 @@ Two frames for the inputs and outputs:
   instead of 4-D, the static force is a function of eps alone, and the
   symmetry holds exactly for the surrogate too.
 
+Extra inputs (``extras``, e.g. ``("S",)`` the sleeve displacement of an
+active bearing) follow the state inputs and are standardised like them.
+The physics scalings assume |X| < c for the nominal clearance, which an
+opened sleeve violates, so extras go with ``standard`` scaling only.
+
 Pure numpy, so that inference needs no torch.
 """
 from __future__ import annotations
@@ -50,19 +55,29 @@ class Scaling:
     out_mean: np.ndarray
     out_std: np.ndarray
     frame: str = "cartesian"
+    extras: tuple = ()
+
+    MAX_INPUTS = 5
 
     # ------------------------------------------------------------------ fit
     @classmethod
     def fit(cls, kind: str, X: np.ndarray, V: np.ndarray, F: np.ndarray, clearance: float, omega: float,
-            force_scale: float, power: float = 1.5, frame: str = "cartesian") -> "Scaling":
+            force_scale: float, power: float = 1.5, frame: str = "cartesian", E: np.ndarray | None = None,
+            extras=()) -> "Scaling":
         if kind not in SCALINGS:
             raise ValueError(f"unknown scaling {kind!r}; choose one of {SCALINGS}")
         if frame not in FRAMES:
             raise ValueError(f"unknown frame {frame!r}; choose one of {FRAMES}")
-        n = 3 if frame == "polar" else 4
+        extras = tuple(extras)
+        if extras and kind != "standard":
+            raise ValueError(f"extra inputs {extras} need scaling kind 'standard', got {kind!r} "
+                             "(the physics scalings assume |X| < c for the nominal clearance)")
+        n = (3 if frame == "polar" else 4) + len(extras)
+        if n > cls.MAX_INPUTS:
+            raise ValueError(f"{n} network inputs; the compiled kernel takes at most {cls.MAX_INPUTS}")
         s = cls(kind, float(clearance), float(omega), float(force_scale), float(power),
-                np.zeros(n), np.ones(n), np.zeros(2), np.ones(2), frame)
-        z = s._raw_inputs(X, V)
+                np.zeros(n), np.ones(n), np.zeros(2), np.ones(2), frame, extras)
+        z = s._raw_inputs(X, V, E)
         y = s._raw_targets(X, V, F)
         s.in_mean, s.in_std = z.mean(axis=0), z.std(axis=0) + 1e-12
         s.out_mean, s.out_std = y.mean(axis=0), y.std(axis=0) + 1e-12
@@ -83,7 +98,7 @@ class Scaling:
 
     @property
     def n_inputs(self) -> int:
-        return 3 if self.frame == "polar" else 4
+        return (3 if self.frame == "polar" else 4) + len(self.extras)
 
     def _axes(self, X):
         """Unit vectors along (e_r) and across (e_t) the line of centres; e_r = +X2 at the centre."""
@@ -106,20 +121,27 @@ class Scaling:
         er, et = self._axes(X)
         return G[..., :1] * er + G[..., 1:2] * et
 
-    def _raw_inputs(self, X, V):
+    def _raw_inputs(self, X, V, E=None):
         if self.frame == "polar":
             eps = np.hypot(X[..., 0], X[..., 1]) / self.clearance
             vf = self.to_frame(X, V) / (self.clearance * self.omega)
-            return np.concatenate([eps[..., None], vf], axis=-1)
-        if self.kind != "standard":
-            return np.concatenate([X / self.clearance, V / (self.clearance * self.omega)], axis=-1)
-        return np.concatenate([X, V], axis=-1)
+            z = np.concatenate([eps[..., None], vf], axis=-1)
+        elif self.kind != "standard":
+            z = np.concatenate([X / self.clearance, V / (self.clearance * self.omega)], axis=-1)
+        else:
+            z = np.concatenate([X, V], axis=-1)
+        if self.extras:
+            if E is None or np.shape(E)[-1] != len(self.extras):
+                raise ValueError(f"this scaling needs the extra inputs {self.extras}, got "
+                                 f"{None if E is None else np.shape(E)}")
+            z = np.concatenate([z, np.asarray(E, dtype=float)], axis=-1)
+        return z
 
     def _raw_targets(self, X, V, F):
         return self.to_frame(X, F) / self.gain(X, V)[..., None]
 
-    def inputs(self, X, V) -> np.ndarray:
-        return (self._raw_inputs(X, V) - self.in_mean) / self.in_std
+    def inputs(self, X, V, E=None) -> np.ndarray:
+        return (self._raw_inputs(X, V, E) - self.in_mean) / self.in_std
 
     def targets(self, X, V, F) -> np.ndarray:
         return (self._raw_targets(X, V, F) - self.out_mean) / self.out_std
@@ -139,15 +161,17 @@ class Scaling:
     def from_dict(cls, d: dict) -> "Scaling":
         d = dict(d)
         d.setdefault("frame", "cartesian")
+        d["extras"] = tuple(d.get("extras", ()))
         for k in ("in_mean", "in_std", "out_mean", "out_std"):
             d[k] = np.asarray(d[k], dtype=float)
         return cls(**d)
 
     def kernel_row(self) -> np.ndarray:
-        """Flat parameters for the compiled kernel (18): kind, c, omega, force_scale, power,
-        input means (4, padded), input stds (4, padded), output means, output stds, frame."""
-        pad = 4 - len(self.in_mean)
+        """Flat parameters for the compiled kernel (21): 0 kind, 1 c, 2 omega, 3 force_scale, 4 power,
+        5-9 input means (padded to 5), 10-14 input stds, 15-16 output means, 17-18 output stds,
+        19 frame, 20 number of extra inputs."""
+        pad = self.MAX_INPUTS - len(self.in_mean)
         return np.concatenate([[KIND_CODES[self.kind], self.clearance, self.omega, self.force_scale, self.power],
                                np.concatenate([self.in_mean, np.zeros(pad)]),
                                np.concatenate([self.in_std, np.ones(pad)]), self.out_mean, self.out_std,
-                               [1.0 if self.frame == "polar" else 0.0]])
+                               [1.0 if self.frame == "polar" else 0.0, float(len(self.extras))]])

@@ -28,7 +28,7 @@ import pandas as pd
 import torch
 from torch import nn
 
-from ..bearing import JournalBearing
+from ..bearing import bearing_from_dict
 from .scaling import Scaling
 
 _ACT = {"tanh": nn.Tanh, "relu": nn.ReLU, "silu": nn.SiLU, "sigmoid": nn.Sigmoid}
@@ -168,12 +168,18 @@ class _Batches(torch.utils.data.IterableDataset):
 
 
 def read_dataset(path, columns=("X1", "X2", "V1", "V2", "F1", "F2", "eps")) -> tuple[pd.DataFrame, dict]:
-    """The Parquet dataset and its metadata (bearing, config hash)."""
+    """The Parquet dataset and its metadata (bearing, config hash); the sleeve column S comes along if present."""
     path = Path(path)
     meta_file = path / "_metadata.json"
     if not meta_file.exists():
         raise ValueError(f"{path} is not a complete dataset (no _metadata.json); generate it first")
-    return pd.read_parquet(path, columns=list(columns)), json.loads(meta_file.read_text())
+    meta = json.loads(meta_file.read_text())
+    extra = [c for c in EXTRA_INPUTS if c in meta.get("columns", ()) and c not in columns]
+    return pd.read_parquet(path, columns=list(columns) + extra), meta
+
+
+# dataset columns that become extra network inputs when present (S: sleeve displacement, m)
+EXTRA_INPUTS = ("S",)
 
 
 class ForceDataModule(L.LightningDataModule):
@@ -201,7 +207,7 @@ class ForceDataModule(L.LightningDataModule):
         if self.scaling is not None:
             return
         df, meta = (self._table, self._meta) if self._table is not None else read_dataset(self.dataset_dir)
-        self.bearing = JournalBearing(**meta["bearing"])
+        self.bearing = bearing_from_dict(meta["bearing"])
         df = df[(df["eps"] >= self.eps_low) & (df["eps"] < self.eps_high)]
         if len(df) == 0:
             raise ValueError(f"no samples with eps in [{self.eps_low}, {self.eps_high})")
@@ -216,10 +222,13 @@ class ForceDataModule(L.LightningDataModule):
         X = df[["X1", "X2"]].to_numpy()
         V = df[["V1", "V2"]].to_numpy()
         F = df[["F1", "F2"]].to_numpy()
+        extras = tuple(c for c in EXTRA_INPUTS if c in df.columns)
+        E = df[list(extras)].to_numpy() if extras else None
         b = self.bearing
         self.scaling = Scaling.fit(self.scaling_kind, X[~is_val], V[~is_val], F[~is_val], b.clearance, b.omega,
-                                   b.force_scale, self.power, self.frame)
-        z = self.scaling.inputs(X, V)
+                                   b.force_scale, self.power, self.frame,
+                                   E=None if E is None else E[~is_val], extras=extras)
+        z = self.scaling.inputs(X, V, E)
         y = self.scaling.targets(X, V, F)
         gain = self.scaling.gain(X, V)  # F = (network output unscaled) * gain
         t = lambda a: torch.as_tensor(np.ascontiguousarray(a), dtype=torch.float32)  # noqa: E731
