@@ -20,7 +20,7 @@ GROUPS = {
     "model": ("train", "model"), "split": ("train", "split"), "scaling": ("train", "scaling"),
     "trainer": ("train", "trainer"), "experiment": ("train", None), "rotor": ("trajectories", "rotor"),
     "integrator": ("trajectories", "integrator"), "case": ("trajectories", "cases.a"),
-    "metrics": ("compare", "metrics"),
+    "metrics": ("compare", "metrics"), "controller": ("control", "controller"),
 }
 
 
@@ -45,6 +45,19 @@ def test_primary_config_composes_and_resolves(name):
     if "cases" in cfg and "rotor" in cfg:
         for case in cfg.cases.values():
             rotor_for_case(cfg.rotor, case)
+    if "controller" in cfg:
+        _controller_objects(cfg)
+
+
+def _controller_objects(cfg):
+    from fluidfilm.control import RewardWeights
+    from fluidfilm.control.build import scenario_from_cfg
+
+    scenario_from_cfg(cfg.controller.scenario)
+    RewardWeights(**cfg.controller.reward)
+    bearing = bearing_from_cfg(cfg.bearing)
+    for s in cfg.controller.sleeve_positions:
+        bearing.clearance_at(s)
 
 
 def _options():
@@ -70,3 +83,5 @@ def test_every_option_composes(group, option):
         DatasetSpec.from_cfg(cfg.dataset)
     if group == "bearing":
         bearing_from_cfg(cfg.bearing)
+    if group == "controller":
+        _controller_objects(cfg)

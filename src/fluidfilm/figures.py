@@ -222,3 +222,69 @@ def plot_equilibrium_locus(locus: pd.DataFrame, clearance: float):
     ax2.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
     return fig
+
+
+def fig5_panels(runs: dict, clearance: float, out_dir, ramp: tuple[float, float]) -> list:
+    """Fig. 5: rotor orbits under a growing imbalance, coloured by time, one file per controller
+    (``fig5_a_dqn.png``: DQN control, ``fig5_b_none.png``: no control, ``fig5_c_mpc.png``: MPC), and
+    ``fig5_amplitude.png``: orbit amplitude and sleeve position against time for all of them.
+
+    ``runs``: {name: ``control.run_episode`` result}.  Axes in um; the grey circles are the
+    clearances of the sleeve positions used (nominal dashed).
+    """
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    from . import io
+
+    out = Path(out_dir)
+    letters = {"dqn": "a", "none": "b", "mpc": "c"}
+    titles = {"dqn": "DQN-agent control", "none": "no control", "mpc": "model predictive control"}
+    written = []
+    phi = np.linspace(0, 2 * np.pi, 200)
+    lim = 1e6 * max(max(h["clearance"] for h in r["history"]) for r in runs.values()) * 1.05
+    for name, r in runs.items():
+        fig, ax = plt.subplots(figsize=(4.6, 4.2))
+        for c_r in sorted({h["clearance"] for h in r["history"]}):
+            ax.plot(1e6 * c_r * np.cos(phi), 1e6 * c_r * np.sin(phi), color="0.75", lw=0.8)
+        ax.plot(1e6 * clearance * np.cos(phi), 1e6 * clearance * np.sin(phi), color="0.5", lw=0.8, ls="--")
+        x = 1e6 * r["x"]
+        seg = np.stack([x[:-1], x[1:]], axis=1)
+        lc = LineCollection(seg, cmap="viridis", linewidths=0.6)
+        lc.set_array(r["t"][:-1])
+        ax.add_collection(lc)
+        cb = fig.colorbar(lc, ax=ax)
+        cb.set_label("t [s]")
+        ax.set_aspect("equal")
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(lim, -lim)  # X2 (gravity) down the page
+        ax.set_xlabel("X1 [um]")
+        ax.set_ylabel("X2 [um]")
+        ax.set_title(f"{letters.get(name, '')}) {titles.get(name, name)}: max amplitude "
+                     f"{1e6 * r['max_amplitude_m']:.0f} um", fontsize=9)
+        fig.tight_layout()
+        path = out / f"fig5_{letters.get(name, 'x')}_{name}.png"
+        io.save_figure(fig, path, dpi=130)
+        plt.close(fig)
+        written.append(path)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 5.0), sharex=True)
+    for name, r in runs.items():
+        t = np.array([h["t"] for h in r["history"]])
+        a1.plot(t, [1e6 * h["amplitude"] for h in r["history"]], label=titles.get(name, name), lw=1)
+        a2.step(t, [1e3 * h["sleeve"] for h in r["history"]], where="pre", label=titles.get(name, name), lw=1)
+    a1.set_ylabel("orbit amplitude [um]")
+    a1.set_title(f"imbalance ramp {ramp[0]:g} -> {ramp[1]:g} kg m", fontsize=9)
+    a1.legend(fontsize=8)
+    a2.set_ylabel("sleeve position [mm]")
+    a2.set_xlabel("t [s]")
+    fig.tight_layout()
+    path = out / "fig5_amplitude.png"
+    io.save_figure(fig, path, dpi=130)
+    plt.close(fig)
+    written.append(path)
+    return written

@@ -94,6 +94,11 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
     s = scal[r]
     physics = s[0] >= 1.0  # 1: physics, 2: physics_v
     c, omega, fscale, power = s[1], s[2], s[3], s[4]
+    if s[21] == 1.0:
+        # sleeve-aware: normalise by the current clearance c_r; forces scale as (c/c_r)^2
+        inv_c2 = params[10][0]
+        fscale = fscale * c * c * inv_c2
+        c = 1.0 / math.sqrt(inv_c2)
     polar = s[19] == 1.0
     z = params[12][2]
     er1, er2 = 0.0, 1.0
@@ -149,7 +154,7 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
 def surrogate_force(params, x1, x2, v1, v2):
     """Force kernel of a (possibly split) network: same signature as the reference solver's.
 
-    params = (weights[R], tables[R], n_layers(R,), activation, scalings(R, 21),
+    params = (weights[R], tables[R], n_layers(R,), activation, scalings(R, 22),
               boundaries(R-1,), blend_width, domain(S, 3) [eps_low, eps_high, v_max],
               eps_max, counter(1,) int64, setting(2,) [1/c^2 of the current clearance, sleeve],
               max_width, scratch(3, max_width),

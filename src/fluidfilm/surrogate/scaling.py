@@ -27,8 +27,11 @@ Two frames for the inputs and outputs:
 
 Extra inputs (``extras``, e.g. ``("S",)`` the sleeve displacement of an
 active bearing) follow the state inputs and are standardised like them.
-The physics scalings assume |X| < c for the nominal clearance, which an
-opened sleeve violates, so extras go with ``standard`` scaling only.
+With ``sleeve_gain`` = dc_r/dS (tan(alpha) of a conical bearing) the
+clearance used everywhere above is the sleeve position's own,
+c_r = c + S tan(alpha), and the physics force scale carries (c/c_r)^2: by the
+film's similarity law (tests/test_conical.py) the scaled target then hardly
+depends on S at all, and the network only learns what the law leaves over.
 
 Pure numpy, so that inference needs no torch.
 """
@@ -56,6 +59,7 @@ class Scaling:
     out_std: np.ndarray
     frame: str = "cartesian"
     extras: tuple = ()
+    sleeve_gain: float = 0.0
 
     MAX_INPUTS = 5
 
@@ -63,37 +67,48 @@ class Scaling:
     @classmethod
     def fit(cls, kind: str, X: np.ndarray, V: np.ndarray, F: np.ndarray, clearance: float, omega: float,
             force_scale: float, power: float = 1.5, frame: str = "cartesian", E: np.ndarray | None = None,
-            extras=()) -> "Scaling":
+            extras=(), sleeve_gain: float = 0.0) -> "Scaling":
         if kind not in SCALINGS:
             raise ValueError(f"unknown scaling {kind!r}; choose one of {SCALINGS}")
         if frame not in FRAMES:
             raise ValueError(f"unknown frame {frame!r}; choose one of {FRAMES}")
         extras = tuple(extras)
-        if extras and kind != "standard":
-            raise ValueError(f"extra inputs {extras} need scaling kind 'standard', got {kind!r} "
-                             "(the physics scalings assume |X| < c for the nominal clearance)")
+        if extras and kind != "standard" and not (extras == ("S",) and sleeve_gain > 0):
+            raise ValueError(f"extra inputs {extras} with scaling kind {kind!r} need the sleeve input S and "
+                             f"sleeve_gain = dc/dS > 0 (got {sleeve_gain!r}): the physics scalings need the "
+                             "clearance of each sample")
         n = (3 if frame == "polar" else 4) + len(extras)
         if n > cls.MAX_INPUTS:
             raise ValueError(f"{n} network inputs; the compiled kernel takes at most {cls.MAX_INPUTS}")
         s = cls(kind, float(clearance), float(omega), float(force_scale), float(power),
-                np.zeros(n), np.ones(n), np.zeros(2), np.ones(2), frame, extras)
+                np.zeros(n), np.ones(n), np.zeros(2), np.ones(2), frame, extras,
+                float(sleeve_gain) if extras == ("S",) else 0.0)
         z = s._raw_inputs(X, V, E)
-        y = s._raw_targets(X, V, F)
+        y = s._raw_targets(X, V, F, E)
         s.in_mean, s.in_std = z.mean(axis=0), z.std(axis=0) + 1e-12
         s.out_mean, s.out_std = y.mean(axis=0), y.std(axis=0) + 1e-12
         return s
 
     # ------------------------------------------------------------------ transforms
-    def _eps2(self, X):
-        return (X[..., 0] ** 2 + X[..., 1] ** 2) / self.clearance**2
+    def _clear(self, E=None):
+        """Clearance of each sample: c, or c + S tan(alpha) for a sleeve-aware scaling."""
+        if self.sleeve_gain:
+            if E is None:
+                raise ValueError("a sleeve-aware scaling needs the sleeve input S")
+            return self.clearance + np.asarray(E, dtype=float)[..., 0] * self.sleeve_gain
+        return self.clearance
 
-    def gain(self, X, V) -> np.ndarray:
+    def _eps2(self, X, E=None):
+        return (X[..., 0] ** 2 + X[..., 1] ** 2) / self._clear(E) ** 2
+
+    def gain(self, X, V, E=None) -> np.ndarray:
         """Force per unit of raw network target at each state (1 for standard scaling)."""
         if self.kind == "standard":
             return np.ones(np.shape(X)[:-1])
-        g = self.force_scale / (1.0 - self._eps2(X)) ** self.power
+        c = self._clear(E)
+        g = self.force_scale * (self.clearance / c) ** 2 / (1.0 - self._eps2(X, E)) ** self.power
         if self.kind == "physics_v":
-            g = g * (1.0 + np.hypot(V[..., 0], V[..., 1]) / (self.clearance * self.omega))
+            g = g * (1.0 + np.hypot(V[..., 0], V[..., 1]) / (c * self.omega))
         return g
 
     @property
@@ -122,12 +137,14 @@ class Scaling:
         return G[..., :1] * er + G[..., 1:2] * et
 
     def _raw_inputs(self, X, V, E=None):
+        c = self._clear(E)
+        c = c[..., None] if np.ndim(c) else c
         if self.frame == "polar":
-            eps = np.hypot(X[..., 0], X[..., 1]) / self.clearance
-            vf = self.to_frame(X, V) / (self.clearance * self.omega)
-            z = np.concatenate([eps[..., None], vf], axis=-1)
+            eps = np.hypot(X[..., 0], X[..., 1])[..., None] / c
+            vf = self.to_frame(X, V) / (c * self.omega)
+            z = np.concatenate([eps, vf], axis=-1)
         elif self.kind != "standard":
-            z = np.concatenate([X / self.clearance, V / (self.clearance * self.omega)], axis=-1)
+            z = np.concatenate([X / c, V / (c * self.omega)], axis=-1)
         else:
             z = np.concatenate([X, V], axis=-1)
         if self.extras:
@@ -137,18 +154,18 @@ class Scaling:
             z = np.concatenate([z, np.asarray(E, dtype=float)], axis=-1)
         return z
 
-    def _raw_targets(self, X, V, F):
-        return self.to_frame(X, F) / self.gain(X, V)[..., None]
+    def _raw_targets(self, X, V, F, E=None):
+        return self.to_frame(X, F) / self.gain(X, V, E)[..., None]
 
     def inputs(self, X, V, E=None) -> np.ndarray:
         return (self._raw_inputs(X, V, E) - self.in_mean) / self.in_std
 
-    def targets(self, X, V, F) -> np.ndarray:
-        return (self._raw_targets(X, V, F) - self.out_mean) / self.out_std
+    def targets(self, X, V, F, E=None) -> np.ndarray:
+        return (self._raw_targets(X, V, F, E) - self.out_mean) / self.out_std
 
-    def forces(self, X, V, y) -> np.ndarray:
+    def forces(self, X, V, y, E=None) -> np.ndarray:
         """Inverse of ``targets``: network outputs -> forces [N]."""
-        return self.from_frame(X, (y * self.out_std + self.out_mean) * self.gain(X, V)[..., None])
+        return self.from_frame(X, (y * self.out_std + self.out_mean) * self.gain(X, V, E)[..., None])
 
     # ------------------------------------------------------------------ io
     def to_dict(self) -> dict:
@@ -169,9 +186,10 @@ class Scaling:
     def kernel_row(self) -> np.ndarray:
         """Flat parameters for the compiled kernel (21): 0 kind, 1 c, 2 omega, 3 force_scale, 4 power,
         5-9 input means (padded to 5), 10-14 input stds, 15-16 output means, 17-18 output stds,
-        19 frame, 20 number of extra inputs."""
+        19 frame, 20 number of extra inputs, 21 sleeve-aware (clearance from the current setting)."""
         pad = self.MAX_INPUTS - len(self.in_mean)
         return np.concatenate([[KIND_CODES[self.kind], self.clearance, self.omega, self.force_scale, self.power],
                                np.concatenate([self.in_mean, np.zeros(pad)]),
                                np.concatenate([self.in_std, np.ones(pad)]), self.out_mean, self.out_std,
-                               [1.0 if self.frame == "polar" else 0.0, float(len(self.extras))]])
+                               [1.0 if self.frame == "polar" else 0.0, float(len(self.extras)),
+                                1.0 if self.sleeve_gain else 0.0]])

@@ -227,10 +227,11 @@ class ForceDataModule(L.LightningDataModule):
         b = self.bearing
         self.scaling = Scaling.fit(self.scaling_kind, X[~is_val], V[~is_val], F[~is_val], b.clearance, b.omega,
                                    b.force_scale, self.power, self.frame,
-                                   E=None if E is None else E[~is_val], extras=extras)
+                                   E=None if E is None else E[~is_val], extras=extras,
+                                   sleeve_gain=getattr(b, "tan_half_angle", 0.0) if extras == ("S",) else 0.0)
         z = self.scaling.inputs(X, V, E)
-        y = self.scaling.targets(X, V, F)
-        gain = self.scaling.gain(X, V)  # F = (network output unscaled) * gain
+        y = self.scaling.targets(X, V, F, E)
+        gain = self.scaling.gain(X, V, E)  # F = (network output unscaled) * gain
         t = lambda a: torch.as_tensor(np.ascontiguousarray(a), dtype=torch.float32)  # noqa: E731
         tr, va = ~is_val, is_val
         self.train_tensors = (t(z[tr]), t(y[tr]))

@@ -1,0 +1,62 @@
+"""Evaluate no control, the DQN agent and MPC on the reference model of the active bearing (Fig. 5).
+
+    python experiments/evaluate_control.py
+Writes reports/control.json (amplitudes, friction, sleeve travel, time per decision, the
+amplitude reduction) and reports/figures/fig5_*.png; logs to MLflow.
+"""
+import time
+
+import hydra
+import numpy as np
+from omegaconf import DictConfig, OmegaConf
+
+from fluidfilm import io, load_surrogate, tracking
+from fluidfilm.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.control import ConstantSleeve, DQNController, ModelPredictiveController, run_episode
+from fluidfilm.control.build import env_from_cfg
+from fluidfilm.control.dqn import load_agent
+from fluidfilm.figures import fig5_panels
+
+
+@hydra.main(config_path="../conf", config_name="control", version_base="1.3")
+def main(cfg: DictConfig) -> dict:
+    c = OmegaConf.to_container(cfg, resolve=True)
+    reference = reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference)
+    env = env_from_cfg(reference, c["rotor"], c["controller"])
+    surrogate = load_surrogate(cfg.surrogate_dir)
+    controllers = [ConstantSleeve(env.initial_action), DQNController(load_agent(cfg.agent_path)),
+                   ModelPredictiveController(surrogate, cfg.controller.mpc.horizon_intervals)]
+    controllers[0].name = "none"
+    runs = {}
+    for ctrl in controllers:
+        t0 = time.perf_counter()
+        res = run_episode(env, ctrl)
+        res["wall_s"] = time.perf_counter() - t0
+        runs[ctrl.name] = res
+        print(f"{ctrl.name}: max amplitude {res['max_amplitude_m'] * 1e6:.1f} um, final {res['final_amplitude_m'] * 1e6:.1f} um, "
+              f"friction {res['mean_friction_power_W']:.2f} W, sleeve travel {res['sleeve_travel_m'] * 1e3:.1f} mm, "
+              f"{res['decision_ms_median']:.3f} ms per decision, return {res['return']:.1f}")
+    none = runs["none"]["max_amplitude_m"]
+    summary = {name: {k: v for k, v in r.items() if k not in ("history", "t", "x")} for name, r in runs.items()}
+    for name, r in runs.items():
+        summary[name]["amplitude_reduction_pct"] = 100.0 * (1.0 - r["max_amplitude_m"] / none)
+        summary[name]["sleeve_schedule_m"] = [float(h["sleeve"]) for h in r["history"]]
+    out = {"controllers": summary, "scenario": c["controller"]["scenario"], "reward": c["controller"]["reward"],
+           "sleeve_positions_m": c["controller"]["sleeve_positions"],
+           "controller_amplitude_reduction_pct": summary["dqn"]["amplitude_reduction_pct"],
+           "mpc_amplitude_reduction_pct": summary["mpc"]["amplitude_reduction_pct"],
+           "evaluated_on": repr(reference), "nominal_clearance_m": env.c0}
+    io.write_json(cfg.out_json, out)
+    fig5_panels(runs, env.c0, cfg.figures_dir, ramp=(env.scenario.imbalance_start, env.scenario.imbalance_end))
+    with tracking.run(cfg.tracking, "control_evaluation", c, tags={"stage": "evaluate_control"}) as run:
+        if run is not None:
+            import mlflow
+
+            for name, s in summary.items():
+                mlflow.log_metrics({f"{name}_{k}": float(v) for k, v in s.items()
+                                    if isinstance(v, (int, float)) and not isinstance(v, bool)})
+    return out
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,130 @@
+"""Controllers of the active bearing and the loop that runs them on ``ActiveBearingEnv``.
+
+Every controller is a callable ``controller(obs, env) -> action``: the DQN
+agent reads only the observation; the model predictive controller reads the
+measured state (position, velocity, time, current sleeve) from the
+environment, as a real MPC reads its sensors.
+
+- ``ConstantSleeve``: no control, the sleeve held (the passive bearing).
+- ``DQNController``: a stable-baselines3 DQN policy, greedy.
+- ``ModelPredictiveController``: at each decision, predicts the orbit over a
+  horizon for every sleeve position held constant, with its own force model
+  (the surrogate; the reference for a "perfect model"), and takes the
+  position of least predicted cost, the environment's own cost.  The
+  imbalance is held at its current value over the horizon: the controller
+  knows the present imbalance (estimated from the measured orbit), not the
+  future ramp.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..rotor import simulate
+from .env import ActiveBearingEnv, friction_power, orbit_amplitude
+
+
+class ConstantSleeve:
+    """No control: always the same sleeve position."""
+
+    def __init__(self, action: int):
+        self.action = int(action)
+        self.name = f"constant_{self.action}"
+
+    def __call__(self, obs, env) -> int:
+        return self.action
+
+
+class DQNController:
+    """A trained stable-baselines3 DQN agent, acting greedily."""
+
+    name = "dqn"
+
+    def __init__(self, agent):
+        self.agent = agent
+
+    def __call__(self, obs, env) -> int:
+        action, _ = self.agent.predict(obs, deterministic=True)
+        return int(action)
+
+
+class ModelPredictiveController:
+    """Shooting MPC over constant sleeve holds, with its own force model."""
+
+    name = "mpc"
+
+    def __init__(self, model, horizon_intervals: int = 2):
+        if not hasattr(model, "set_sleeve"):
+            raise ValueError(f"{type(model).__name__} has no sleeve input; the MPC needs an active bearing model")
+        if int(horizon_intervals) < 1:
+            raise ValueError(f"horizon_intervals must be >= 1, got {horizon_intervals!r}")
+        self.model = model
+        self.horizon = int(horizon_intervals)
+
+    def predicted_costs(self, env: ActiveBearingEnv) -> np.ndarray:
+        sc, w = env.scenario, env.weights
+        rotor = env.rotor_with(env.scenario.imbalance_start + (sc.imbalance_end - sc.imbalance_start)
+                               * min(env.t / sc.ramp_time, 1.0))
+        costs = np.full(len(env.sleeve_positions), np.inf)
+        for a, s in enumerate(env.sleeve_positions):
+            self.model.set_sleeve(s)
+            c_r = self.model.clearance
+            if np.hypot(*env.x) >= sc.eps_stop * c_r:
+                continue
+            tr = simulate(self.model, rotor, self.horizon * sc.control_interval, sc.dt, x0=env.x, v0=env.v,
+                          eps_stop=sc.eps_stop, record_every=sc.record_every, t0=env.t)
+            if not tr.ok:
+                costs[a] = w.contact_penalty
+                continue
+            eps_mean = float(np.hypot(*tr.x.mean(axis=0)) / c_r)
+            move = abs(s - env.sleeve_positions[env.action]) / env.travel
+            costs[a] = (orbit_amplitude(tr.x) / (w.amplitude_ref * env.c0)
+                        + w.friction * friction_power(env.bearing, c_r, min(eps_mean, 0.99)) / env.p_ref
+                        + w.move * move)
+        return costs
+
+    def __call__(self, obs, env) -> int:
+        return int(np.argmin(self.predicted_costs(env)))
+
+
+def run_episode(env: ActiveBearingEnv, controller, keep_trajectory: bool = True) -> dict:
+    """One episode; returns the per-decision history, the whole trajectory and summary numbers.
+
+    ``decision_ms``: wall time the controller took per decision (median), the
+    figure that matters for running it on-line.
+    """
+    obs, _ = env.reset()
+    t_parts, x_parts = [], []
+    decision_s = []
+    total = 0.0
+    while True:
+        t0 = time.perf_counter()
+        action = controller(obs, env)
+        decision_s.append(time.perf_counter() - t0)
+        obs, reward, terminated, truncated, info = env.step(action)
+        total += reward
+        tr = env.last_trajectory
+        if keep_trajectory and tr is not None:
+            t_parts.append(tr.t[1:] if t_parts else tr.t)
+            x_parts.append(tr.x[1:] if x_parts else tr.x)
+        if terminated or truncated:
+            break
+    hist = env.history
+    amps = np.array([h["amplitude"] for h in hist])
+    out = {
+        "controller": getattr(controller, "name", type(controller).__name__),
+        "return": float(total),
+        "n_decisions": len(hist),
+        "contact": bool(hist[-1]["terminated"]),
+        "max_amplitude_m": float(amps.max()),
+        "final_amplitude_m": float(amps[-max(1, len(amps) // 10):].mean()),
+        "mean_friction_power_W": float(np.mean([h["friction_power"] for h in hist])),
+        "sleeve_travel_m": float(sum(h["move"] for h in hist) * env.travel),
+        "decision_ms_median": float(np.median(decision_s) * 1e3),
+        "history": hist,
+    }
+    if keep_trajectory and t_parts:
+        out["t"] = np.concatenate(t_parts)
+        out["x"] = np.concatenate(x_parts)
+    return out

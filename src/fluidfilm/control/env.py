@@ -1,0 +1,232 @@
+"""``ActiveBearingEnv``: the rotor in the active conical bearing as a gymnasium environment.
+
+Scenario (paper Fig. 5): a fault develops - the rotor's imbalance grows
+uniformly from ``imbalance_start`` to ``imbalance_end`` over ``ramp_time``
+(5 s) - while a controller picks the axial sleeve position every
+``control_interval`` seconds (one shaft revolution by default).  Between
+decisions the sleeve is held and the rotor integrated with the same compiled
+RK4 loop as every other trajectory in the workspace (``rotor.simulate``), so
+the force model is swappable: a surrogate for training, the reference
+solver for evaluation.
+
+Observation (7, float32), all things a rig measures or the controller knows:
+journal position X/c and velocity V/(c omega) (proximity probes, c the
+nominal clearance), the orbit amplitude over the last interval /c (how big
+the vibration has become: the imbalance itself is not measured), the
+largest eccentricity ratio over the last interval relative to the current
+clearance (how close to contact), and the sleeve position scaled to [-1, 1].
+
+Actions: ``Discrete(len(sleeve_positions))``, the index of a sleeve position.
+
+Reward per interval (negative cost; weights in config, documented in
+``conf/control``):
+
+    r = -( A / a_ref  +  w_friction P / P_ref  +  w_move |s_new - s_old| / travel )
+
+A the orbit amplitude over the interval (largest distance of the journal
+from the interval's mean position), P the film's viscous friction power
+(Petroff with the eccentricity factor, 2 pi mu omega^2 R^3 L / (c_r
+sqrt(1 - eps^2)), eps of the mean position), P_ref its value at the nominal
+clearance and eps = 0.  Without the friction term closing the sleeve would
+always win (a thinner film is stiffer), and the controller would be a
+constant; with it, the sleeve must follow the growing imbalance - the
+vibration-versus-friction trade-off the paper names as the aim of active
+bearings.  Contact (eps reaching ``eps_stop`` of the current clearance)
+ends the episode with ``contact_penalty``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+
+from ..rotor import Rotor, simulate
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """The Fig. 5 scenario and the controller's timing; SI units."""
+
+    imbalance_start: float = 2.0e-4      # kg m, total rotor imbalance at t = 0
+    imbalance_end: float = 2.0e-3        # kg m, at t = ramp_time
+    ramp_time: float = 5.0               # s
+    t_end: float = 5.0                   # s, episode length
+    control_interval: float = 0.02       # s between decisions
+    settle_time: float = 0.2             # s run before t = 0 at the initial sleeve and imbalance
+    dt: float = 1.0e-5                   # s, RK4 step
+    record_every: int = 10
+    eps_stop: float = 0.95
+    initial_action: int | None = None    # None: the position closest to s = 0
+
+    def __post_init__(self) -> None:
+        for name in ("ramp_time", "t_end", "control_interval", "dt"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"scenario.{name} must be a positive time in s, got {v!r}")
+        for name in ("imbalance_start", "imbalance_end", "settle_time"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"scenario.{name} must be finite and >= 0, got {v!r}")
+        n = self.control_interval / self.dt
+        if abs(n - round(n)) > 1e-6 or round(n) % self.record_every:
+            raise ValueError(f"scenario.control_interval={self.control_interval} must be a whole number of "
+                             f"record_every={self.record_every} steps of dt={self.dt}")
+        k = self.t_end / self.control_interval
+        if abs(k - round(k)) > 1e-6:
+            raise ValueError(f"scenario.t_end={self.t_end} must be a whole number of control intervals "
+                             f"({self.control_interval} s)")
+
+    @property
+    def n_decisions(self) -> int:
+        return int(round(self.t_end / self.control_interval))
+
+
+@dataclass(frozen=True)
+class RewardWeights:
+    amplitude_ref: float = 0.2       # a_ref as a fraction of the nominal clearance
+    friction: float = 1.0            # w_friction
+    move: float = 0.5                # w_move
+    contact_penalty: float = 100.0
+
+
+def friction_power(bearing, clearance: float, eps: float) -> float:
+    """Viscous power loss of the film [W]: Petroff's 2 pi mu omega^2 R^3 L / c with 1/sqrt(1 - eps^2)."""
+    r = bearing.radius
+    return 2 * math.pi * bearing.viscosity * bearing.omega**2 * r**3 * bearing.length / (
+        clearance * math.sqrt(max(1.0 - eps * eps, 1e-6)))
+
+
+def orbit_amplitude(x: np.ndarray) -> float:
+    """Largest distance of the journal from the mean position of a stretch of orbit [m]."""
+    return float(np.max(np.linalg.norm(x - x.mean(axis=0), axis=1)))
+
+
+class ActiveBearingEnv(gym.Env):
+    """Rotor in an active bearing under a growing imbalance; a discrete sleeve controller acts on it."""
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, model, rotor: Rotor, sleeve_positions, scenario: Scenario = Scenario(),
+                 weights: RewardWeights = RewardWeights(), load_share: float = 1.0):
+        """``rotor``: what the bearing carries (mass share, gravity, external force; its own
+        imbalance is ignored); the scenario's total imbalances are multiplied by ``load_share``."""
+        if not hasattr(model, "set_sleeve"):
+            raise ValueError(f"{type(model).__name__} has no sleeve: the environment needs an active bearing model")
+        positions = np.asarray(sleeve_positions, dtype=float)
+        if positions.ndim != 1 or positions.size < 2 or np.any(np.diff(positions) <= 0):
+            raise ValueError(f"sleeve_positions must be >= 2 increasing values (m), got {list(positions)}")
+        for s in positions:
+            model.bearing.clearance_at(s)  # inside the travel, or a clear error
+        self.model = model
+        self.bearing = model.bearing
+        self.sleeve_positions = positions
+        self.scenario = scenario
+        self.weights = weights
+        # the rotor as one bearing sees it, with the ramp; the base rotor gives mass, gravity, load share
+        self.rotor = rotor
+        if not 0.0 < float(load_share) <= 1.0:
+            raise ValueError(f"load_share must lie in (0, 1], got {load_share!r}")
+        self.load_share = float(load_share)
+        self.c0 = self.bearing.clearance
+        self.travel = float(positions[-1] - positions[0])
+        self.p_ref = friction_power(self.bearing, self.c0, 0.0)
+        self.action_space = gym.spaces.Discrete(len(positions))
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(7,), dtype=np.float32)
+        self.initial_action = (int(np.argmin(np.abs(positions))) if scenario.initial_action is None
+                               else int(scenario.initial_action))
+        if not 0 <= self.initial_action < len(positions):
+            raise ValueError(f"scenario.initial_action={scenario.initial_action} is not an action index")
+        self._settled: dict = {}
+        self.history: list[dict] = []
+
+    # ------------------------------------------------------------------ helpers
+    def ramp_rotor(self) -> Rotor:
+        """The rotor with the scenario's imbalance ramp (what the bearing carries)."""
+        return self.rotor_with(self.scenario.imbalance_start, self.scenario.imbalance_end, self.scenario.ramp_time)
+
+    def rotor_with(self, u_start: float, u_end: float | None = None, ramp_time: float = 0.0) -> Rotor:
+        r = self.rotor
+        share = self.load_share
+        return Rotor(mass=r.mass, imbalance=u_start * share, external_force=r.external_force, gravity=r.gravity,
+                     imbalance_direction=r.imbalance_direction,
+                     imbalance_final=None if u_end is None else u_end * share, ramp_time=ramp_time)
+
+    def initial_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """State at t = 0: settled for ``settle_time`` at the initial sleeve and the initial imbalance."""
+        a = self.initial_action
+        if a not in self._settled:
+            sc = self.scenario
+            self.model.set_sleeve(self.sleeve_positions[a])
+            if sc.settle_time > 0:
+                # a whole number of revolutions ending at t = 0, so the imbalance phase is continuous
+                tr = simulate(self.model, self.rotor_with(sc.imbalance_start), sc.settle_time, sc.dt,
+                              eps_stop=sc.eps_stop, record_every=sc.record_every, t0=-sc.settle_time)
+                if not tr.ok:
+                    raise RuntimeError(f"settling run failed: {tr.status}")
+                self._settled[a] = (tr.x[-1].copy(), tr.v[-1].copy())
+            else:
+                self._settled[a] = (np.zeros(2), np.zeros(2))
+        x, v = self._settled[a]
+        return x.copy(), v.copy()
+
+    def _observe(self, amp: float, eps_max: float) -> np.ndarray:
+        cw = self.c0 * self.bearing.omega
+        s_norm = 2.0 * (self.sleeve_positions[self.action] - self.sleeve_positions[0]) / self.travel - 1.0
+        return np.array([self.x[0] / self.c0, self.x[1] / self.c0, self.v[0] / cw, self.v[1] / cw,
+                         amp / self.c0, eps_max, s_norm], dtype=np.float32)
+
+    # ------------------------------------------------------------------ gymnasium API
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.action = self.initial_action
+        self.model.set_sleeve(self.sleeve_positions[self.action])
+        self.x, self.v = self.initial_state()
+        self.t = 0.0
+        self.k = 0
+        self.history = []
+        self._ramp = self.ramp_rotor()
+        eps = float(np.hypot(*self.x) / self.model.clearance)
+        return self._observe(0.0, eps), {"t": 0.0}
+
+    def step(self, action):
+        if not self.action_space.contains(int(action)):
+            raise ValueError(f"action {action!r} is not in {self.action_space}")
+        sc, w = self.scenario, self.weights
+        a_old = self.action
+        self.action = int(action)
+        s_new = self.sleeve_positions[self.action]
+        self.model.set_sleeve(s_new)
+        c_r = self.model.clearance
+        move = abs(s_new - self.sleeve_positions[a_old]) / self.travel
+        terminated = False
+        if np.hypot(*self.x) >= sc.eps_stop * c_r:
+            # the sleeve closed onto the journal
+            tr = None
+            terminated = True
+        else:
+            tr = simulate(self.model, self._ramp, sc.control_interval, sc.dt, x0=self.x, v0=self.v,
+                          eps_stop=sc.eps_stop, record_every=sc.record_every, t0=self.t)
+            terminated = not tr.ok and tr.status.startswith(("contact", "diverged"))
+        if tr is not None:
+            xs = tr.x
+            self.x, self.v = tr.x[-1].copy(), tr.v[-1].copy()
+        else:
+            xs = self.x[None, :]
+        amp = orbit_amplitude(xs)
+        eps_all = np.hypot(xs[:, 0], xs[:, 1]) / c_r
+        eps_mean = float(np.hypot(*xs.mean(axis=0)) / c_r)
+        power = friction_power(self.bearing, c_r, min(eps_mean, 0.99))
+        cost = amp / (w.amplitude_ref * self.c0) + w.friction * power / self.p_ref + w.move * move
+        if terminated:
+            cost += w.contact_penalty
+        self.k += 1
+        self.t = self.k * sc.control_interval
+        truncated = (not terminated) and self.k >= sc.n_decisions
+        rec = {"t": self.t, "sleeve": s_new, "clearance": c_r, "amplitude": amp, "eps_max": float(eps_all.max()),
+               "friction_power": power, "move": move, "cost": cost, "terminated": terminated}
+        self.history.append(rec)
+        # the interval's trajectory stays on the environment (infos must compare by value)
+        self.last_trajectory = tr
+        return self._observe(amp, float(eps_all.max())), -float(cost), terminated, truncated, dict(rec)

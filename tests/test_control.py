@@ -1,0 +1,218 @@
+"""The active bearing's data, surrogate and controllers.
+
+- the sleeve dataset holds the reference forces at each sleeve position, on grids relative to c_r(s);
+- the surrogate with a sleeve input: compiled kernel == torch module on the saved layers;
+- the gymnasium environment passes gymnasium's checker, and with a constant action its trajectory
+  is ``simulate``'s with the same force model and imbalance ramp;
+- a short DQN run (stable-baselines3) completes, saves a policy that loads and acts the same;
+- MPC with a perfect model (the reference) does no worse than no control;
+- the imbalance ramp of the rotor model.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+import torch
+import yaml
+from gymnasium.utils.env_checker import check_env
+
+from fluidfilm import GradedReynoldsModel, Rotor, load_surrogate, simulate
+from fluidfilm.bearing import bearing_from_dict
+from fluidfilm.control import ActiveBearingEnv, ConstantSleeve, DQNController, ModelPredictiveController, run_episode
+from fluidfilm.control.build import env_from_cfg
+from fluidfilm.control.dqn import load_agent, save_agent, train_dqn
+from fluidfilm.data import DatasetSpec, generate_dataset, random_test_set
+from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors
+
+from conftest import ROOT
+
+REFERENCE = {"coarse": [30, 30], "dense": [55, 55], "eps_threshold": 0.9, "cavitation": "gumbel"}
+
+
+def _yaml(*parts):
+    return yaml.safe_load((ROOT.joinpath("conf", *parts)).read_text())
+
+
+@pytest.fixture(scope="module")
+def conical():
+    return bearing_from_dict(_yaml("bearing", "conical.yaml"))
+
+
+@pytest.fixture(scope="module")
+def reference(conical):
+    return GradedReynoldsModel(conical, **{k: tuple(v) if isinstance(v, list) else v for k, v in REFERENCE.items()})
+
+
+@pytest.fixture(scope="module")
+def controller_cfg():
+    quick = _yaml("controller", "quick.yaml")
+    cfg = _yaml("controller", "default.yaml")
+    for key in ("scenario", "dqn"):
+        cfg[key].update(quick[key])
+    return cfg
+
+
+@pytest.fixture(scope="module")
+def rotor_cfg():
+    return _yaml("rotor", "paper.yaml")
+
+
+@pytest.fixture(scope="module")
+def active_data(conical, tmp_path_factory):
+    spec = DatasetSpec.from_cfg(_yaml("dataset", "active_quick.yaml"))
+    out = tmp_path_factory.mktemp("active")
+    meta = generate_dataset(conical, REFERENCE, spec, out / "dataset", scheduler="inline", progress=False)
+    random_test_set(conical, REFERENCE, spec, out / "testset")
+    return out / "dataset", out / "testset", spec, meta
+
+
+@pytest.fixture(scope="module")
+def active_surrogate(active_data):
+    model_cfg = {"width": 32, "depth": 2, "activation": "tanh", "optimizer": "adam", "lr": 3e-3,
+                 "weight_decay": 0.0, "scheduler": "cosine"}
+    trainer = {"max_epochs": 30, "max_time": None, "accelerator": "cpu", "progress_bar": False}
+    model, _ = fit_surrogate(active_data[0], model_cfg, {"boundaries": []},
+                             {"kind": "physics", "power": 1.5, "frame": "polar"}, trainer, None, batch_size=256,
+                             val_fraction=0.2, name="active_test")
+    return model
+
+
+def test_sleeve_dataset_holds_the_reference_force_at_each_sleeve_position(active_data, reference, conical):
+    ds, _, spec, meta = active_data
+    df = pd.read_parquet(ds)
+    assert meta["n_samples"] == len(df) == spec.n_samples(conical.clearance)
+    assert sorted(df["S"].unique()) == list(spec.sleeve_positions)
+    rng = np.random.default_rng(0)
+    rows = df.iloc[rng.choice(len(df), 40, replace=False)]
+    for s, grp in rows.groupby("S"):
+        reference.set_sleeve(s)
+        X, V = grp[["X1", "X2"]].to_numpy(), grp[["V1", "V2"]].to_numpy()
+        np.testing.assert_allclose(reference.forces(X, V), grp[["F1", "F2"]].to_numpy(), rtol=1e-12, atol=1e-12)
+        # the eccentricity grid is relative to the clearance at that sleeve position
+        np.testing.assert_allclose(np.hypot(X[:, 0], X[:, 1]) / conical.clearance_at(s), grp["eps"], atol=1e-12)
+    reference.set_sleeve(0.0)
+
+
+def test_sleeve_surrogate_kernel_equals_the_torch_network_and_learns_the_sleeve(active_surrogate, active_data,
+                                                                                   tmp_path):
+    from fluidfilm.surrogate.training import ForceMLP
+
+    active_surrogate.save(tmp_path / "m")
+    model = load_surrogate(tmp_path / "m")
+    sc = model.scalings[0]
+    assert sc.extras == ("S",) and sc.n_inputs == 4
+    rng = np.random.default_rng(1)
+    X = 40e-6 * (rng.random((20, 2)) - 0.5)
+    V = 0.02 * (rng.random((20, 2)) - 0.5)
+    module = ForceMLP(width=32, depth=2, activation="tanh", n_inputs=4).double()
+    for seq_layer, (W, b) in zip([m for m in module.net if isinstance(m, torch.nn.Linear)], model.networks[0]):
+        seq_layer.weight.data, seq_layer.bias.data = torch.as_tensor(W), torch.as_tensor(b)
+    for s in (-0.8e-3, 0.3e-3):
+        model.set_sleeve(s)
+        E = np.full((20, 1), s)
+        with torch.no_grad():
+            y = module(torch.as_tensor(sc.inputs(X, V, E))).numpy()
+        np.testing.assert_allclose(model.forces(X, V), sc.forces(X, V, y, E), rtol=1e-9, atol=1e-9)
+    # it has learnt the sleeve: a closed sleeve carries more load at the same displacement (the reference's trend)
+    x = np.array([[0.0, 40e-6]])
+    model.set_sleeve(-0.8e-3)
+    f_closed = np.linalg.norm(model.forces(x, np.zeros((1, 2))))
+    model.set_sleeve(0.8e-3)
+    f_open = np.linalg.norm(model.forces(x, np.zeros((1, 2))))
+    assert f_closed > 1.5 * f_open
+    err = held_out_errors(model, active_data[1])
+    assert err["test_rel_err_median"] < 0.2  # a 30-epoch network on 20k samples: a smoke bound
+
+
+def test_environment_follows_the_gymnasium_api(reference, rotor_cfg, controller_cfg):
+    env = env_from_cfg(reference, rotor_cfg, controller_cfg)
+    check_env(env, skip_render_check=True)
+
+
+@pytest.mark.parametrize("action", [0, 3])
+def test_constant_action_trajectory_equals_simulate(reference, rotor_cfg, controller_cfg, action):
+    env = env_from_cfg(reference, rotor_cfg, controller_cfg)
+    env.reset()
+    x0, v0 = env.x.copy(), env.v.copy()
+    xs = [x0[None, :]]
+    done = False
+    while not done:
+        _, _, term, trunc, _ = env.step(action)
+        xs.append(env.last_trajectory.x[1:])
+        done = term or trunc
+    x_env = np.concatenate(xs)
+    reference.set_sleeve(env.sleeve_positions[action])
+    sc = env.scenario
+    tr = simulate(reference, env.ramp_rotor(), sc.t_end, sc.dt, x0=x0, v0=v0, eps_stop=sc.eps_stop,
+                  record_every=sc.record_every)
+    assert tr.ok and len(tr.x) == len(x_env)
+    np.testing.assert_allclose(x_env, tr.x, rtol=0, atol=1e-9 * env.c0)
+    reference.set_sleeve(0.0)
+
+
+def test_short_dqn_run_saves_a_policy_that_loads(active_surrogate, rotor_cfg, controller_cfg, tmp_path):
+    env = env_from_cfg(active_surrogate, rotor_cfg, controller_cfg)
+    agent, returns = train_dqn(env, controller_cfg["dqn"], seed=0)
+    assert len(returns) >= 2 and all(np.isfinite(r) for _, r in returns)
+    path = save_agent(agent, tmp_path / "dqn.zip")
+    loaded = load_agent(path)
+    obs = np.random.default_rng(0).normal(size=(10, 7)).astype(np.float32)
+    a1 = [DQNController(agent)(o, env) for o in obs]
+    a2 = [DQNController(loaded)(o, env) for o in obs]
+    assert a1 == a2 and all(0 <= a < env.action_space.n for a in a1)
+    res = run_episode(env, DQNController(loaded))
+    assert res["n_decisions"] == env.scenario.n_decisions or res["contact"]
+
+
+def test_mpc_with_a_perfect_model_does_no_worse_than_no_control(conical, reference, rotor_cfg, controller_cfg):
+    env = env_from_cfg(reference, rotor_cfg, controller_cfg)
+    none = run_episode(env, ConstantSleeve(env.initial_action))
+    perfect = GradedReynoldsModel(conical)
+    mpc = run_episode(env, ModelPredictiveController(perfect, horizon_intervals=1))
+    assert mpc["return"] >= none["return"] - 1e-9
+    assert not mpc["contact"]
+    # and it acts: the growing imbalance makes it move the sleeve away from the nominal position
+    assert mpc["sleeve_travel_m"] > 0
+
+
+def test_imbalance_ramp():
+    r = Rotor(mass=2.0, imbalance=1e-4, imbalance_final=5e-4, ramp_time=2.0)
+    assert r.imbalance_at(-1) == 1e-4 and r.imbalance_at(1.0) == pytest.approx(3e-4) and r.imbalance_at(9) == 5e-4
+    with pytest.raises(ValueError, match="ramp_time"):
+        Rotor(mass=2.0, imbalance=1e-4, imbalance_final=5e-4)
+    with pytest.raises(ValueError, match="imbalance_final"):
+        Rotor(mass=2.0, imbalance=1e-4, imbalance_final=-1.0, ramp_time=1.0)
+
+
+def test_ramped_imbalance_drives_a_free_mass_as_the_integral_of_its_force():
+    """No bearing (zero stiffness and damping), no gravity: m dV/dt = u(t) w^2 (cos wt, sin wt) with u ramping;
+    the velocity is the closed-form integral of that force."""
+    from fluidfilm import LinearBearing, paper_bearing
+
+    b = paper_bearing()
+    w = b.omega
+    rotor = Rotor(mass=5.0, imbalance=1e-4, imbalance_final=3e-4, ramp_time=0.05, gravity=0.0)
+    tr = simulate(LinearBearing(b, 0.0, 0.0), rotor, 0.03, 1e-5, record_every=100)
+    t = tr.t
+    u0, k = 1e-4, (3e-4 - 1e-4) / 0.05
+    # int_0^t (u0 + k s) cos(ws) ds and the sine counterpart
+    ic = u0 * np.sin(w * t) / w + k * (t * np.sin(w * t) / w + (np.cos(w * t) - 1) / w**2)
+    is_ = u0 * (1 - np.cos(w * t)) / w + k * (-t * np.cos(w * t) / w + np.sin(w * t) / w**2)
+    v_exact = w**2 / rotor.mass * np.stack([ic, is_], axis=1)
+    np.testing.assert_allclose(tr.v, v_exact, rtol=0, atol=1e-6 * np.abs(v_exact).max())
+
+
+def test_bad_controller_input_names_the_value(reference, rotor_cfg, controller_cfg):
+    env = env_from_cfg(reference, rotor_cfg, controller_cfg)
+    env.reset()
+    with pytest.raises(ValueError, match="7"):
+        env.step(7)
+    with pytest.raises(ValueError, match="sleeve_positions"):
+        ActiveBearingEnv(reference, Rotor(mass=2.5), [0.0])
+    with pytest.raises(ValueError, match="0.002"):
+        ActiveBearingEnv(reference, Rotor(mass=2.5), [0.0, 2e-3])
+    from fluidfilm.control import Scenario
+
+    with pytest.raises(ValueError, match="control_interval"):
+        Scenario(control_interval=0.01005)
