@@ -45,7 +45,19 @@ def quick_pipeline(quick_data, tmp_path_factory):
         f"models.best={models / 'best'}", "integrator.t_end=0.06", "integrator.t_settle=0.04", "timing_repeats=1",
         "force_eval_states=500", f"out_dir={tmp / 'traj'}", f"figure_dir={reports / 'figures'}",
         f"report_dir={reports}", f"tracking.uri={uri}")
-    run("report.py", f"report_dir={reports}", f"models_dir={models}", f"dataset_dir={dataset}", f"tracking.uri={uri}")
+    # the active conical bearing: sleeve dataset, surrogate, DQN on it, evaluation on the reference
+    active_ds, active_ts = tmp / "active_dataset", tmp / "active_testset"
+    run("make_dataset.py", "bearing=conical", "reference=conical", "dataset=active_quick", f"out_dir={active_ds}",
+        f"test_dir={active_ts}", "dask.scheduler=inline", "progress=false")
+    run("train_surrogate.py", "experiment=active", f"dataset_dir={active_ds}", f"testset_dir={active_ts}",
+        f"out_dir={models}", f"checkpoint_dir={tmp / 'ckpt'}", f"tracking.uri={uri}", "trainer=quick",
+        "trainer.max_epochs=10", "model=tiny")
+    control = [f"surrogate_dir={models / 'active'}", f"agent_path={models / 'dqn_active.zip'}",
+               "controller=quick", f"tracking.uri={uri}"]
+    run("train_controller.py", *control, f"training_report={reports / 'dqn_training.json'}")
+    run("evaluate_control.py", *control, f"out_json={reports / 'control.json'}", f"figures_dir={reports / 'figures'}")
+    run("report.py", f"report_dir={reports}", f"models_dir={models}", f"dataset_dir={dataset}", f"tracking.uri={uri}",
+        f"active_dataset_dir={active_ds}")
     return tmp, uri
 
 
@@ -61,6 +73,11 @@ def test_pipeline_writes_every_headline_number(quick_pipeline):
     assert "| training time reduction, split vs single | 26 % |" in md
     assert (tmp / "reports" / "figures" / "fig4_comparison.png").stat().st_size > 10_000
     assert metrics["speedup_trajectory_split"] > 0
+    assert isinstance(metrics["controller_amplitude_reduction_pct"], float)
+    assert metrics["active_dataset_samples"] == 20_412
+    for panel in ("a_dqn", "b_none", "c_mpc"):
+        assert (tmp / "reports" / "figures" / f"fig5_{panel}.png").stat().st_size > 10_000
+    assert "Active conical bearing" in md
 
 
 def test_review_notebook_runs_on_the_quick_profile(quick_pipeline):
