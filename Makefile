@@ -32,6 +32,7 @@ test-slow: setup
 bench: setup
 	$(PY) benchmarks/bench_solver.py
 	$(PY) benchmarks/bench_rotor.py
+	$(PY) benchmarks/bench_conical.py
 
 clean-venv:
 	rm -rf $(VENV)

@@ -16,6 +16,7 @@ from fluidfilm.control import ConstantSleeve, DQNController, ModelPredictiveCont
 from fluidfilm.control.build import env_from_cfg
 from fluidfilm.control.dqn import load_agent
 from fluidfilm.figures import fig5_panels
+from fluidfilm.reynolds import ConicalReynoldsSolver
 
 
 @hydra.main(config_path="../conf", config_name="control", version_base="1.3")
@@ -37,7 +38,16 @@ def main(cfg: DictConfig) -> dict:
               f"friction {res['mean_friction_power_W']:.2f} W, sleeve travel {res['sleeve_travel_m'] * 1e3:.1f} mm, "
               f"{res['decision_ms_median']:.3f} ms per decision, return {res['return']:.1f}")
     none = runs["none"]["max_amplitude_m"]
-    summary = {name: {k: v for k, v in r.items() if k not in ("history", "t", "x")} for name, r in runs.items()}
+    summary = {name: {k: v for k, v in r.items() if k not in ("history", "t", "x", "v")} for name, r in runs.items()}
+    # the cone's axial film force over the last revolution (the planar rotor model does not carry it)
+    cone = ConicalReynoldsSolver(reference.bearing, *cfg.reference.coarse)
+    for name, r in runs.items():
+        cone.set_sleeve(r["history"][-1]["sleeve"])
+        n_rev = int(round(2 * np.pi / reference.bearing.omega / (r["t"][1] - r["t"][0])))
+        idx = np.linspace(len(r["t"]) - n_rev, len(r["t"]) - 1, 24).astype(int)
+        f3 = cone.forces_axial(r["x"][idx], r["v"][idx])[:, 2]
+        summary[name]["axial_force_N_mean_last_rev"] = float(f3.mean())
+        summary[name]["axial_force_N_max_last_rev"] = float(f3.max())
     for name, r in runs.items():
         summary[name]["amplitude_reduction_pct"] = 100.0 * (1.0 - r["max_amplitude_m"] / none)
         summary[name]["sleeve_schedule_m"] = [float(h["sleeve"]) for h in r["history"]]

@@ -149,9 +149,9 @@ sleeve as an input, {active_meta['generation_seconds_last_run']:.0f} s; held-out
 {active['metrics']['test_rel_err_median']:.4f}). Paper (qualitative): the DQN agent "tends to restrain the growth" of
 the orbit, the passive bearing's orbit grows.
 
-| controller | max amplitude um | reduction vs none % | final amplitude um | mean friction W | sleeve travel mm | ms per decision |
-|---|---|---|---|---|---|---|
-{chr(10).join(f"| {n} | {1e6 * r['max_amplitude_m']:.1f} | {r['amplitude_reduction_pct']:.1f} | {1e6 * r['final_amplitude_m']:.1f} | {r['mean_friction_power_W']:.2f} | {1e3 * r['sleeve_travel_m']:.1f} | {r['decision_ms_median']:.3f} |" for n, r in ctl.items())}
+| controller | max amplitude um | reduction vs none % | final amplitude um | mean friction W | sleeve travel mm | ms per decision | axial force N (last rev.) |
+|---|---|---|---|---|---|---|---|
+{chr(10).join(f"| {n} | {1e6 * r['max_amplitude_m']:.1f} | {r['amplitude_reduction_pct']:.1f} | {1e6 * r['final_amplitude_m']:.1f} | {r['mean_friction_power_W']:.2f} | {1e3 * r['sleeve_travel_m']:.1f} | {r['decision_ms_median']:.3f} | {r['axial_force_N_mean_last_rev']:.1f} |" for n, r in ctl.items())}
 
 ![Fig. 5 a](figures/fig5_a_dqn.png) ![Fig. 5 b](figures/fig5_b_none.png) ![MPC](figures/fig5_c_mpc.png)
 

@@ -42,6 +42,18 @@ trained = runs.dropna(subset=["metrics.test_rel_err_median"]) if "metrics.test_r
 display(trained[cols])
 assert len(trained) > 0, "no training runs in MLflow"
 """),
+    nbf.v4.new_markdown_cell("## Active conical bearing: DQN and MPC on the reference model (Fig. 5)"),
+    nbf.v4.new_code_cell("""control = json.loads((REPORT_DIR / "control.json").read_text())
+display(pd.DataFrame(control["controllers"]).T.drop(columns=["sleeve_schedule_m"]))
+curve = runs.dropna(subset=["metrics.episode_return"]) if "metrics.episode_return" in runs else runs.iloc[:0]
+if len(curve):
+    run_id = curve.iloc[0]["run_id"]
+    hist = mlflow.tracking.MlflowClient(MLFLOW_URI).get_metric_history(run_id, "episode_return")
+    display(pd.DataFrame([(m.step, m.value) for m in hist], columns=["timestep", "episode_return"]).tail(10))
+for panel in ("fig5_a_dqn", "fig5_b_none", "fig5_amplitude"):
+    f = REPORT_DIR / "figures" / f"{panel}.png"
+    if f.exists():
+        display(Image(filename=str(f)))"""),
     nbf.v4.new_markdown_cell("## The full report"),
     nbf.v4.new_code_cell("""display(Markdown((REPORT_DIR / "paper_comparison.md").read_text()))"""),
 ]

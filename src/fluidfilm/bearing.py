@@ -17,8 +17,33 @@ def _require_positive(name: str, value: float) -> float:
     return value
 
 
+class _FilmScales:
+    """Derived scales shared by every bearing (needs radius, clearance, length, speed_rpm, viscosity, density)."""
+
+    @property
+    def omega(self) -> float:
+        """Shaft angular speed [rad/s]."""
+        return self.speed_rpm * 2.0 * math.pi / 60.0
+
+    @property
+    def force_scale(self) -> float:
+        """Film-force scale mu*omega*R*L*(R/c)^2 [N]: forces divided by it are O(1)."""
+        r = self.radius
+        return self.viscosity * self.omega * r * self.length * (r / self.clearance) ** 2
+
+    @property
+    def couette_reynolds(self) -> float:
+        """rho*omega*R*c/mu; laminar Reynolds theory assumes it is well below Taylor's limit."""
+        return self.density * self.omega * self.radius * self.clearance / self.viscosity
+
+    @property
+    def taylor_limit(self) -> float:
+        """Couette Reynolds number at which Taylor vortices appear, 41.3*sqrt(R/c)."""
+        return 41.3 * math.sqrt(self.radius / self.clearance)
+
+
 @dataclass(frozen=True)
-class JournalBearing:
+class JournalBearing(_FilmScales):
     """A plain cylindrical journal bearing with a fixed sleeve.
 
     Parameters (SI): ``length`` L [m], ``diameter`` D [m] (of the bearing bore,
@@ -61,30 +86,9 @@ class JournalBearing:
         return 0.5 * self.diameter
 
     @property
-    def omega(self) -> float:
-        """Shaft angular speed [rad/s]."""
-        return self.speed_rpm * 2.0 * math.pi / 60.0
-
-    @property
     def slenderness(self) -> float:
         """L/D."""
         return self.length / self.diameter
-
-    @property
-    def force_scale(self) -> float:
-        """Film-force scale mu*omega*R*L*(R/c)^2 [N]: forces divided by it are O(1)."""
-        r = self.radius
-        return self.viscosity * self.omega * r * self.length * (r / self.clearance) ** 2
-
-    @property
-    def couette_reynolds(self) -> float:
-        """rho*omega*R*c/mu; laminar Reynolds theory assumes it is well below Taylor's limit."""
-        return self.density * self.omega * self.radius * self.clearance / self.viscosity
-
-    @property
-    def taylor_limit(self) -> float:
-        """Couette Reynolds number at which Taylor vortices appear, 41.3*sqrt(R/c)."""
-        return 41.3 * math.sqrt(self.radius / self.clearance)
 
     def sommerfeld(self, load: float) -> float:
         """Sommerfeld number S = (R/c)^2 * mu * N / P, N in rev/s, P = W/(L D)."""
@@ -118,14 +122,15 @@ def paper_bearing(supply_pressure: float = 0.0) -> JournalBearing:
 
 
 @dataclass(frozen=True)
-class ConicalBearing:
+class ConicalBearing(_FilmScales):
     """An adjustable conical journal bearing: the film lies between two coaxial cones.
 
     The journal radius grows linearly along the axis, from ``diameter_small/2``
     at the supply end z = 0 to ``diameter_large/2`` at z = L (half-cone angle
-    alpha = atan((r1 - r0)/L)).  The sleeve can slide axially by ``s``: moving
-    it towards the small end (s < 0) closes the radial clearance by |s| tan(alpha),
-    moving it towards the large end opens it,
+    alpha = atan((r1 - r0)/L)).  The sleeve can slide axially; ``s`` is its
+    displacement towards the journal's small end (towards -z).  The bore then
+    faces a thinner part of the journal, so s > 0 opens the radial clearance
+    by s tan(alpha) and s < 0 (towards the large end) closes it,
 
         c_r(s) = clearance + s tan(alpha),
 
@@ -204,22 +209,9 @@ class ConicalBearing:
         return math.atan(self.tan_half_angle)
 
     @property
-    def omega(self) -> float:
-        return self.speed_rpm * 2.0 * math.pi / 60.0
-
-    @property
-    def force_scale(self) -> float:
-        """mu*omega*R*L*(R/c)^2 [N] with the mean radius and the nominal clearance."""
-        r = self.radius
-        return self.viscosity * self.omega * r * self.length * (r / self.clearance) ** 2
-
-    @property
     def couette_reynolds(self) -> float:
+        """At the large end, where the surface is fastest (scales use the mean radius and nominal clearance)."""
         return self.density * self.omega * self.radius_large * self.clearance / self.viscosity
-
-    @property
-    def taylor_limit(self) -> float:
-        return 41.3 * math.sqrt(self.radius / self.clearance)
 
     def clearance_at(self, sleeve: float, check_travel: bool = True) -> float:
         """Radial clearance at the supply end [m] with the sleeve displaced axially by ``sleeve`` [m]."""

@@ -95,7 +95,7 @@ def run_episode(env: ActiveBearingEnv, controller, keep_trajectory: bool = True)
     figure that matters for running it on-line.
     """
     obs, _ = env.reset()
-    t_parts, x_parts = [], []
+    t_parts, x_parts, v_parts = [], [], []
     decision_s = []
     total = 0.0
     while True:
@@ -108,6 +108,7 @@ def run_episode(env: ActiveBearingEnv, controller, keep_trajectory: bool = True)
         if keep_trajectory and tr is not None:
             t_parts.append(tr.t[1:] if t_parts else tr.t)
             x_parts.append(tr.x[1:] if x_parts else tr.x)
+            v_parts.append(tr.v[1:] if v_parts else tr.v)
         if terminated or truncated:
             break
     hist = env.history
@@ -127,4 +128,5 @@ def run_episode(env: ActiveBearingEnv, controller, keep_trajectory: bool = True)
     if keep_trajectory and t_parts:
         out["t"] = np.concatenate(t_parts)
         out["x"] = np.concatenate(x_parts)
+        out["v"] = np.concatenate(v_parts)
     return out

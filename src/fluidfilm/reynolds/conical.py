@@ -158,7 +158,7 @@ class ConicalReynoldsSolver:
     """Finite-difference Reynolds solver of the conical bearing at a settable sleeve position.
 
     >>> solver = ConicalReynoldsSolver(bearing, 40, 40)
-    >>> solver.set_sleeve(-0.2e-3)            # sleeve 0.2 mm towards the small end
+    >>> solver.set_sleeve(-0.2e-3)            # sleeve 0.2 mm towards the large end: clearance closes
     >>> F = solver.forces(X, V)               # (..., 2) N, radial
     >>> F3 = solver.forces_axial(X, V)        # (..., 3) N, radial and axial
 

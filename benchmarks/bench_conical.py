@@ -1,0 +1,68 @@
+"""Benchmark of the conical bearing's solver paths and of the controllers' model evaluations.
+
+    python benchmarks/bench_conical.py
+
+Medians per force evaluation through the compiled kernels (what the rotor integrator calls), side
+by side: the cylindrical fast path, the conical fast path (eigenbasis), the conical general path
+(block-cyclic direct solve, any h(theta, z)), a tapered film on the general path, and the active
+surrogate (models/active, if trained); ratios against the conical fast path.
+"""
+from __future__ import annotations
+
+import os
+import platform
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from fluidfilm import ReynoldsSolver, paper_bearing
+from fluidfilm.bearing import bearing_from_dict
+from fluidfilm.reynolds.conical import ConicalReynoldsSolver
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def kernel_time(model, repeats=7, calls=200) -> float:
+    import time
+
+    fn, params = model.force_kernel
+    x1, x2, v1, v2 = 20e-6, 45e-6, 0.01, -0.005
+    fn(params, x1, x2, v1, v2)
+    samples = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(calls):
+            fn(params, x1, x2, v1, v2)
+        samples.append((time.perf_counter() - t0) / calls)
+    return float(np.median(samples))
+
+
+def main() -> None:
+    cfg = yaml.safe_load((ROOT / "conf" / "bearing" / "conical.yaml").read_text())
+    cone = bearing_from_dict(cfg)
+    tapered = bearing_from_dict({**cfg, "clearance_taper": 20e-6})
+    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores; medians of 7 x N calls")
+    for n in (30, 55):
+        rows = {
+            "cylinder, fast path": kernel_time(ReynoldsSolver(paper_bearing(), n, n)),
+            "cone, fast path (eigenbasis)": kernel_time(ConicalReynoldsSolver(cone, n, n)),
+            "cone, general path": kernel_time(ConicalReynoldsSolver(cone, n, n, method="general"), calls=10),
+            "tapered cone, general path": kernel_time(ConicalReynoldsSolver(tapered, n, n), calls=10),
+        }
+        base = rows["cone, fast path (eigenbasis)"]
+        print(f"\n{n}x{n} grid")
+        for name, t in rows.items():
+            print(f"  {name:32s} {t * 1e6:10.1f} us   {t / base:8.1f} x the cone's fast path")
+    active = ROOT / "models" / "active"
+    if (active / "model.json").exists():
+        from fluidfilm import load_surrogate
+
+        t = kernel_time(load_surrogate(active), calls=20000)
+        t_ref = kernel_time(ConicalReynoldsSolver(cone, 30, 30))
+        print(f"\nactive surrogate (models/active): {t * 1e6:.2f} us per force, {t_ref / t:.1f}x faster than "
+              f"the conical fast path at 30x30")
+
+
+if __name__ == "__main__":
+    main()
