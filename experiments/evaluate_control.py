@@ -25,9 +25,8 @@ def main(cfg: DictConfig) -> dict:
     reference = reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference)
     env = env_from_cfg(reference, c["rotor"], c["controller"])
     surrogate = load_surrogate(cfg.surrogate_dir)
-    controllers = [ConstantSleeve(env.initial_action), DQNController(load_agent(cfg.agent_path)),
+    controllers = [ConstantSleeve(env.initial_action, name="none"), DQNController(load_agent(cfg.agent_path)),
                    ModelPredictiveController(surrogate, cfg.controller.mpc.horizon_intervals)]
-    controllers[0].name = "none"
     runs = {}
     for ctrl in controllers:
         t0 = time.perf_counter()

@@ -22,15 +22,15 @@ import time
 import numpy as np
 
 from ..rotor import simulate
-from .env import ActiveBearingEnv, friction_power, orbit_amplitude
+from .env import ActiveBearingEnv
 
 
 class ConstantSleeve:
     """No control: always the same sleeve position."""
 
-    def __init__(self, action: int):
+    def __init__(self, action: int, name: str | None = None):
         self.action = int(action)
-        self.name = f"constant_{self.action}"
+        self.name = name or f"constant_{self.action}"
 
     def __call__(self, obs, env) -> int:
         return self.action
@@ -63,9 +63,8 @@ class ModelPredictiveController:
         self.horizon = int(horizon_intervals)
 
     def predicted_costs(self, env: ActiveBearingEnv) -> np.ndarray:
-        sc, w = env.scenario, env.weights
-        rotor = env.rotor_with(env.scenario.imbalance_start + (sc.imbalance_end - sc.imbalance_start)
-                               * min(env.t / sc.ramp_time, 1.0))
+        sc = env.scenario
+        rotor = env.rotor_with(env.present_imbalance())
         costs = np.full(len(env.sleeve_positions), np.inf)
         for a, s in enumerate(env.sleeve_positions):
             self.model.set_sleeve(s)
@@ -75,13 +74,10 @@ class ModelPredictiveController:
             tr = simulate(self.model, rotor, self.horizon * sc.control_interval, sc.dt, x0=env.x, v0=env.v,
                           eps_stop=sc.eps_stop, record_every=sc.record_every, t0=env.t)
             if not tr.ok:
-                costs[a] = w.contact_penalty
+                costs[a] = env.weights.contact_penalty
                 continue
-            eps_mean = float(np.hypot(*tr.x.mean(axis=0)) / c_r)
             move = abs(s - env.sleeve_positions[env.action]) / env.travel
-            costs[a] = (orbit_amplitude(tr.x) / (w.amplitude_ref * env.c0)
-                        + w.friction * friction_power(env.bearing, c_r, min(eps_mean, 0.99)) / env.p_ref
-                        + w.move * move)
+            costs[a] = env.interval_cost(tr.x, c_r, move)[0]
         return costs
 
     def __call__(self, obs, env) -> int:

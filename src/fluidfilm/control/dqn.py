@@ -67,12 +67,9 @@ def save_agent(agent, path) -> Path:
     from .. import io
 
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    # the temporary name ends in .zip, so SB3 writes it as given (it appends .zip otherwise)
     with io.atomic_path(path, suffix=".zip") as tmp:
         agent.save(tmp)
-        # SB3 appends .zip when the name lacks it
-        if not Path(tmp).exists() and Path(str(tmp) + ".zip").exists():
-            Path(str(tmp) + ".zip").rename(tmp)
     return path
 
 

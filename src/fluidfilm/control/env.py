@@ -171,6 +171,21 @@ class ActiveBearingEnv(gym.Env):
         x, v = self._settled[a]
         return x.copy(), v.copy()
 
+    def interval_cost(self, xs: np.ndarray, clearance: float, move: float) -> tuple[float, float, float]:
+        """(cost, orbit amplitude, friction power) of a stretch of orbit ``xs`` at radial clearance
+        ``clearance`` after a sleeve move of ``move`` (fraction of the travel); the reward is -cost."""
+        w = self.weights
+        amp = orbit_amplitude(xs)
+        eps_mean = float(np.hypot(*xs.mean(axis=0)) / clearance)
+        power = friction_power(self.bearing, clearance, min(eps_mean, 0.99))
+        cost = amp / (w.amplitude_ref * self.c0) + w.friction * power / self.p_ref + w.move * move
+        return cost, amp, power
+
+    def present_imbalance(self) -> float:
+        """Total rotor imbalance [kg m] at the present time of the scenario."""
+        sc = self.scenario
+        return sc.imbalance_start + (sc.imbalance_end - sc.imbalance_start) * min(self.t / sc.ramp_time, 1.0)
+
     def _observe(self, amp: float, eps_max: float) -> np.ndarray:
         cw = self.c0 * self.bearing.omega
         s_norm = 2.0 * (self.sleeve_positions[self.action] - self.sleeve_positions[0]) / self.travel - 1.0
@@ -208,17 +223,14 @@ class ActiveBearingEnv(gym.Env):
         else:
             tr = simulate(self.model, self._ramp, sc.control_interval, sc.dt, x0=self.x, v0=self.v,
                           eps_stop=sc.eps_stop, record_every=sc.record_every, t0=self.t)
-            terminated = not tr.ok and tr.status.startswith(("contact", "diverged"))
+            terminated = not tr.ok  # contact or divergence
         if tr is not None:
             xs = tr.x
             self.x, self.v = tr.x[-1].copy(), tr.v[-1].copy()
         else:
             xs = self.x[None, :]
-        amp = orbit_amplitude(xs)
+        cost, amp, power = self.interval_cost(xs, c_r, move)
         eps_all = np.hypot(xs[:, 0], xs[:, 1]) / c_r
-        eps_mean = float(np.hypot(*xs.mean(axis=0)) / c_r)
-        power = friction_power(self.bearing, c_r, min(eps_mean, 0.99))
-        cost = amp / (w.amplitude_ref * self.c0) + w.friction * power / self.p_ref + w.move * move
         if terminated:
             cost += w.contact_penalty
         self.k += 1

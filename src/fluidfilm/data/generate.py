@@ -89,7 +89,7 @@ def compute_chunk(job: dict) -> dict:
 
 def _chunk_at(model, spec: DatasetSpec, job: dict) -> dict:
     """Rows of one chunk at the model's current setting (eccentricities relative to its clearance)."""
-    c = float(getattr(model, "clearance", model.bearing.clearance))
+    c = model.clearance
     x_all, sec_all, eps_all = spec.positions(c)
     x = x_all[job["start"]:job["stop"]]
     sec = sec_all[job["start"]:job["stop"]]
@@ -240,21 +240,45 @@ def random_test_set(bearing: JournalBearing, reference: dict, spec: DatasetSpec,
 
     Each position section gets an equal share of the samples: eps uniform in
     the section's range, angle uniform, each velocity component uniform in
-    +-v_max of the velocity section at that eps.  Forces from the same
-    reference model and grid policy.  Written atomically as one part file.
+    +-v_max of the velocity section at that eps.  With sleeve positions, each
+    sample's sleeve position is one of 33 levels spanning the grid's (most of
+    them between the training levels) and eps is relative to its clearance.
+    Forces from the same reference model and grid policy.  Written
+    atomically as one part file.
     """
     n = spec.n_test if n is None else int(n)
     seed = spec.test_seed if seed is None else int(seed)
     rng = np.random.default_rng(seed)
     model = _reference(json.dumps(bearing.to_dict(), sort_keys=True), json.dumps(dict(reference), sort_keys=True))
     if spec.sleeve_positions:
-        return _random_test_set_sleeve(model, spec, out_dir, n, seed, rng, bearing, reference)
-    x, v, eps, k_sec = _random_states(spec, bearing.clearance, n, rng)
-    F = model.forces(x, v)
-    n_theta, n_z = model.grid_for(eps)
-    cols = {"X1": x[:, 0], "X2": x[:, 1], "V1": v[:, 0], "V2": v[:, 1], "F1": F[:, 0], "F2": F[:, 1],
-            "eps": eps, "section": k_sec, "n_theta": n_theta, "n_z": n_z}
+        # an active bearing: each sample at a sleeve position drawn from levels spanning the grid's
+        levels = np.linspace(min(spec.sleeve_positions), max(spec.sleeve_positions), N_TEST_SLEEVES)
+        s_all = levels[rng.integers(0, N_TEST_SLEEVES, n)]
+        settings = [(s, int(np.count_nonzero(s_all == s))) for s in levels]
+        keep = model.sleeve
+    else:
+        settings = [(None, n)]
+    parts = []
+    try:
+        for s, count in settings:
+            if not count:
+                continue
+            if s is not None:
+                model.set_sleeve(s)
+            x, v, eps, k_sec = _random_states(spec, model.clearance, count, rng)
+            F = model.forces(x, v)
+            n_theta, n_z = model.grid_for(eps)
+            cols = {"X1": x[:, 0], "X2": x[:, 1], "V1": v[:, 0], "V2": v[:, 1], "F1": F[:, 0], "F2": F[:, 1],
+                    "eps": eps, "section": k_sec, "n_theta": n_theta, "n_z": n_z}
+            parts.append(cols if s is None else {"S": np.full(count, s), **cols})
+    finally:
+        if spec.sleeve_positions:
+            model.set_sleeve(keep)
+    cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     return _write_test_set(out_dir, cols, n, seed, bearing, reference, spec)
+
+
+N_TEST_SLEEVES = 33  # sleeve levels of the test set: between the grid's, so the test checks interpolation in s
 
 
 def _random_states(spec: DatasetSpec, c: float, n: int, rng):
@@ -267,33 +291,6 @@ def _random_states(spec: DatasetSpec, c: float, n: int, rng):
     vmax = np.array([spec.velocity_sections[spec.velocity_section_index(e)].v_max for e in eps])
     v = vmax[:, None] * (2 * rng.random((n, 2)) - 1)
     return x, v, eps, k_sec
-
-
-N_TEST_SLEEVES = 33  # sleeve levels of the test set: between the grid's, so the test checks interpolation in s
-
-
-def _random_test_set_sleeve(model, spec, out_dir, n, seed, rng, bearing, reference) -> dict:
-    """Test set of an active bearing: each sample at a sleeve position drawn from 33 levels spanning the grid's."""
-    levels = np.linspace(min(spec.sleeve_positions), max(spec.sleeve_positions), N_TEST_SLEEVES)
-    s_all = levels[rng.integers(0, N_TEST_SLEEVES, n)]
-    keep = model.sleeve
-    parts = []
-    try:
-        for s in levels:
-            idx = np.flatnonzero(s_all == s)
-            if not idx.size:
-                continue
-            model.set_sleeve(s)
-            x, v, eps, k_sec = _random_states(spec, model.clearance, idx.size, rng)
-            F = model.forces(x, v)
-            n_theta, n_z = model.grid_for(eps)
-            parts.append({"S": np.full(idx.size, s), "X1": x[:, 0], "X2": x[:, 1], "V1": v[:, 0], "V2": v[:, 1],
-                          "F1": F[:, 0], "F2": F[:, 1], "eps": eps, "section": k_sec, "n_theta": n_theta,
-                          "n_z": n_z})
-    finally:
-        model.set_sleeve(keep)
-    cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    return _write_test_set(out_dir, cols, n, seed, bearing, reference, spec)
 
 
 def _write_test_set(out_dir, cols, n, seed, bearing, reference, spec) -> dict:

@@ -47,14 +47,14 @@ sleeve position costs a few scalars, not a new eigenbasis.
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
 from ..bearing import ConicalBearing
-from ..states import as_state_pairs, check_states
+from ..states import as_state_pairs
 from . import kernels
 from .mesh import FilmMesh
+from .solver import _GridSolver
 
 METHODS = ("auto", "fast", "general")
 
@@ -154,7 +154,7 @@ def build_general_params(bearing: ConicalBearing, mesh: FilmMesh, sleeve: float,
     )
 
 
-class ConicalReynoldsSolver:
+class ConicalReynoldsSolver(_GridSolver):
     """Finite-difference Reynolds solver of the conical bearing at a settable sleeve position.
 
     >>> solver = ConicalReynoldsSolver(bearing, 40, 40)
@@ -174,8 +174,6 @@ class ConicalReynoldsSolver:
             raise ValueError(f"bearing must be a ConicalBearing, got {type(bearing).__name__}")
         if method not in METHODS:
             raise ValueError(f"unknown method {method!r}; choose one of {METHODS}")
-        if cavitation not in ("gumbel", "none"):
-            raise ValueError(f"the conical bearing supports cavitation 'gumbel' or 'none', got {cavitation!r}")
         if method == "auto":
             method = "fast" if bearing.clearance_taper == 0.0 else "general"
         if method == "fast" and bearing.clearance_taper != 0.0:
@@ -185,6 +183,10 @@ class ConicalReynoldsSolver:
         self.cavitation = cavitation
         self.method = method
         self._basis = axial_eigenbasis(bearing, self.mesh) if method == "fast" else None
+        # Simpson weights of the force integrals: R(z) sits in the axial weights
+        self._w_zr = self.mesh.w_z * _axial_geometry(bearing, self.mesh)[2]
+        self._a_sin = self.mesh.w_theta * np.sin(self.mesh.theta)
+        self._a_cos = self.mesh.w_theta * np.cos(self.mesh.theta)
         self._cache: dict[float, tuple] = {}
         self.set_sleeve(sleeve)
 
@@ -192,7 +194,7 @@ class ConicalReynoldsSolver:
     def set_sleeve(self, sleeve: float) -> None:
         """Move the sleeve to ``sleeve`` [m]; parameters are cached per position."""
         s = float(sleeve)
-        self._bearing.clearance_at(s)  # validates the travel
+        c_r = self._bearing.clearance_at(s)  # validates the travel
         if s not in self._cache:
             if self.method == "fast":
                 self._cache[s] = build_conical_params(self._bearing, self.mesh, s, self.cavitation, self._basis)
@@ -200,7 +202,7 @@ class ConicalReynoldsSolver:
                 self._cache[s] = build_general_params(self._bearing, self.mesh, s, self.cavitation)
         self._sleeve = s
         self.params = self._cache[s]
-        self._c = self._bearing.clearance_at(s)
+        self._c = c_r
 
     @property
     def sleeve(self) -> float:
@@ -212,18 +214,6 @@ class ConicalReynoldsSolver:
         return self._c
 
     @property
-    def bearing(self) -> ConicalBearing:
-        return self._bearing
-
-    @property
-    def n_theta(self) -> int:
-        return self.mesh.n_theta
-
-    @property
-    def n_z(self) -> int:
-        return self.mesh.n_z
-
-    @property
     def force_kernel(self):
         fn = kernels.film_force if self.method == "fast" else kernels.general_force
         return fn, self.params
@@ -232,14 +222,14 @@ class ConicalReynoldsSolver:
         return (f"ConicalReynoldsSolver({self.n_theta}x{self.n_z}, {self.method}, sleeve={self._sleeve:g} m, "
                 f"cavitation={self.cavitation!r})")
 
-    def _limit(self) -> float:
+    def _state_limit(self) -> float:
         # the film closes where X reaches the smallest radial clearance along z
         return self._c + min(0.0, self._bearing.clearance_taper)
 
     # --- evaluation --------------------------------------------------------------
     def forces(self, X, V) -> np.ndarray:
         """Radial film force on the journal [N], shape (..., 2)."""
-        x, v, shape = as_state_pairs(X, V, self._limit())
+        x, v, shape = as_state_pairs(X, V, self._state_limit())
         out = np.empty_like(x)
         if x.shape[0]:
             if self.method == "fast":
@@ -249,23 +239,12 @@ class ConicalReynoldsSolver:
                     out[k] = kernels.general_force(self.params, x[k, 0], x[k, 1], v[k, 0], v[k, 1])
         return out.reshape(shape + (2,))
 
-    def forces_product(self, X, V) -> np.ndarray:
-        """Every velocity at every position: (P, 2), (Q, 2) -> (P, Q, 2) (one factorisation per position)."""
-        x = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 2))
-        v = np.ascontiguousarray(np.asarray(V, dtype=np.float64).reshape(-1, 2))
-        check_states(x, v, self._limit())
-        if self.method != "fast":
-            xx = np.repeat(x, v.shape[0], axis=0)
-            vv = np.tile(v, (x.shape[0], 1))
-            return self.forces(xx, vv).reshape(x.shape[0], v.shape[0], 2)
-        out = np.empty((x.shape[0], v.shape[0], 2))
-        if out.size:
-            kernels.forces_product(self.params, x, v, out)
-        return out
+    def _separable(self) -> bool:
+        return self.method == "fast"
 
     def linear_pressure(self, x, v) -> np.ndarray:
         """Pressure [Pa] before cavitation, (n_theta, n_z)."""
-        xa, va, _ = as_state_pairs(x, v, self._limit())
+        xa, va, _ = as_state_pairs(x, v, self._state_limit())
         if xa.shape[0] != 1:
             raise ValueError("linear_pressure takes one state")
         out = np.empty((self.n_theta, self.n_z))
@@ -283,10 +262,6 @@ class ConicalReynoldsSolver:
             np.maximum(p, 0.0, out=p)
         return p
 
-    def _weights(self):
-        _, _, r_node, _, _ = _axial_geometry(self._bearing, self.mesh)
-        return self.mesh.w_theta, self.mesh.w_z * r_node
-
     def forces_axial(self, X, V) -> np.ndarray:
         """Radial and axial film force (F1, F2, F3) [N], shape (..., 3).
 
@@ -294,15 +269,12 @@ class ConicalReynoldsSolver:
         cone's large end; a planar rotor model ignores it, a thrust bearing or
         the sleeve actuator has to carry it.
         """
-        x, v, shape = as_state_pairs(X, V, self._limit())
-        w_t, w_zr = self._weights()
+        x, v, shape = as_state_pairs(X, V, self._state_limit())
         out = np.empty((x.shape[0], 3))
-        ta = self._bearing.tan_half_angle
         for k in range(x.shape[0]):
-            p = self.pressure(x[k], v[k])
-            out[k, 0] = -np.sum(w_t * np.sin(self.mesh.theta) * (p @ w_zr))
-            out[k, 1] = -np.sum(w_t * np.cos(self.mesh.theta) * (p @ w_zr))
-            out[k, 2] = ta * kernels.axial_integral(w_t, w_zr, p)
+            f1, f2, total = kernels.film_integrals(self._a_sin, self._a_cos, self.mesh.w_theta, self._w_zr,
+                                                   self.pressure(x[k], v[k]), False)
+            out[k] = f1, f2, self._bearing.tan_half_angle * total
         return out.reshape(shape + (3,))
 
     def sweep_sleeve(self, sleeves, X, V) -> np.ndarray:

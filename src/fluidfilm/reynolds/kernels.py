@@ -50,8 +50,10 @@ Kernels:
                              misfit sleeves), one block-cyclic-tridiagonal
                              direct solve (theta blocks of axial lines)
 - ``general_force``          force of the general path (same signature)
-- ``axial_integral``         sum w_theta w_z R(z) p: the cone's axial force
-                             is tan(alpha) times it
+- ``film_integrals``         (F1, F2) and sum w_theta w_z R(z) p of a field,
+                             optionally Gumbel-clipped: the general path's
+                             force and the cone's axial force (tan(alpha)
+                             times the sum)
 
 The conical bearing's fast path reuses ``film_force`` unchanged: with
 matched cones h does not depend on z, and the axial operator
@@ -538,32 +540,27 @@ def general_linear_field(gp, x1, x2, v1, v2, out):
 @njit(cache=True)
 def general_force(gp, x1, x2, v1, v2):
     """Force (F1, F2) of the general path; Gumbel clipping or none (``gp[1]``)."""
-    n = gp[0]
-    nz = gp[6].shape[0]
-    p = np.empty((n, nz))
+    p = np.empty((gp[0], gp[6].shape[0]))
     general_linear_field(gp, x1, x2, v1, v2, p)
-    a_sin, a_cos, w_zr = gp[17], gp[18], gp[19]
-    f1 = 0.0
-    f2 = 0.0
-    for i in range(n):
-        col = 0.0
-        for j in range(nz):
-            pij = p[i, j]
-            if gp[1] == CAV_GUMBEL and pij < 0.0:
-                pij = 0.0
-            col += w_zr[j] * pij
-        f1 -= a_sin[i] * col
-        f2 -= a_cos[i] * col
+    f1, f2, _ = film_integrals(gp[17], gp[18], gp[20], gp[19], p, gp[1] == CAV_GUMBEL)
     return f1, f2
 
 
 @njit(cache=True)
-def axial_integral(w_theta, w_zr, p):
-    """Simpson sum of p R(z) over the film: sum_i sum_j w_theta[i] w_zr[j] p[i, j]."""
-    acc = 0.0
+def film_integrals(a_sin, a_cos, w_theta, w_z, p, clip):
+    """Simpson sums of a field p (n_theta, n_z), negative values dropped if ``clip`` (Gumbel):
+    (-sum a_sin w_z p, -sum a_cos w_z p, sum w_theta w_z p)."""
+    f1 = 0.0
+    f2 = 0.0
+    total = 0.0
     for i in range(p.shape[0]):
         col = 0.0
         for j in range(p.shape[1]):
-            col += w_zr[j] * p[i, j]
-        acc += w_theta[i] * col
-    return acc
+            pij = p[i, j]
+            if clip and pij < 0.0:
+                pij = 0.0
+            col += w_z[j] * pij
+        f1 -= a_sin[i] * col
+        f2 -= a_cos[i] * col
+        total += w_theta[i] * col
+    return f1, f2, total

@@ -84,7 +84,54 @@ def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str,
     )
 
 
-class ReynoldsSolver:
+class _GridSolver:
+    """Read-only description shared by the finite-difference solvers (``_bearing`` and ``mesh`` set by them)."""
+
+    @property
+    def bearing(self):
+        return self._bearing
+
+    @property
+    def n_theta(self) -> int:
+        return self.mesh.n_theta
+
+    @property
+    def n_z(self) -> int:
+        return self.mesh.n_z
+
+    @property
+    def theta(self) -> np.ndarray:
+        return self.mesh.theta.copy()
+
+    @property
+    def z(self) -> np.ndarray:
+        return self.mesh.z.copy()
+
+    def _state_limit(self) -> float:
+        """Radius [m] a journal position must stay inside."""
+        return self._c
+
+    def forces_product(self, X, V) -> np.ndarray:
+        """Forces for every velocity at every position: X (P, 2), V (Q, 2) -> (P, Q, 2).
+
+        On the fast path one factorisation per position serves all its
+        velocities (positions run in parallel): the dataset generator's path.
+        Otherwise (PSOR, the general conical path) pair by pair.
+        """
+        x = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 2))
+        v = np.ascontiguousarray(np.asarray(V, dtype=np.float64).reshape(-1, 2))
+        check_states(x, v, self._state_limit())
+        if not self._separable():
+            xx = np.repeat(x, v.shape[0], axis=0)
+            vv = np.tile(v, (x.shape[0], 1))
+            return self.forces(xx, vv).reshape(x.shape[0], v.shape[0], 2)
+        out = np.empty((x.shape[0], v.shape[0], 2))
+        if out.size:
+            kernels.forces_product(self.params, x, v, out)
+        return out
+
+
+class ReynoldsSolver(_GridSolver):
     """Finite-difference solution of the finite-length Reynolds equation.
 
     >>> solver = ReynoldsSolver(bearing, n_theta=30, n_z=30, cavitation="gumbel")
@@ -121,27 +168,7 @@ class ReynoldsSolver:
         self._kernel = kernels.film_force_ss if ss else kernels.film_force
         self._batch = kernels.forces_batch_ss if ss else kernels.forces_batch
 
-    # --- read-only description ---------------------------------------------
-    @property
-    def bearing(self) -> JournalBearing:
-        return self._bearing
-
-    @property
-    def n_theta(self) -> int:
-        return self.mesh.n_theta
-
-    @property
-    def n_z(self) -> int:
-        return self.mesh.n_z
-
-    @property
-    def theta(self) -> np.ndarray:
-        return self.mesh.theta.copy()
-
-    @property
-    def z(self) -> np.ndarray:
-        return self.mesh.z.copy()
-
+    # --- read-only description (bearing, n_theta, n_z, theta, z: _GridSolver) ---
     @property
     def force_kernel(self):
         """(compiled function, params): ``fn(params, x1, x2, v1, v2) -> (F1, F2)`` for compiled callers."""
@@ -171,23 +198,8 @@ class ReynoldsSolver:
             self._batch(self.params, x, v, out)
         return out.reshape(shape + (2,))
 
-    def forces_product(self, X, V) -> np.ndarray:
-        """Forces for every velocity at every position: X (P, 2), V (Q, 2) -> (P, Q, 2).
-
-        One factorisation per position serves all its velocities; positions
-        run in parallel.  This is the dataset generator's path.
-        """
-        x = np.ascontiguousarray(np.asarray(X, dtype=np.float64).reshape(-1, 2))
-        v = np.ascontiguousarray(np.asarray(V, dtype=np.float64).reshape(-1, 2))
-        check_states(x, v, self._c)
-        if self.cavitation == "swift-stieber":
-            xx = np.repeat(x, v.shape[0], axis=0)
-            vv = np.tile(v, (x.shape[0], 1))
-            return self.forces(xx, vv).reshape(x.shape[0], v.shape[0], 2)
-        out = np.empty((x.shape[0], v.shape[0], 2))
-        if out.size:
-            kernels.forces_product(self.params, x, v, out)
-        return out
+    def _separable(self) -> bool:
+        return self.cavitation != "swift-stieber"
 
     def pressure(self, x, v) -> np.ndarray:
         """Pressure field [Pa] of one state, shape (n_theta, n_z), after the cavitation model."""
