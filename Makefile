@@ -1,13 +1,24 @@
 # The two commands of the README:
 #   make reproduce   set up everything and run the whole pipeline (dvc repro)
 #   make test        set up everything and run the test suite (what CI runs)
-# Both are idempotent: the virtual environment is built once and reused.
-PYTHON ?= python3
-VENV   ?= .venv
-PY      = $(VENV)/bin/python
-STAMP   = $(VENV)/.installed
+# Both are idempotent: the virtual environment is built once and reused, and they work from a
+# shell in which no environment is active.  The pipeline's stages start .venv/bin/python
+# themselves (conf/pipeline/full.yaml), so nothing here or in dvc.yaml depends on the caller's PATH.
+#
+# Other targets:
+#   make reproduce PROFILE=quick   the same dvc.yaml on the small profile, in a scratch copy
+#                                  ($(QUICK_DIR)); the workspace's own outputs are not touched
+#   make mlflow                    serve the workspace's MLflow runs on http://127.0.0.1:$(MLFLOW_PORT)
+#   make lint / test-slow / bench
+PYTHON      ?= python3
+VENV        := .venv
+PY          := $(VENV)/bin/python
+STAMP       := $(VENV)/.installed
+PROFILE     ?= full
+QUICK_DIR   ?= build/quick
+MLFLOW_PORT ?= 5000
 
-.PHONY: setup reproduce test test-slow bench clean-venv
+.PHONY: setup reproduce test test-slow lint bench mlflow dvc-remote dvc-cache clean-venv
 
 setup: $(STAMP)
 
@@ -15,13 +26,17 @@ setup: $(STAMP)
 # any other spec would pull gigabytes of CUDA wheels.
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet torch==2.13.0
-	$(PY) -m pip install --quiet -e ".[test]"
+	$(PY) -m pip install --quiet --disable-pip-version-check --upgrade pip
+	$(PY) -m pip install --quiet --disable-pip-version-check torch==2.13.0
+	$(PY) -m pip install --quiet --disable-pip-version-check -e ".[test]"
 	touch $(STAMP)
 
 reproduce: setup
-	$(VENV)/bin/dvc repro
+ifeq ($(PROFILE),full)
+	$(PY) -m fluidfilm.pipeline run
+else
+	$(PY) -m fluidfilm.pipeline run --profile $(PROFILE) --workdir $(QUICK_DIR)
+endif
 
 test: setup
 	$(PY) -m pytest
@@ -29,10 +44,32 @@ test: setup
 test-slow: setup
 	$(PY) -m pytest -m slow
 
+lint: setup
+	$(PY) -m ruff check src experiments tests benchmarks
+	$(PY) -m mypy src
+
 bench: setup
 	$(PY) benchmarks/bench_solver.py
 	$(PY) benchmarks/bench_rotor.py
 	$(PY) benchmarks/bench_conical.py
+
+mlflow: setup
+	$(PY) -m fluidfilm.pipeline serve --port $(MLFLOW_PORT)
+
+# Sharing outputs in a team (there is no default remote: `make reproduce` regenerates everything).
+#   make dvc-remote REMOTE=/shared/fluidfilm-dvc   (any DVC remote URL: s3://..., ssh://...), then
+#   .venv/bin/dvc push   on the machine that ran the pipeline, .venv/bin/dvc pull   elsewhere
+#   make dvc-cache CACHE=/shared/dvc-cache         one cache for several clones on the same machine/NFS
+# Both write .dvc/config.local (not committed), so each user chooses their own.
+dvc-remote: setup
+	@test -n "$(REMOTE)" || { echo "usage: make dvc-remote REMOTE=<path or URL>"; exit 2; }
+	$(VENV)/bin/dvc remote add --local --force --default team "$(REMOTE)"
+
+dvc-cache: setup
+	@test -n "$(CACHE)" || { echo "usage: make dvc-cache CACHE=<path>"; exit 2; }
+	$(VENV)/bin/dvc cache dir --local "$(CACHE)"
+	$(VENV)/bin/dvc config --local cache.shared group
+	$(VENV)/bin/dvc config --local cache.type "reflink,symlink,hardlink,copy"
 
 clean-venv:
 	rm -rf $(VENV)

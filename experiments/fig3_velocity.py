@@ -1,6 +1,6 @@
 """Fig. 3: film reaction against rotor velocity at several eccentricities.
 
-    python experiments/fig3_velocity.py        # writes reports/figures/fig3_velocity.{png,csv}
+    python experiments/fig3_velocity.py        # writes reports/figures/fig3_velocity{.png,.csv,_radial.csv,_tangential.csv}
 """
 from pathlib import Path
 
@@ -9,7 +9,7 @@ from omegaconf import DictConfig
 
 from fluidfilm import io
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
-from fluidfilm.figures import plot_velocity_response, velocity_response
+from fluidfilm.figures import plot_velocity_response, velocity_response, velocity_response_wide
 
 
 @hydra.main(config_path="../conf", config_name="fig3", version_base="1.3")
@@ -19,6 +19,8 @@ def main(cfg: DictConfig) -> None:
     frame = velocity_response(model, list(cfg.eccentricities), cfg.v_max, cfg.n_v, cfg.angle_deg)
     out = Path(cfg.out_dir)
     io.write_csv(out / "fig3_velocity.csv", frame)
+    for direction in ("radial", "tangential"):  # one line per eccentricity in `dvc plots`
+        io.write_csv(out / f"fig3_velocity_{direction}.csv", velocity_response_wide(frame, direction))
     io.save_figure(plot_velocity_response(frame), out / "fig3_velocity.png", dpi=130)
     print(f"{model}: {len(frame)} rows -> {out / 'fig3_velocity.csv'}")
 

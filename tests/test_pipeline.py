@@ -1,7 +1,10 @@
-"""The whole comparison pipeline on the quick profile, end to end, and the review notebook on its outputs.
+"""The user's route, end to end: ``make reproduce PROFILE=quick`` from a shell where no environment is active.
 
-The same entry points as `dvc repro`, with overrides that point them at the
-quick dataset, tiny networks, short trajectories and a temporary directory.
+This is the same ``dvc.yaml`` as the full reproduction (every stage, the same commands), run by
+``make`` on the small profile (``conf/pipeline/quick.yaml``) in a scratch copy of the workspace.
+The environment handed to ``make`` has no virtual environment on PATH and no VIRTUAL_ENV, so a
+stage that relied on the caller's ``python`` would fail here exactly as it fails for a user.
+The review notebook then runs on the pipeline's outputs.
 """
 from __future__ import annotations
 
@@ -13,77 +16,76 @@ from pathlib import Path
 
 import nbformat
 import pytest
+import yaml
 from nbclient import NotebookClient
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run(script, *overrides):
-    proc = subprocess.run([sys.executable, f"experiments/{script}", *overrides], cwd=ROOT, capture_output=True,
-                          text=True, timeout=900)
-    assert proc.returncode == 0, f"{script} failed:\n{proc.stderr[-4000:]}"
-    return proc.stdout
+def clean_env() -> dict:
+    """The caller's environment with every trace of an activated virtual environment removed."""
+    venv_bin = str(Path(sys.executable).parent)
+    env = {k: v for k, v in os.environ.items() if k not in ("VIRTUAL_ENV", "PYTHONHOME", "CONDA_PREFIX")}
+    env["PATH"] = os.pathsep.join(p for p in os.environ.get("PATH", "").split(os.pathsep)
+                                  if p and Path(p).resolve() != Path(venv_bin).resolve()) or "/usr/bin:/bin"
+    return env
 
 
 @pytest.fixture(scope="module")
-def quick_pipeline(quick_data, tmp_path_factory):
-    dataset, testset = quick_data
-    tmp = tmp_path_factory.mktemp("pipeline")
-    uri = f"sqlite:///{tmp / 'mlflow.db'}"
-    common = [f"dataset_dir={dataset}", f"testset_dir={testset}", f"out_dir={tmp / 'models'}",
-              f"checkpoint_dir={tmp / 'ckpt'}", f"tracking.uri={uri}", "trainer=quick", "trainer.max_epochs=20",
-              "model=tiny"]
-    for exp in ("paper_single", "paper_split", "best"):
-        # (the quick grid has no positions in some of best's five regions: three regions there)
-        extra = ["split=paper_blend"] if exp == "best" else []
-        run("train_surrogate.py", f"experiment={exp}", *common, *extra)
-    reports = tmp / "reports"
-    run("train_time.py", f"dataset_dir={dataset}", "seeds=[0,1]", "trainer=quick", "trainer.max_epochs=5",
-        "studies.paper_setup.target_val_rel_rmse=0.95", "studies.physics_scaling.target_val_rel_rmse=0.9", "model=tiny", f"out={reports / 'train_time.json'}", f"tracking.uri={uri}")
-    models = tmp / "models"
-    run("compare.py", f"models.single={models / 'paper_single'}", f"models.split={models / 'paper_split'}",
-        f"models.best={models / 'best'}", "integrator.t_end=0.06", "integrator.t_settle=0.04", "timing_repeats=1",
-        "force_eval_states=500", f"out_dir={tmp / 'traj'}", f"figure_dir={reports / 'figures'}",
-        f"report_dir={reports}", f"tracking.uri={uri}")
-    # the active conical bearing: sleeve dataset, surrogate, DQN on it, evaluation on the reference
-    active_ds, active_ts = tmp / "active_dataset", tmp / "active_testset"
-    run("make_dataset.py", "bearing=conical", "reference=conical", "dataset=active_quick", f"out_dir={active_ds}",
-        f"test_dir={active_ts}", "dask.scheduler=inline", "progress=false")
-    run("train_surrogate.py", "experiment=active", f"dataset_dir={active_ds}", f"testset_dir={active_ts}",
-        f"out_dir={models}", f"checkpoint_dir={tmp / 'ckpt'}", f"tracking.uri={uri}", "trainer=quick",
-        "trainer.max_epochs=10", "model=tiny")
-    control = [f"surrogate_dir={models / 'active'}", f"agent_path={models / 'dqn_active.zip'}",
-               "controller=quick", f"tracking.uri={uri}"]
-    run("train_controller.py", *control, f"training_report={reports / 'dqn_training.json'}")
-    run("evaluate_control.py", *control, f"out_json={reports / 'control.json'}", f"figures_dir={reports / 'figures'}")
-    run("report.py", f"report_dir={reports}", f"models_dir={models}", f"dataset_dir={dataset}", f"tracking.uri={uri}",
-        f"active_dataset_dir={active_ds}")
-    return tmp, uri
+def quick_reproduce(tmp_path_factory):
+    workdir = tmp_path_factory.mktemp("reproduce") / "quick"
+    env = clean_env()
+    proc = subprocess.run(["make", "reproduce", "PROFILE=quick", f"QUICK_DIR={workdir}"], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=1800)
+    assert proc.returncode == 0, f"make reproduce PROFILE=quick failed:\n{proc.stdout[-6000:]}\n{proc.stderr[-4000:]}"
+    return workdir, proc.stdout
 
 
-def test_pipeline_writes_every_headline_number(quick_pipeline):
-    tmp, _ = quick_pipeline
-    metrics = json.loads((tmp / "reports" / "metrics.json").read_text())
+def test_every_stage_of_the_pipeline_ran_with_the_workspace_interpreter(quick_reproduce):
+    workdir, out = quick_reproduce
+    stages = yaml.safe_load((ROOT / "dvc.yaml").read_text())["stages"]
+    for name in stages:
+        assert f"Running stage '{name}'" in out, f"stage {name} did not run"
+    lock = yaml.safe_load((workdir / "dvc.lock").read_text())["stages"]
+    assert set(lock) == set(stages)
+    for name, entry in lock.items():
+        assert entry["cmd"].startswith(".venv/bin/python "), (name, entry["cmd"])
+    timing = json.loads((workdir / "reports" / "reproduce_timing.json").read_text())["quick"]
+    assert set(timing["stages"]) == set(stages)
+    assert "Results:" in out and "make mlflow" in out
+
+
+def test_pipeline_writes_every_headline_number(quick_reproduce):
+    workdir, _ = quick_reproduce
+    metrics = json.loads((workdir / "reports" / "metrics.json").read_text())
     for key in ("train_time_single_s", "train_time_split_s", "train_time_reduction_pct", "speedup_trajectory_single",
                 "speedup_trajectory_split", "speedup_force_eval"):
         assert isinstance(metrics[key], float), key
     for case in "abcdefg":
         assert f"orbit_rms_pct_single_{case}" in metrics and f"orbit_rms_pct_split_{case}" in metrics
-    md = (tmp / "reports" / "paper_comparison.md").read_text()
+    md = (workdir / "reports" / "paper_comparison.md").read_text()
     assert "| training time reduction, split vs single | 26 % |" in md
-    assert (tmp / "reports" / "figures" / "fig4_comparison.png").stat().st_size > 10_000
+    assert (workdir / "reports" / "figures" / "fig4_comparison.png").stat().st_size > 10_000
     assert metrics["speedup_trajectory_split"] > 0
     assert isinstance(metrics["controller_amplitude_reduction_pct"], float)
     assert metrics["active_dataset_samples"] == 20_412
     for panel in ("a_dqn", "b_none", "c_mpc"):
-        assert (tmp / "reports" / "figures" / f"fig5_{panel}.png").stat().st_size > 10_000
+        assert (workdir / "reports" / "figures" / f"fig5_{panel}.png").stat().st_size > 10_000
     assert "Active conical bearing" in md
 
 
-def test_review_notebook_runs_on_the_quick_profile(quick_pipeline):
-    tmp, uri = quick_pipeline
+def test_a_second_reproduce_finds_every_stage_up_to_date(quick_reproduce):
+    workdir, _ = quick_reproduce
+    proc = subprocess.run([str(Path(sys.executable).parent / "dvc"), "status"], cwd=workdir, env=clean_env(),
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "up to date" in proc.stdout, proc.stdout
+
+
+def test_review_notebook_runs_on_the_quick_profile(quick_reproduce):
+    workdir, _ = quick_reproduce
     nb = nbformat.read(ROOT / "notebooks" / "review.ipynb", as_version=4)
-    env = {"FLUIDFILM_REPORT_DIR": str(tmp / "reports"), "FLUIDFILM_MLFLOW_URI": uri}
+    env = {"FLUIDFILM_REPORT_DIR": str(workdir / "reports"), "FLUIDFILM_MLFLOW_URI": f"sqlite:///{workdir / 'mlflow.db'}"}
     old = {k: os.environ.get(k) for k in env}
     os.environ.update(env)
     try:

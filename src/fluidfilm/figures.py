@@ -69,6 +69,19 @@ def velocity_response(model, eccentricities, v_max: float, n_v: int, angle_deg: 
     return pd.concat(rows, ignore_index=True)
 
 
+def velocity_response_wide(frame: pd.DataFrame, direction: str) -> pd.DataFrame:
+    """One direction of ``velocity_response`` as a wide table: v, then F1/F2 per eccentricity (``F2_eps0.5``).
+
+    What ``dvc plots`` draws: one line per eccentricity instead of every curve joined into one.
+    """
+    sub = frame[frame["direction"] == direction]
+    if sub.empty:
+        raise ValueError(f"no rows with direction {direction!r}; have {sorted(frame['direction'].unique())}")
+    wide = sub.pivot(index="v", columns="eps", values=["F1", "F2"])
+    wide.columns = [f"{comp}_eps{eps:g}" for comp, eps in wide.columns]
+    return wide.reset_index()
+
+
 def time_per_evaluation(model, x, v, repeats: int = 7, calls: int = 200) -> float:
     """Median wall time [s] of one ``forces(x, v)`` call (Python call included)."""
     model.forces(x, v)  # compile / warm up
@@ -114,7 +127,7 @@ def plot_grid_comparison(frame: pd.DataFrame, names: list[str], labels: dict[str
     ax.semilogy(frame["eps"], frame[f"F_{reference}"], "k--", lw=0.8, label=labels.get(reference, reference))
     ax.set_ylabel("|F| [N]")
     ax.set_title("Fig. 2 - film reaction against eccentricity (journal at rest)")
-    ax.axvspan(0.9, frame["eps"].max(), color="0.9")
+    ax.axvspan(0.9, frame["eps"].max(), color="0.9", label="eps > 0.9: the paper's dense-grid region")
     ax.legend()
     ax.grid(True, which="both", alpha=0.3)
     for name in names:
@@ -124,7 +137,10 @@ def plot_grid_comparison(frame: pd.DataFrame, names: list[str], labels: dict[str
     ax_err.set_xlabel("eccentricity ratio eps")
     ax_err.set_ylabel(f"error vs {labels.get(reference, reference)} [%]")
     ax_err.grid(True, alpha=0.3)
-    fig.tight_layout()
+    fig.text(0.01, 0.005, "Journal displaced at rest, Gumbel cavitation. Grey band: eps > 0.9, where the paper "
+             "switches to the dense grid\n(the coarse grid's error grows fast there). Dashed: grid-converged "
+             "(Richardson) reference.", fontsize=7, va="bottom")
+    fig.tight_layout(rect=(0, 0.04, 1, 1))
     return fig
 
 
@@ -168,8 +184,11 @@ def plot_orbits(panels: dict, clearance: float, t_settle: float, title: str):
     cols = min(4, n)
     rows = (n + cols - 1) // cols
     fig, axes = plt.subplots(rows, cols, figsize=(3.3 * cols, 3.4 * rows), squeeze=False)
-    styles = {"reference": dict(color="k"), "single": dict(color="tab:red", ls="--"),
-              "split": dict(color="tab:blue", ls=":"), "best": dict(color="tab:green", ls="-.")}
+    # the reference is drawn wide and light underneath, the models narrower on top, so that a model
+    # lying on the reference shows as a coloured line inside a grey band instead of hiding it
+    styles = {"reference": dict(color="0.55"), "single": dict(color="tab:red", ls="--"),
+              "split": dict(color="tab:blue", ls="-"), "best": dict(color="tab:green", ls="-")}
+    settled_width = {"reference": 4.0}
     phi = np.linspace(0, 2 * np.pi, 200)
     for ax, (case, (label, trajs)) in zip(axes.flat, panels.items()):
         ax.plot(np.cos(phi), np.sin(phi), color="0.7", lw=0.8)
@@ -179,20 +198,25 @@ def plot_orbits(panels: dict, clearance: float, t_settle: float, title: str):
             done = tr.t >= t_settle
             ax.plot(x[:, 0], x[:, 1], lw=0.4, alpha=0.5, **st)
             ax.plot(x[-1:, 0], x[-1:, 1], marker="o", ms=3, **st)  # a settled point shows too
-            ax.plot(x[done, 0], x[done, 1], lw=1.6, label=name if tr.ok else f"{name} ({tr.status.split(':')[0]})",
+            ax.plot(x[done, 0], x[done, 1], lw=settled_width.get(name, 1.3),
+                    label=name if tr.ok else f"{name} ({tr.status.split(':')[0]})", zorder=1 if name == "reference" else 2,
                     **st)
         ax.set_title(f"{case}) {label}", fontsize=9)
         ax.set_aspect("equal")
         ax.set_xlim(-1.05, 1.05)
         ax.set_ylim(1.05, -1.05)  # X2 (gravity) points down the page
         ax.set_xlabel("X1 / c", fontsize=8)
-        ax.set_ylabel("X2 / c", fontsize=8)
+        ax.set_ylabel("X2 / c  (gravity: down)", fontsize=8)
         ax.tick_params(labelsize=7)
         ax.legend(fontsize=6, loc="upper left")
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
     fig.suptitle(title)
-    fig.tight_layout()
+    fig.text(0.01, 0.005, "Journal-centre orbits in units of the radial clearance c; the grey circle is the clearance "
+             "circle (eps = 1). X2 points along gravity, drawn downwards (the X2 axis is inverted).\nThin: the "
+             "transient; thick: the settled orbit (t >= %g s); dot: the final position. Reference: wide grey band "
+             "underneath the models." % t_settle, fontsize=7, va="bottom")
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     return fig
 
 
@@ -267,7 +291,10 @@ def fig5_panels(runs: dict, clearance: float, out_dir, ramp: tuple[float, float]
         ax.set_ylabel("X2 [um]")
         ax.set_title(f"{letters.get(name, '')}) {titles.get(name, name)}: max amplitude "
                      f"{1e6 * r['max_amplitude_m']:.0f} um", fontsize=9)
-        fig.tight_layout()
+        fig.text(0.01, 0.005, "Grey circles: the radial clearance c_r of each sleeve position used (dashed: the "
+                 "nominal c).\nX2 along gravity, drawn downwards. Colour: time along the imbalance ramp.",
+                 fontsize=6.5, va="bottom")
+        fig.tight_layout(rect=(0, 0.06, 1, 1))
         path = out / f"fig5_{letters.get(name, 'x')}_{name}.png"
         io.save_figure(fig, path, dpi=130)
         plt.close(fig)

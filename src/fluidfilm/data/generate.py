@@ -206,32 +206,29 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
 
 
 def _run_jobs(jobs: list, out: Path, scheduler: str, n_workers: int | None, progress: bool) -> None:
-    from tqdm.auto import tqdm
+    from ..progress import ProgressLog
 
-    bar = tqdm(total=len(jobs), desc="dataset chunks", unit="chunk", disable=not progress, smoothing=0.1)
-    try:
-        if scheduler == "inline":
-            for job in jobs:
-                res = compute_chunk(job)
+    bar = ProgressLog(len(jobs), f"dataset parts ({out.name})", enabled=progress)
+    if scheduler == "inline":
+        for job in jobs:
+            res = compute_chunk(job)
+            _write_part(out / _part_name(res["index"]), res["columns"])
+            bar.update()
+        return
+    from dask.distributed import as_completed
+
+    with _dask_client(scheduler, n_workers) as client:
+        for job in jobs:
+            job["numba_threads"] = 1  # one single-threaded worker per core
+        futures = client.map(compute_chunk, jobs, pure=False)
+        try:
+            for fut in as_completed(futures):
+                res = fut.result()
                 _write_part(out / _part_name(res["index"]), res["columns"])
                 bar.update()
-            return
-        from dask.distributed import as_completed
-
-        with _dask_client(scheduler, n_workers) as client:
-            for job in jobs:
-                job["numba_threads"] = 1  # one single-threaded worker per core
-            futures = client.map(compute_chunk, jobs, pure=False)
-            try:
-                for fut in as_completed(futures):
-                    res = fut.result()
-                    _write_part(out / _part_name(res["index"]), res["columns"])
-                    bar.update()
-            except BaseException:
-                client.cancel(futures)
-                raise
-    finally:
-        bar.close()
+        except BaseException:
+            client.cancel(futures)
+            raise
 
 
 def random_test_set(bearing: JournalBearing, reference: dict, spec: DatasetSpec, out_dir, n: int | None = None,

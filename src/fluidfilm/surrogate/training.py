@@ -310,6 +310,14 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
                      n_inputs=dm.scaling.n_inputs)
     stop = TargetStop(target)
     callbacks = [stop]
+    if not trainer_cfg.get("progress_bar", False):
+        # a line per epoch instead of a bar: readable in DVC stage output and CI logs
+        from ..progress import epoch_log_callback
+
+        callbacks.append(epoch_log_callback(trainer_cfg["max_epochs"]))
+    from ..progress import quiet_third_party
+
+    quiet_third_party()
     ckpt_path = None
     if ckpt_dir is not None:
         ckpt_dir = Path(ckpt_dir)
@@ -318,7 +326,7 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
             ckpt_path = str(ckpt_dir / "last.ckpt")
     trainer = L.Trainer(max_epochs=trainer_cfg["max_epochs"], max_time=trainer_cfg.get("max_time"),
                         accelerator=trainer_cfg.get("accelerator", "cpu"), devices=1, logger=logger or False,
-                        callbacks=callbacks, enable_progress_bar=trainer_cfg.get("progress_bar", True),
+                        callbacks=callbacks, enable_progress_bar=trainer_cfg.get("progress_bar", False),
                         enable_model_summary=False, num_sanity_val_steps=0, deterministic=True,
                         check_val_every_n_epoch=1, enable_checkpointing=ckpt_dir is not None)
     t0 = time.perf_counter()

@@ -1,0 +1,209 @@
+"""Run the workspace's DVC pipeline and serve its MLflow runs (what ``make reproduce`` and ``make mlflow`` call).
+
+    python -m fluidfilm.pipeline run                                 # dvc repro, the full profile
+    python -m fluidfilm.pipeline run --profile quick --workdir DIR   # the small profile in a scratch copy
+    python -m fluidfilm.pipeline serve --port 5000                   # MLflow UI on the workspace's store
+
+Why a module and not a shell line: the stages must start the workspace's interpreter whatever is
+on the caller's PATH (dvc.yaml takes it from ``conf/pipeline/full.yaml``), the small profile must
+run the very same ``dvc.yaml`` without touching the full outputs (so it runs in a copy of the
+workspace with ``conf/pipeline/quick.yaml`` in place of the full profile), and a user should see,
+line by line, which stage runs, how long each took and where the results are at the end.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+PROFILE_FILE = Path("conf/pipeline/full.yaml")
+TIMING_FILE = Path("reports/reproduce_timing.json")
+STAGE_LINE = re.compile(r"^Running stage '([^']+)'")
+
+
+def venv_bin() -> Path:
+    """The folder of the interpreter running this module (the workspace's .venv/bin under make)."""
+    return Path(sys.executable).parent
+
+
+def copy_workspace(src: Path, dst: Path) -> None:
+    """Copy the tracked and untracked-but-not-ignored files of ``src`` to ``dst`` (fresh)."""
+    listing = subprocess.run(["git", "ls-files", "-co", "--exclude-standard", "-z"], cwd=src, check=True,
+                             capture_output=True).stdout.decode().split("\0")
+    if dst.exists():
+        shutil.rmtree(dst)
+    dst.mkdir(parents=True)
+    for rel in filter(None, listing):
+        source = src / rel
+        if not source.is_file():          # deleted but not yet committed
+            continue
+        target = dst / rel
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(source, target)
+
+
+def prepare_profile_copy(root: Path, profile: str, workdir: Path) -> Path:
+    """A scratch copy of the workspace that runs ``profile`` through the unchanged dvc.yaml."""
+    profile_file = root / "conf" / "pipeline" / f"{profile}.yaml"
+    if not profile_file.is_file():
+        known = sorted(p.stem for p in (root / "conf" / "pipeline").glob("*.yaml"))
+        raise SystemExit(f"unknown pipeline profile {profile!r}: expected one of {known}")
+    workdir = workdir if workdir.is_absolute() else root / workdir
+    copy_workspace(root, workdir)
+    shutil.copy2(profile_file, workdir / PROFILE_FILE)
+    (workdir / "dvc.lock").unlink(missing_ok=True)
+    # the stages start .venv/bin/python relative to the workspace: point it at this one's
+    venv = root / ".venv"
+    if venv.exists():
+        (workdir / ".venv").symlink_to(venv.resolve(), target_is_directory=True)
+    # the copy is no git repository of its own; DVC runs it without one
+    subprocess.run([str(venv_bin() / "dvc"), "config", "--local", "core.no_scm", "true"], cwd=workdir, check=True,
+                   capture_output=True)
+    return workdir
+
+
+def run_dvc_repro(workdir: Path, extra: list[str]) -> tuple[int, dict[str, float]]:
+    """``dvc repro`` in ``workdir``, streaming its output; return its exit code and seconds per stage run."""
+    cmd = [str(venv_bin() / "dvc"), "repro", *extra]
+    env = dict(os.environ)
+    env.setdefault("PYTHONUNBUFFERED", "1")     # stage output line by line, not in 4 kB blocks
+    start = time.perf_counter()
+    stage_times: dict[str, float] = {}
+    current, current_start = None, start
+    proc = subprocess.Popen(cmd, cwd=workdir, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            bufsize=1)
+    try:
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            m = STAGE_LINE.match(line)
+            now = time.perf_counter()
+            if m:
+                if current is not None:
+                    stage_times[current] = now - current_start
+                current, current_start = m.group(1), now
+                line = line.rstrip("\n") + f"   [pipeline {now - start:,.0f} s]\n"
+            sys.stdout.write(line)
+            sys.stdout.flush()
+        code = proc.wait()
+    except KeyboardInterrupt:
+        proc.send_signal(signal.SIGINT)
+        proc.wait()
+        print(f"\ninterrupted during stage {current!r}: run the same command again to resume "
+              "(finished stages and finished dataset parts are kept)", file=sys.stderr)
+        raise SystemExit(130) from None
+    if current is not None and code == 0:
+        stage_times[current] = time.perf_counter() - current_start
+    return code, stage_times
+
+
+def record_timing(workdir: Path, profile: str, stage_times: dict[str, float], total: float) -> None:
+    """Merge the seconds of the stages that ran into reports/reproduce_timing.json (stages not rerun keep theirs)."""
+    path = workdir / TIMING_FILE
+    data = json.loads(path.read_text()) if path.exists() else {}
+    runs = data.setdefault(profile, {"stages": {}})
+    runs["stages"].update({k: round(v, 1) for k, v in stage_times.items()})
+    runs["date"] = _dt.date.today().isoformat()
+    from .comparison import machine
+
+    runs["machine"] = machine()
+    runs["last_run_total_s"] = round(total, 1)
+    runs["stages_total_s"] = round(sum(runs["stages"].values()), 1)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
+    os.replace(tmp, path)
+
+
+def where_things_are(workdir: Path) -> str:
+    rel = os.path.relpath(workdir)
+    prefix = "" if rel == "." else f"{rel}/"
+    return "\n".join([
+        "",
+        "Results:",
+        f"  report          {prefix}reports/paper_comparison.md   (headline values: {prefix}reports/metrics.json)",
+        f"  figures         {prefix}reports/figures/",
+        f"  stage timings   {prefix}{TIMING_FILE}",
+        f"  MLflow runs     {prefix}mlflow.db          open with: make mlflow   (then http://127.0.0.1:5000)",
+        "  DVC             .venv/bin/dvc metrics show ; .venv/bin/dvc plots show   (writes reports/dvc_plots/)",
+        "  review notebook .venv/bin/jupyter execute --inplace notebooks/review.ipynb",
+    ])
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    root = Path.cwd()
+    workdir = root if args.profile == "full" else prepare_profile_copy(root, args.profile, Path(args.workdir))
+    print(f"fluidfilm pipeline: profile {args.profile}, in {workdir}", flush=True)
+    start = time.perf_counter()
+    code, stage_times = run_dvc_repro(workdir, args.dvc_args)
+    total = time.perf_counter() - start
+    if code != 0:
+        print(f"\ndvc repro failed (exit {code}) after {total:,.0f} s", file=sys.stderr)
+        return code
+    if stage_times:
+        record_timing(workdir, args.profile, stage_times, total)
+        print(f"\n{len(stage_times)} stage(s) ran in {total / 60:.1f} min:")
+        for name, sec in stage_times.items():
+            print(f"  {name:<24} {sec:8.1f} s")
+    else:
+        print("\nevery stage is up to date")
+    print(where_things_are(workdir))
+    return 0
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    """The MLflow UI on this workspace's store; artifacts served by the server (portable links)."""
+    url = f"http://{args.host}:{args.port}"
+    cmd = [str(venv_bin() / "mlflow"), "server", "--backend-store-uri", args.store, "--artifacts-destination",
+           args.artifacts, "--host", args.host, "--port", str(args.port), "--workers", "1"]
+    print(f"starting MLflow on {url} (store {args.store}, artifacts {args.artifacts}); Ctrl-C stops it", flush=True)
+    proc = subprocess.Popen(cmd)
+    try:
+        deadline = time.time() + 120
+        while time.time() < deadline and proc.poll() is None:
+            try:
+                urllib.request.urlopen(url + "/health", timeout=2)
+                print(f"MLflow is up: {url}", flush=True)
+                break
+            except OSError:
+                time.sleep(1)
+        return proc.wait()
+    except KeyboardInterrupt:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+        print("MLflow stopped")
+        return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m fluidfilm.pipeline", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="dvc repro on a profile")
+    run.add_argument("--profile", default="full", help="conf/pipeline/<profile>.yaml (default: full)")
+    run.add_argument("--workdir", default="build/quick", help="scratch copy for a profile other than full")
+    run.add_argument("dvc_args", nargs="*", help="passed to dvc repro (e.g. a stage name)")
+    run.set_defaults(func=cmd_run)
+    serve = sub.add_parser("serve", help="serve the workspace's MLflow runs")
+    serve.add_argument("--port", type=int, default=5000)
+    serve.add_argument("--host", default="127.0.0.1")
+    serve.add_argument("--store", default="sqlite:///mlflow.db")
+    serve.add_argument("--artifacts", default="./mlartifacts")
+    serve.set_defaults(func=cmd_serve)
+    args = parser.parse_args(argv)
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
