@@ -132,7 +132,9 @@ def where_things_are(workdir: Path) -> str:
         f"  report          {prefix}reports/paper_comparison.md   (headline values: {prefix}reports/metrics.json)",
         f"  figures         {prefix}reports/figures/",
         f"  stage timings   {prefix}{TIMING_FILE}",
-        f"  MLflow runs     {prefix}mlflow.db          open with: make mlflow   (then http://127.0.0.1:5000)",
+        f"  MLflow runs     {prefix}mlflow.db          open with: "
+        + ("make mlflow" if not prefix else f"(cd {rel} && .venv/bin/python -m fluidfilm.pipeline serve)")
+        + "   then http://127.0.0.1:5000",
         "  DVC             .venv/bin/dvc metrics show ; .venv/bin/dvc plots show   (writes reports/dvc_plots/)",
         "  review notebook .venv/bin/jupyter execute --inplace notebooks/review.ipynb",
     ])
@@ -150,6 +152,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         return code
     if stage_times:
         record_timing(workdir, args.profile, stage_times, total)
+    from . import readme
+
+    readme.main(["--readme", str(workdir / "README.md"), "--reports", str(workdir / "reports")])
+    if stage_times:
         print(f"\n{len(stage_times)} stage(s) ran in {total / 60:.1f} min:")
         for name, sec in stage_times.items():
             print(f"  {name:<24} {sec:8.1f} s")
@@ -161,11 +167,16 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 def cmd_serve(args: argparse.Namespace) -> int:
     """The MLflow UI on this workspace's store; artifacts served by the server (portable links)."""
+    from .tracking import relocate_artifacts
+
     url = f"http://{args.host}:{args.port}"
+    moved = relocate_artifacts(args.store)   # artifact links follow the workspace if it was moved
+    if moved:
+        print(f"re-pointed {moved} artifact locations to {Path.cwd()}", flush=True)
     cmd = [str(venv_bin() / "mlflow"), "server", "--backend-store-uri", args.store, "--artifacts-destination",
            args.artifacts, "--host", args.host, "--port", str(args.port), "--workers", "1"]
-    print(f"starting MLflow on {url} (store {args.store}, artifacts {args.artifacts}); Ctrl-C stops it", flush=True)
-    proc = subprocess.Popen(cmd)
+    print(f"starting MLflow on {url} (store {args.store}); Ctrl-C stops it", flush=True)
+    proc = subprocess.Popen(cmd, start_new_session=True)  # Ctrl-C is forwarded once, below
     try:
         deadline = time.time() + 120
         while time.time() < deadline and proc.poll() is None:
@@ -177,12 +188,12 @@ def cmd_serve(args: argparse.Namespace) -> int:
                 time.sleep(1)
         return proc.wait()
     except KeyboardInterrupt:
-        proc.send_signal(signal.SIGINT)
+        os.killpg(proc.pid, signal.SIGTERM)  # the server and its gunicorn/uvicorn workers
         try:
             proc.wait(timeout=15)
         except subprocess.TimeoutExpired:
-            proc.kill()
-        print("MLflow stopped")
+            os.killpg(proc.pid, signal.SIGKILL)
+        print("MLflow stopped", flush=True)
         return 0
 
 

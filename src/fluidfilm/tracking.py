@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import os
 from collections.abc import Mapping
+from pathlib import Path
 
 
 def flatten(cfg: Mapping, prefix: str = "") -> dict:
@@ -23,17 +24,85 @@ def flatten(cfg: Mapping, prefix: str = "") -> dict:
     return out
 
 
+# What the MLflow UI shows for the experiment: the runs table of a model-training experiment (the
+# UI otherwise guesses, and may open the GenAI traces view), and a description.
+EXPERIMENT_TAGS = {
+    "mlflow.experimentKind": "custom_model_development",
+    "mlflow.note.content": (
+        "fluidfilm: finite-difference Reynolds reference model, graded force datasets, neural surrogates "
+        "(single vs split by eccentricity), rotor trajectories, the active conical bearing's controllers. "
+        "Relative force errors (test_rel_err_*) are fractions (0.01 = 1 %); *_pct metrics are percent; "
+        "*_s seconds; *_us microseconds; *_m metres; *_N newtons."),
+}
+WORKSPACE_TAG = "fluidfilm.workspace"
+
+
+def _sqlite_path(uri: str) -> Path | None:
+    if not uri.startswith("sqlite:///"):
+        return None
+    return Path(uri[len("sqlite:///"):])
+
+
+def relocate_artifacts(uri: str, workspace: Path | None = None) -> int:
+    """Re-point the artifact paths of a workspace's SQLite store after the workspace folder moved.
+
+    MLflow stores absolute artifact paths.  Every experiment made here records the workspace folder
+    it was made in (tag ``fluidfilm.workspace``); when the store is opened from another folder, the
+    recorded prefix is replaced by the current one in the experiments' artifact locations and the
+    runs' artifact URIs, so that artifact links keep working after ``mv``/``cp -r`` of the clone.
+    Returns the number of rows changed.  Stores on a server (http://, postgresql://) are left alone:
+    there the server owns the artifacts.
+    """
+    import sqlite3
+
+    db = _sqlite_path(uri)
+    if db is None or not db.exists():
+        return 0
+    new_root = str((workspace or Path.cwd()).resolve())
+    changed = 0
+    with sqlite3.connect(db) as con:
+        try:
+            rows = con.execute("SELECT experiment_id, value FROM experiment_tags WHERE key = ?",
+                               (WORKSPACE_TAG,)).fetchall()
+        except sqlite3.OperationalError:  # store not initialised yet
+            return 0
+        for exp_id, old_root in rows:
+            if old_root == new_root:
+                continue
+            cur = con.execute("UPDATE experiments SET artifact_location = ? || substr(artifact_location, ?) "
+                              "WHERE experiment_id = ? AND artifact_location LIKE ? || '%'",
+                              (new_root, len(old_root) + 1, exp_id, old_root))
+            changed += cur.rowcount
+            cur = con.execute("UPDATE runs SET artifact_uri = ? || substr(artifact_uri, ?) "
+                              "WHERE experiment_id = ? AND artifact_uri LIKE ? || '%'",
+                              (new_root, len(old_root) + 1, exp_id, old_root))
+            changed += cur.rowcount
+            con.execute("UPDATE experiment_tags SET value = ? WHERE experiment_id = ? AND key = ?",
+                        (new_root, exp_id, WORKSPACE_TAG))
+    return changed
+
+
 def ensure_experiment(uri: str, name: str) -> str:
-    """Create the store and the experiment if needed; return the experiment id."""
+    """Create the store and the experiment if needed; return the experiment id.
+
+    A new experiment keeps its artifacts in ``mlartifacts/<name>`` of the workspace (the folder the
+    entry points run in), tagged so that ``relocate_artifacts`` can follow the workspace if it moves.
+    """
     import mlflow
 
     mlflow.set_tracking_uri(uri)
     client = mlflow.tracking.MlflowClient(uri)
+    relocate_artifacts(uri)
     exp = client.get_experiment_by_name(name)
     if exp is not None:
         return exp.experiment_id
+    tags = dict(EXPERIMENT_TAGS)
+    location = None
+    if _sqlite_path(uri) is not None:
+        tags[WORKSPACE_TAG] = str(Path.cwd().resolve())
+        location = str(Path.cwd().resolve() / "mlartifacts" / name)
     try:
-        return client.create_experiment(name)
+        return client.create_experiment(name, artifact_location=location, tags=tags)
     except Exception:  # another process created it between the two calls
         exp = client.get_experiment_by_name(name)
         if exp is None:

@@ -1,0 +1,161 @@
+"""Fill the README's result tables from the pipeline's outputs, so that no number is copied by hand.
+
+    python -m fluidfilm.readme            # rewrite the generated blocks of README.md in place
+    python -m fluidfilm.readme --check    # exit 1 if README.md differs from what reports/ say
+
+A generated block in the README looks like::
+
+    <!-- generated: headline -->
+    ...table...
+    <!-- end generated -->
+
+and ``RENDERERS[name](reports_dir)`` produces its content from the files under ``reports/`` that
+``make reproduce`` writes (``metrics.json``, ``reproduce_timing.json``, ``control.json``, ...).
+``make reproduce`` runs this after ``dvc repro``; ``tests/test_readme.py`` checks that the
+committed README agrees with the committed reports.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+BLOCK = re.compile(r"(<!-- generated: (?P<name>[a-z_0-9]+) -->\n)(?P<body>.*?)(<!-- end generated -->)", re.S)
+
+
+def _load(reports: Path, name: str) -> dict:
+    path = reports / name
+    if not path.exists():
+        raise FileNotFoundError(f"{path} is missing: run `make reproduce` first")
+    return json.loads(path.read_text())
+
+
+def _num(x, spec: str = ".1f", unit: str = "") -> str:
+    if x is None:
+        return "n/a"
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    return f"{format(x, spec)}{unit}"
+
+
+def _table(header: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+def render_reproduce_timing(reports: Path) -> str:
+    data = _load(reports, "reproduce_timing.json")
+    full = data.get("full")
+    if not full:
+        raise FileNotFoundError("reports/reproduce_timing.json has no full-profile run yet")
+    rows = [[f"`{name}`", f"{sec / 60:.1f} min" if sec >= 60 else f"{sec:.0f} s"]
+            for name, sec in full["stages"].items()]
+    rows.append(["**total**", f"**{full['stages_total_s'] / 60:.0f} min**"])
+    return (f"Measured on {full['date']}, {full['machine']}, every stage run from scratch "
+            f"(`reports/reproduce_timing.json`, written by `make reproduce`):\n\n" + _table(["stage", "wall time"], rows))
+
+
+def render_headline(reports: Path) -> str:
+    m = _load(reports, "metrics.json")
+    g = m.get
+
+    rows = [
+        ["dataset samples", "4,700,000", _num(g("dataset_samples"), ",.0f")],
+        ["dataset generation", "hours (not given)", _num(g("dataset_generation_s"), ".0f", " s")],
+        ["training time reduction, split vs single", "26 %",
+         _num(g("train_time_reduction_pct"), ".0f", " %")
+         + (f" ± {g('train_time_reduction_ci95'):.0f} (95 % CI, {g('train_time_seeds')} seeds)"
+            if g("train_time_reduction_ci95") is not None else "")],
+        ["speed-up per trajectory, split vs our reference", "12x", _num(g("speedup_trajectory_split"), ".1f", "x")],
+        ["speed-up per force, split vs our reference", "12x", _num(g("speedup_force_eval_split"), ".1f", "x")],
+        ["cases satisfactory, single", "e only", _num(g("satisfactory_cases_single"), "d", " of 7")],
+        ["cases satisfactory, split", "a-e (5 of 7)", _num(g("satisfactory_cases_split"), "d", " of 7")],
+        ["cases satisfactory, best (ours)", "-", _num(g("satisfactory_cases_best"), "d", " of 7")],
+        ["held-out median relative force error, single / split / best", "not given",
+         " / ".join(_num(g(f"test_rel_err_median_{k}"), ".2%") for k in ("paper_single", "paper_split", "best"))],
+        ["Fig. 5: largest orbit amplitude, DQN vs no control", "growth restrained (qualitative)",
+         _num(g("controller_amplitude_reduction_pct"), ".0f", " % smaller")],
+        ["Fig. 5: MPC vs no control", "not shown", _num(g("mpc_amplitude_reduction_pct"), ".0f", " % smaller")],
+    ]
+    for key, label, paper, spec, unit in (
+        ("speedup_trajectory_split_vs_sparse_reference", "speed-up per trajectory, split vs a sparse direct solver",
+         "12x", ".0f", "x"),
+        ("kc_max_rel_err_direct_best", "stiffness/damping, best model, max error direct terms", "-", ".1%", ""),
+        ("whirl_threshold_rel_err_best", "whirl threshold, best model vs reference", "-", ".1%", ""),
+        ("trajectories_per_s_batch_speedup", "batched trajectories, best vs reference", "-", ".0f", "x"),
+        ("controller_decision_ms_mpc", "MPC time per decision (control period 20 ms)", "-", ".1f", " ms"),
+        ("controller_training_speedup", "DQN training, surrogate vs reference model", ">= 10x", ".0f", "x"),
+    ):
+        if g(key) is not None:
+            rows.append([label, paper, _num(g(key), spec, unit)])
+    return _table(["quantity", "paper", "this workspace"], rows)
+
+
+def render_control(reports: Path) -> str:
+    control = _load(reports, "control.json")
+    names = {"none": "none (sleeve held at 0)", "dqn": "DQN (SB3)", "mpc": "MPC (surrogate)"}
+    rows = []
+    for name, r in control["controllers"].items():
+        rows.append([names.get(name, name), f"{1e6 * r['max_amplitude_m']:.1f} µm", f"{r['amplitude_reduction_pct']:.1f} %",
+                     f"{1e6 * r['final_amplitude_m']:.1f} µm", f"{r['mean_friction_power_W']:.2f} W",
+                     f"{1e3 * r['sleeve_travel_m']:.1f} mm", f"{r['decision_ms_median']:.2f} ms"])
+    return _table(["controller", "largest orbit amplitude", "reduction vs none", "amplitude at the end",
+                   "mean friction power", "sleeve travel", "time per decision"], rows)
+
+
+RENDERERS: dict[str, Callable[[Path], str]] = {
+    "reproduce_timing": render_reproduce_timing,
+    "headline": render_headline,
+    "control": render_control,
+}
+
+
+def fill(text: str, reports: Path, strict: bool = False) -> str:
+    """``text`` with every generated block re-rendered; a block whose source is missing is kept
+    as it is (or raises with ``strict``)."""
+
+    def sub(m: re.Match) -> str:
+        name = m.group("name")
+        if name not in RENDERERS:
+            raise KeyError(f"README block {name!r} has no renderer; known: {sorted(RENDERERS)}")
+        try:
+            body = RENDERERS[name](reports)
+        except (FileNotFoundError, KeyError) as exc:
+            if strict:
+                raise
+            print(f"README block {name!r} left as it was: {exc}", file=sys.stderr)
+            return m.group(0)
+        return m.group(1) + body + m.group(4)
+
+    return BLOCK.sub(sub, text)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m fluidfilm.readme", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--readme", default="README.md")
+    parser.add_argument("--reports", default="reports")
+    parser.add_argument("--check", action="store_true", help="only compare; exit 1 when README.md is stale")
+    args = parser.parse_args(argv)
+    path = Path(args.readme)
+    old = path.read_text()
+    new = fill(old, Path(args.reports), strict=args.check)
+    if args.check:
+        if new != old:
+            print(f"{path} is stale: run `python -m fluidfilm.readme`", file=sys.stderr)
+            return 1
+        return 0
+    if new != old:
+        tmp = path.with_suffix(".md.tmp")
+        tmp.write_text(new)
+        tmp.replace(path)
+        print(f"{path}: generated blocks updated from {args.reports}/")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
