@@ -43,6 +43,7 @@ def main() -> None:
     cone = bearing_from_dict(cfg)
     tapered = bearing_from_dict({**cfg, "clearance_taper": 20e-6})
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores; medians of 7 x N calls")
+    table = {}
     for n in (30, 55):
         rows = {
             "cylinder, fast path": kernel_time(ReynoldsSolver(paper_bearing(), n, n)),
@@ -54,6 +55,7 @@ def main() -> None:
         print(f"\n{n}x{n} grid")
         for name, t in rows.items():
             print(f"  {name:32s} {t * 1e6:10.1f} us   {t / base:8.1f} x the cone's fast path")
+            table.setdefault(name, {})[n] = f"{t * 1e6:,.1f} us ({t / base:.1f}x)"
     active = ROOT / "models" / "active"
     if (active / "model.json").exists():
         from fluidfilm import load_surrogate
@@ -62,6 +64,12 @@ def main() -> None:
         t_ref = kernel_time(ConicalReynoldsSolver(cone, 30, 30))
         print(f"\nactive surrogate (models/active): {t * 1e6:.2f} us per force, {t_ref / t:.1f}x faster than "
               f"the conical fast path at 30x30")
+        table["active surrogate (models/active)"] = {30: f"{t * 1e6:.2f} us ({t / t_ref:.2f}x)", 55: "-"}
+    from fluidfilm.benchmarking import write_benchmark
+
+    write_benchmark("conical", "Conical bearing, per force evaluation through the compiled kernels (medians; ratio to "
+                    "the cone's fast path)", ["path", "30x30", "55x55"],
+                    [[name, cells[30], cells[55]] for name, cells in table.items()])
 
 
 if __name__ == "__main__":

@@ -29,6 +29,7 @@ def main() -> None:
               "graded 30/55 @0.9": GradedReynoldsModel(b)}
     print(f"case e, t_end={t_end} s, dt=1e-5 s, {os.cpu_count()} cores (the integrator runs on one)")
     print(f"{'model':>18} {'median s':>9} {'us/step':>8} {'us/force':>9} {'steps':>7}")
+    table = []
     for name, model in models.items():
         simulate(model, rotor, t_end=0.001, dt=1e-5)  # compile
         times = []
@@ -40,6 +41,14 @@ def main() -> None:
         steps = int(round(t_end / 1e-5))
         print(f"{name:>18} {med:9.3f} {1e6 * med / steps:8.2f} {1e6 * med / tr.n_force_evals:9.2f} {steps:7d}"
               f"  ({tr.status})")
+        table.append([name, f"{med:.2f} s", f"{1e6 * med / steps:.1f} us", f"{1e6 * med / tr.n_force_evals:.1f} us",
+                      tr.status])
+    if not args.quick:
+        from fluidfilm.benchmarking import write_benchmark
+
+        write_benchmark("rotor", f"Case e trajectory with the reference model ({t_end} s of rotor time, dt = 1e-5 s, "
+                        f"RK4, median of {repeats})", ["model", "wall time", "per RK4 step", "per force evaluation",
+                                                       "status"], table)
 
 
 if __name__ == "__main__":

@@ -114,16 +114,31 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
 }
 
 
+def _renderer(name: str) -> Callable[[Path], str]:
+    if name in RENDERERS:
+        return RENDERERS[name]
+    if name.startswith("bench_"):
+        from .benchmarking import render
+
+        def bench(reports: Path) -> str:
+            path = reports / "benchmarks" / f"{name[len('bench_'):]}.json"
+            if not path.exists():
+                raise FileNotFoundError(f"{path} is missing: run `make bench`")
+            return render(path)
+
+        return bench
+    raise KeyError(f"README block {name!r} has no renderer; known: {sorted(RENDERERS)} and bench_<name>")
+
+
 def fill(text: str, reports: Path, strict: bool = False) -> str:
     """``text`` with every generated block re-rendered; a block whose source is missing is kept
     as it is (or raises with ``strict``)."""
 
     def sub(m: re.Match) -> str:
         name = m.group("name")
-        if name not in RENDERERS:
-            raise KeyError(f"README block {name!r} has no renderer; known: {sorted(RENDERERS)}")
+        renderer = _renderer(name)
         try:
-            body = RENDERERS[name](reports)
+            body = renderer(reports)
         except (FileNotFoundError, KeyError) as exc:
             if strict:
                 raise
