@@ -7,7 +7,7 @@ VENV   ?= .venv
 PY      = $(VENV)/bin/python
 STAMP   = $(VENV)/.installed
 
-.PHONY: setup reproduce test test-slow bench clean-venv
+.PHONY: setup reproduce test test-slow lint bench clean-venv
 
 setup: $(STAMP)
 
@@ -25,6 +25,11 @@ reproduce: setup
 
 test: setup
 	$(PY) -m pytest
+
+# lint and type check: ruff (rules in pyproject.toml) and mypy on src/ (the force-model contract)
+lint: setup
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/mypy
 
 test-slow: setup
 	$(PY) -m pytest -m slow

@@ -47,7 +47,6 @@ sleeve position costs a few scalars, not a new eigenbasis.
 """
 from __future__ import annotations
 
-
 import numpy as np
 
 from ..bearing import ConicalBearing
@@ -203,6 +202,10 @@ class ConicalReynoldsSolver(_GridSolver):
         self._sleeve = s
         self.params = self._cache[s]
         self._c = c_r
+
+    @property
+    def adjustable(self) -> bool:
+        return True
 
     @property
     def sleeve(self) -> float:

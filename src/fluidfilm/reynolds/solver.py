@@ -9,10 +9,12 @@ offers the public, vectorised API shared by every force model:
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from ..bearing import JournalBearing
+from ..models import ReferenceModel
 from ..states import as_state_pairs, check_states
 from . import kernels
 from .mesh import FilmMesh
@@ -84,12 +86,18 @@ def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str,
     )
 
 
-class _GridSolver:
+class _GridSolver(ReferenceModel):
     """Read-only description shared by the finite-difference solvers (``_bearing`` and ``mesh`` set by them)."""
 
-    @property
-    def bearing(self):
-        return self._bearing
+    mesh: FilmMesh
+    params: Any
+    _c: float
+
+    def forces(self, X, V) -> np.ndarray:
+        raise NotImplementedError
+
+    def _separable(self) -> bool:
+        raise NotImplementedError
 
     @property
     def n_theta(self) -> int:

@@ -11,6 +11,7 @@ import numpy as np
 from numba import njit
 
 from ..bearing import JournalBearing
+from ..models import WHOLE_FILM, ValidityDomain
 
 
 @njit(cache=True)
@@ -25,9 +26,25 @@ class LinearBearing:
     stiffness: float
     damping: float
 
+    name = "linear"
+
     @property
     def force_kernel(self):
         return linear_force, (float(self.stiffness), float(self.damping))
+
+    @property
+    def clearance(self) -> float:
+        return float(self.bearing.clearance)
+
+    @property
+    def validity(self) -> ValidityDomain:
+        return WHOLE_FILM
+
+    def reset_domain_counter(self) -> None:
+        """Nothing to count: a linear law holds everywhere."""
+
+    def domain_report(self) -> str | None:
+        return None
 
     def forces(self, X, V) -> np.ndarray:
         X = np.asarray(X, dtype=float)

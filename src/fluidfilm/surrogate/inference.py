@@ -30,6 +30,7 @@ import numpy as np
 from numba import njit
 
 from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
+from ..models import ValidityDomain
 from ..states import as_state_pairs
 from .scaling import Scaling
 
@@ -292,14 +293,24 @@ class SurrogateForceModel:
         self._warned = False
 
     @property
-    def bearing(self) -> JournalBearing:
+    def bearing(self) -> JournalBearing | ConicalBearing:
         return self._bearing
 
     @property
     def force_kernel(self):
         return surrogate_force, self.params
 
+    @property
+    def validity(self) -> ValidityDomain:
+        """The training data's range, as the kernel counts it."""
+        return ValidityDomain(self.eps_max, tuple((float(a), float(b), float(v)) for a, b, v in self.domain))
+
     # ------------------------------------------------------------------ the control input (active bearings)
+    @property
+    def adjustable(self) -> bool:
+        """True when the network takes the sleeve as an input."""
+        return bool(self._n_extra)
+
     @property
     def sleeve(self) -> float:
         return float(self._setting[1])
@@ -311,7 +322,7 @@ class SurrogateForceModel:
 
     def set_sleeve(self, sleeve: float) -> None:
         """Move the sleeve [m] (a surrogate of an active bearing takes it as an input)."""
-        if not self._n_extra:
+        if not self._n_extra or not isinstance(self._bearing, ConicalBearing):
             raise ValueError(f"{self.name} takes no sleeve input")
         c = self._bearing.clearance_at(sleeve)
         self._setting[0] = 1.0 / c**2
@@ -384,7 +395,7 @@ def load_surrogate(path) -> SurrogateForceModel:
     meta = json.loads((d / "model.json").read_text())
     arrays = np.load(d / "surrogate.npz")
     structure = meta.get("structure", "plain")
-    networks = [[(arrays[f"r{r}_W{k}"], arrays[f"r{r}_b{k}"]) for k in range(n)]
+    networks: list = [[(arrays[f"r{r}_W{k}"], arrays[f"r{r}_b{k}"]) for k in range(n)]
                 for r, n in enumerate(meta["n_layers"])]
     if structure == "damping":
         networks = [(net, [(arrays[f"r{r}_dW{k}"], arrays[f"r{r}_db{k}"]) for k in range(meta["n_layers_damping"][r])])

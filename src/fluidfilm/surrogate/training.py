@@ -300,6 +300,7 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
     """
     L.seed_everything(seed, workers=True)
     dm.setup()
+    assert dm.scaling is not None  # set by setup()
     model = ForceMLP(width=model_cfg["width"], depth=model_cfg["depth"], activation=model_cfg["activation"],
                      optimizer=model_cfg.get("optimizer", "adam"), lr=model_cfg["lr"],
                      weight_decay=model_cfg.get("weight_decay", 0.0), scheduler=model_cfg.get("scheduler", "cosine"),
