@@ -7,6 +7,8 @@ sections split) is our default and a config value.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -15,7 +17,16 @@ from ..models import ReferenceModel
 from ..states import as_state_pairs
 from . import kernels
 from .conical import ConicalReynoldsSolver
+from .params import FilmParams
 from .solver import ReynoldsSolver
+
+
+class GradedParams(NamedTuple):
+    """Kernel parameters of the graded model: both grids' and the radius [m] where the dense one starts."""
+
+    coarse: FilmParams
+    dense: FilmParams
+    dense_radius: float
 
 
 def make_solver(bearing: JournalBearing | ConicalBearing, n_theta: int, n_z: int,
@@ -28,18 +39,18 @@ def make_solver(bearing: JournalBearing | ConicalBearing, n_theta: int, n_z: int
 
 @njit(cache=True)
 def graded_force(params, x1, x2, v1, v2):
-    """Force kernel of the graded model: params = (coarse, dense, eps_threshold * c)."""
-    if x1 * x1 + x2 * x2 < params[2] * params[2]:
-        return kernels.film_force(params[0], x1, x2, v1, v2)
-    return kernels.film_force(params[1], x1, x2, v1, v2)
+    """Force kernel of the graded model (``GradedParams``)."""
+    if x1 * x1 + x2 * x2 < params.dense_radius * params.dense_radius:
+        return kernels.film_force(params.coarse, x1, x2, v1, v2)
+    return kernels.film_force(params.dense, x1, x2, v1, v2)
 
 
 @njit(cache=True)
 def graded_force_ss(params, x1, x2, v1, v2):
     """``graded_force`` with Swift-Stieber cavitation."""
-    if x1 * x1 + x2 * x2 < params[2] * params[2]:
-        return kernels.film_force_ss(params[0], x1, x2, v1, v2)
-    return kernels.film_force_ss(params[1], x1, x2, v1, v2)
+    if x1 * x1 + x2 * x2 < params.dense_radius * params.dense_radius:
+        return kernels.film_force_ss(params.coarse, x1, x2, v1, v2)
+    return kernels.film_force_ss(params.dense, x1, x2, v1, v2)
 
 
 class GradedReynoldsModel(ReferenceModel):
@@ -66,7 +77,7 @@ class GradedReynoldsModel(ReferenceModel):
         self._kernel = graded_force_ss if ss else graded_force
 
     def _rebuild(self) -> None:
-        self.params = (self.coarse.params, self.dense.params, self.eps_threshold * self.clearance)
+        self.params = GradedParams(self.coarse.params, self.dense.params, self.eps_threshold * self.clearance)
 
     @property
     def clearance(self) -> float:
@@ -124,7 +135,7 @@ class GradedReynoldsModel(ReferenceModel):
     def forces(self, X, V) -> np.ndarray:
         x, v, shape = as_state_pairs(X, V, self.clearance)
         out = np.empty_like(x)
-        dense = x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] >= self.params[2] * self.params[2]
+        dense = x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] >= self.params.dense_radius * self.params.dense_radius
         # each sub-batch runs the solvers' own parallel kernels (numba's parallel
         # loops cannot take the nested parameter tuple of ``graded_force``)
         for solver, rows in ((self.coarse, ~dense), (self.dense, dense)):
