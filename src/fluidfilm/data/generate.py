@@ -36,15 +36,14 @@ import time
 from pathlib import Path
 
 import numpy as np
-import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .. import __version__, io
 from ..bearing import JournalBearing, bearing_from_dict
 from ..reynolds import GradedReynoldsModel
+from .schema import COLUMNS, part_name, write_part
 from .spec import DatasetSpec, config_hash
 
-COLUMNS = ("X1", "X2", "V1", "V2", "F1", "F2", "eps", "section", "n_theta", "n_z")
 FORMAT_VERSION = 1
 
 
@@ -55,17 +54,6 @@ def _reference(bearing_json: str, reference_json: str) -> GradedReynoldsModel:
     r = json.loads(reference_json)
     return GradedReynoldsModel(b, coarse=tuple(r["coarse"]), dense=tuple(r["dense"]),
                                eps_threshold=r["eps_threshold"], cavitation=r.get("cavitation", "gumbel"))
-
-
-def _table(cols: dict) -> pa.Table:
-    extra = {"S": cols["S"]} if "S" in cols else {}
-    return pa.table({**extra,
-        "X1": cols["X1"], "X2": cols["X2"], "V1": cols["V1"], "V2": cols["V2"],
-        "F1": cols["F1"], "F2": cols["F2"], "eps": cols["eps"],
-        "section": np.asarray(cols["section"], dtype=np.int8),
-        "n_theta": np.asarray(cols["n_theta"], dtype=np.int16),
-        "n_z": np.asarray(cols["n_z"], dtype=np.int16),
-    })
 
 
 def compute_chunk(job: dict) -> dict:
@@ -121,13 +109,9 @@ def _chunk_at(model, spec: DatasetSpec, job: dict) -> dict:
     return {k: np.concatenate(v) for k, v in cols.items()}
 
 
-def _write_part(path: Path, columns: dict) -> None:
-    with io.atomic_path(path, suffix=".parquet") as tmp:
-        pq.write_table(_table(columns), tmp, compression="zstd")
-
-
-def _part_name(index: int) -> str:
-    return f"part-{index:05d}.parquet"
+# the schema module writes the files (kept under the old names for callers of this module)
+_write_part = write_part
+_part_name = part_name
 
 
 def _prepare_dir(out: Path, digest: str) -> None:

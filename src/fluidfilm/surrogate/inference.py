@@ -264,7 +264,7 @@ def pack_network(layers: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarra
 class SurrogateForceModel:
     """A trained network (or split set of networks) with the reference model's interface."""
 
-    def __init__(self, bearing: JournalBearing, networks: list, scalings: list[Scaling], activation: str,
+    def __init__(self, bearing: JournalBearing | ConicalBearing, networks: list, scalings: list[Scaling], activation: str,
                  boundaries=(), blend_width: float = 0.0, domain=None, eps_max: float = 1.0,
                  name: str = "surrogate", info: dict | None = None, structure: str = "plain"):
         """``networks``: one per region, each a list of (W (out, in), b) layers, or with
