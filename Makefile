@@ -41,12 +41,13 @@ endif
 test: setup
 	$(PY) -m pytest
 
+# lint and type check: ruff (rules in pyproject.toml) and mypy on src/ (the force-model contract)
+lint: setup
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/mypy
+
 test-slow: setup
 	$(PY) -m pytest -m slow
-
-lint: setup
-	$(PY) -m ruff check src experiments tests benchmarks
-	$(PY) -m mypy src
 
 bench: setup
 	$(PY) benchmarks/bench_solver.py

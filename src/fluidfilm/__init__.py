@@ -13,8 +13,8 @@ which one they run.
 """
 from .bearing import ConicalBearing, JournalBearing, bearing_from_dict, paper_bearing
 from .reynolds import CAVITATION_MODELS, ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
-from .surrogate import SurrogateForceModel, load_surrogate
 from .rotor import LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, simulate
+from .surrogate import SurrogateForceModel, load_surrogate
 
 __version__ = "0.1.0"
 

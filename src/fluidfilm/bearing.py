@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 
 def _require_positive(name: str, value: float) -> float:
@@ -19,6 +20,16 @@ def _require_positive(name: str, value: float) -> float:
 
 class _FilmScales:
     """Derived scales shared by every bearing (needs radius, clearance, length, speed_rpm, viscosity, density)."""
+
+    if TYPE_CHECKING:  # supplied by the dataclasses that use this mixin
+        clearance: float
+        length: float
+        speed_rpm: float
+        viscosity: float
+        density: float
+
+        @property
+        def radius(self) -> float: ...
 
     @property
     def omega(self) -> float:

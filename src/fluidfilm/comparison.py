@@ -11,6 +11,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from .models import ForceModel
 from .rotor.cases import case_summary, run_case
 from .speed import sample_states, time_per_force_eval
 
@@ -30,7 +31,7 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
 
 
-def trajectory_comparison(models: Mapping[str, object], reference_name: str, rotor_cfg: Mapping,
+def trajectory_comparison(models: Mapping[str, ForceModel], reference_name: str, rotor_cfg: Mapping,
                           cases: Mapping[str, Mapping], integrator_cfg: Mapping, threshold_pct: float,
                           repeats: int = 3) -> tuple[pd.DataFrame, dict]:
     """Run every case with every model; score each against the reference.
@@ -41,7 +42,8 @@ def trajectory_comparison(models: Mapping[str, object], reference_name: str, rot
     """
     clearance = models[reference_name].bearing.clearance
     t_settle = integrator_cfg["t_settle"]
-    rows, trajs = [], {}
+    rows: list[dict] = []
+    trajs: dict[str, dict] = {}
     for name, case in cases.items():
         trajs[name] = {}
         for model_name, model in models.items():
@@ -57,7 +59,7 @@ def trajectory_comparison(models: Mapping[str, object], reference_name: str, rot
     return pd.DataFrame(rows), trajs
 
 
-def speed_comparison(models: Mapping[str, object], references: Mapping[str, object], n_states: int = 5000,
+def speed_comparison(models: Mapping[str, ForceModel], references: Mapping[str, ForceModel], n_states: int = 5000,
                      repeats: int = 7) -> pd.DataFrame:
     """Time per force evaluation of every model in the same compiled loop over the same states."""
     first = next(iter(references.values()))
@@ -69,14 +71,14 @@ def speed_comparison(models: Mapping[str, object], references: Mapping[str, obje
     return pd.DataFrame(rows)
 
 
-def reduction_pct(single: float, split: float) -> float:
+def reduction_pct(single, split):
     """How much less time the split model took, in % of the single model's time (the paper: 26 %)."""
     return 100.0 * (single - split) / single
 
 
 def summarise_training_times(rows: pd.DataFrame) -> dict:
     """Per-seed times -> medians, spread and the reduction in % (median and range over seeds)."""
-    out = {}
+    out: dict = {}
     piv = rows.pivot(index="seed", columns="model", values="time_s")
     for m in ("single", "split"):
         out[f"train_time_{m}_s"] = float(piv[m].median())

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from .bearing import JournalBearing, bearing_from_dict
-from .reynolds import GradedReynoldsModel, ReynoldsSolver, make_solver
+from .reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver, make_solver
 
 
 def bearing_from_cfg(cfg: Mapping):
@@ -15,7 +15,7 @@ def bearing_from_cfg(cfg: Mapping):
     return bearing_from_dict(cfg)
 
 
-def solver_from_cfg(bearing, cfg: Mapping) -> ReynoldsSolver:
+def solver_from_cfg(bearing, cfg: Mapping) -> ReynoldsSolver | ConicalReynoldsSolver:
     return make_solver(bearing, cfg["n_theta"], cfg["n_z"], cavitation=cfg.get("cavitation", "gumbel"))
 
 

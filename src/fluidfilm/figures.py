@@ -279,7 +279,7 @@ def fig5_panels(runs: dict, clearance: float, out_dir, ramp: tuple[float, float]
         ax.plot(1e6 * clearance * np.cos(phi), 1e6 * clearance * np.sin(phi), color="0.5", lw=0.8, ls="--")
         x = 1e6 * r["x"]
         seg = np.stack([x[:-1], x[1:]], axis=1)
-        lc = LineCollection(seg, cmap="viridis", linewidths=0.6)
+        lc = LineCollection(seg, cmap="viridis", linewidths=0.6)  # type: ignore[arg-type]
         lc.set_array(r["t"][:-1])
         ax.add_collection(lc)
         cb = fig.colorbar(lc, ax=ax)

@@ -18,11 +18,21 @@ environment, as a real MPC reads its sensors.
 from __future__ import annotations
 
 import time
+from typing import Any, Protocol
 
 import numpy as np
 
+from ..models import ForceModel, as_adjustable
 from ..rotor import simulate
 from .env import ActiveBearingEnv
+
+
+class Controller(Protocol):
+    """What ``run_episode`` runs: a named callable ``controller(obs, env) -> action index``."""
+
+    name: str
+
+    def __call__(self, obs: Any, env: ActiveBearingEnv) -> int: ...
 
 
 class ConstantSleeve:
@@ -54,9 +64,8 @@ class ModelPredictiveController:
 
     name = "mpc"
 
-    def __init__(self, model, horizon_intervals: int = 2):
-        if not hasattr(model, "set_sleeve"):
-            raise ValueError(f"{type(model).__name__} has no sleeve input; the MPC needs an active bearing model")
+    def __init__(self, model: ForceModel, horizon_intervals: int = 2):
+        model = as_adjustable(model)  # the MPC needs an active bearing model
         if int(horizon_intervals) < 1:
             raise ValueError(f"horizon_intervals must be >= 1, got {horizon_intervals!r}")
         self.model = model
@@ -84,14 +93,16 @@ class ModelPredictiveController:
         return int(np.argmin(self.predicted_costs(env)))
 
 
-def run_episode(env: ActiveBearingEnv, controller, keep_trajectory: bool = True) -> dict:
+def run_episode(env: ActiveBearingEnv, controller: Controller, keep_trajectory: bool = True) -> dict:
     """One episode; returns the per-decision history, the whole trajectory and summary numbers.
 
     ``decision_ms``: wall time the controller took per decision (median), the
     figure that matters for running it on-line.
     """
     obs, _ = env.reset()
-    t_parts, x_parts, v_parts = [], [], []
+    t_parts: list[np.ndarray] = []
+    x_parts: list[np.ndarray] = []
+    v_parts: list[np.ndarray] = []
     decision_s = []
     total = 0.0
     while True:
@@ -110,7 +121,7 @@ def run_episode(env: ActiveBearingEnv, controller, keep_trajectory: bool = True)
     hist = env.history
     amps = np.array([h["amplitude"] for h in hist])
     out = {
-        "controller": getattr(controller, "name", type(controller).__name__),
+        "controller": controller.name,
         "return": float(total),
         "n_decisions": len(hist),
         "contact": bool(hist[-1]["terminated"]),

@@ -42,6 +42,8 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
+from ..bearing import ConicalBearing
+from ..models import ForceModel, as_adjustable
 from ..rotor import Rotor, simulate
 
 
@@ -106,14 +108,15 @@ def orbit_amplitude(x: np.ndarray) -> float:
 class ActiveBearingEnv(gym.Env):
     """Rotor in an active bearing under a growing imbalance; a discrete sleeve controller acts on it."""
 
-    metadata = {"render_modes": []}
+    metadata: dict = {"render_modes": []}
 
-    def __init__(self, model, rotor: Rotor, sleeve_positions, scenario: Scenario = Scenario(),
+    def __init__(self, model: ForceModel, rotor: Rotor, sleeve_positions, scenario: Scenario = Scenario(),
                  weights: RewardWeights = RewardWeights(), load_share: float = 1.0):
         """``rotor``: what the bearing carries (mass share, gravity, external force; its own
         imbalance is ignored); the scenario's total imbalances are multiplied by ``load_share``."""
-        if not hasattr(model, "set_sleeve"):
-            raise ValueError(f"{type(model).__name__} has no sleeve: the environment needs an active bearing model")
+        model = as_adjustable(model)  # the environment needs an active bearing model
+        if not isinstance(model.bearing, ConicalBearing):
+            raise ValueError(f"the environment needs a conical bearing, got {type(model.bearing).__name__}")
         positions = np.asarray(sleeve_positions, dtype=float)
         if positions.ndim != 1 or positions.size < 2 or np.any(np.diff(positions) <= 0):
             raise ValueError(f"sleeve_positions must be >= 2 increasing values (m), got {list(positions)}")

@@ -1,9 +1,22 @@
-"""The graded force dataset: layout (``spec``), generation (``generate``), loading (``load``).
+"""The graded force dataset: layout (``spec``), generation (``generate``), schema, writing and reading (``schema``).
 
-Surrogates depend on this package and on the columns it writes, never on
-the solver's internals.
+Surrogates depend on this package and on the columns it writes (``load_dataset``,
+``load_test_set``, ``dataset_bearing``), never on the solver's internals.
 """
-from .generate import COLUMNS, generate_dataset, random_test_set
+from .schema import (COLUMNS, EXTRA_INPUTS, dataset_bearing, load_dataset, load_test_set, read_metadata,
+                     training_domain)
 from .spec import DatasetConfigError, DatasetSpec, config_hash
 
-__all__ = ["COLUMNS", "DatasetSpec", "DatasetConfigError", "config_hash", "generate_dataset", "random_test_set"]
+__all__ = ["COLUMNS", "EXTRA_INPUTS", "DatasetSpec", "DatasetConfigError", "config_hash", "generate_dataset",
+           "random_test_set", "load_dataset", "load_test_set", "read_metadata", "dataset_bearing",
+           "training_domain"]
+
+
+def __getattr__(name: str):
+    # the generator needs the reference solver; imported on first use so that reading data
+    # (what a surrogate does) does not import the solver
+    if name in ("generate_dataset", "random_test_set"):
+        from . import generate
+
+        return getattr(generate, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -36,15 +36,14 @@ import time
 from pathlib import Path
 
 import numpy as np
-import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .. import __version__, io
 from ..bearing import JournalBearing, bearing_from_dict
 from ..reynolds import GradedReynoldsModel
+from .schema import COLUMNS, part_name, write_part
 from .spec import DatasetSpec, config_hash
 
-COLUMNS = ("X1", "X2", "V1", "V2", "F1", "F2", "eps", "section", "n_theta", "n_z")
 FORMAT_VERSION = 1
 
 
@@ -55,17 +54,6 @@ def _reference(bearing_json: str, reference_json: str) -> GradedReynoldsModel:
     r = json.loads(reference_json)
     return GradedReynoldsModel(b, coarse=tuple(r["coarse"]), dense=tuple(r["dense"]),
                                eps_threshold=r["eps_threshold"], cavitation=r.get("cavitation", "gumbel"))
-
-
-def _table(cols: dict) -> pa.Table:
-    extra = {"S": cols["S"]} if "S" in cols else {}
-    return pa.table({**extra,
-        "X1": cols["X1"], "X2": cols["X2"], "V1": cols["V1"], "V2": cols["V2"],
-        "F1": cols["F1"], "F2": cols["F2"], "eps": cols["eps"],
-        "section": np.asarray(cols["section"], dtype=np.int8),
-        "n_theta": np.asarray(cols["n_theta"], dtype=np.int16),
-        "n_z": np.asarray(cols["n_z"], dtype=np.int16),
-    })
 
 
 def compute_chunk(job: dict) -> dict:
@@ -95,22 +83,19 @@ def _chunk_at(model, spec: DatasetSpec, job: dict) -> dict:
     sec = sec_all[job["start"]:job["stop"]]
     eps = eps_all[job["start"]:job["stop"]]
     vsec = np.array([spec.velocity_section_index(e) for e in eps])
-    dense = eps >= model.eps_threshold
     pairs = {k: spec.velocity_pairs(k) for k in set(vsec.tolist())}
-    forces = [None] * len(x)
-    # positions sharing a velocity section and a grid: one batched product call
+    forces: list[np.ndarray] = [np.empty(0)] * len(x)
+    # positions sharing a velocity section: one batched product call (each on its grid)
     for k in pairs:
-        for is_dense, solver in ((False, model.coarse), (True, model.dense)):
-            idx = np.flatnonzero((vsec == k) & (dense == is_dense))
-            if idx.size:
-                F = solver.forces_product(x[idx], pairs[k])
-                for j, i in enumerate(idx):
-                    forces[i] = F[j]
-    cols = {name: [] for name in COLUMNS}
+        idx = np.flatnonzero(vsec == k)
+        F = model.forces_product(x[idx], pairs[k], eps=eps[idx])
+        for j, row in enumerate(idx):
+            forces[row] = F[j]
+    grid_theta, grid_z = model.grid_for(eps)
+    cols: dict[str, list[np.ndarray]] = {name: [] for name in COLUMNS}
     for i in range(len(x)):
-        V = pairs[vsec[i]]
+        V = pairs[int(vsec[i])]
         n = len(V)
-        solver = model.dense if dense[i] else model.coarse
         cols["X1"].append(np.full(n, x[i, 0]))
         cols["X2"].append(np.full(n, x[i, 1]))
         cols["V1"].append(V[:, 0])
@@ -119,18 +104,14 @@ def _chunk_at(model, spec: DatasetSpec, job: dict) -> dict:
         cols["F2"].append(forces[i][:, 1])
         cols["eps"].append(np.full(n, eps[i]))
         cols["section"].append(np.full(n, sec[i], dtype=np.int8))
-        cols["n_theta"].append(np.full(n, solver.n_theta, dtype=np.int16))
-        cols["n_z"].append(np.full(n, solver.n_z, dtype=np.int16))
+        cols["n_theta"].append(np.full(n, grid_theta[i], dtype=np.int16))
+        cols["n_z"].append(np.full(n, grid_z[i], dtype=np.int16))
     return {k: np.concatenate(v) for k, v in cols.items()}
 
 
-def _write_part(path: Path, columns: dict) -> None:
-    with io.atomic_path(path, suffix=".parquet") as tmp:
-        pq.write_table(_table(columns), tmp, compression="zstd")
-
-
-def _part_name(index: int) -> str:
-    return f"part-{index:05d}.parquet"
+# the schema module writes the files (kept under the old names for callers of this module)
+_write_part = write_part
+_part_name = part_name
 
 
 def _prepare_dir(out: Path, digest: str) -> None:
@@ -183,7 +164,7 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
     step = spec.positions_per_chunk
     bearing_json = json.dumps(bearing.to_dict(), sort_keys=True)
     reference_json = json.dumps(dict(reference), sort_keys=True)
-    jobs = [{"index": i, "start": s, "stop": min(s + step, n_pos), "spec": spec, "bearing": bearing_json,
+    jobs: list[dict] = [{"index": i, "start": s, "stop": min(s + step, n_pos), "spec": spec, "bearing": bearing_json,
              "reference": reference_json} for i, s in enumerate(range(0, n_pos, step))]
     pending = [j for j in jobs if not (out / _part_name(j["index"])).exists()]
     t0 = time.perf_counter()

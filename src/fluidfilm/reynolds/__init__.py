@@ -9,9 +9,12 @@ One responsibility per module:
 - ``conical``    the adjustable conical bearing: eigenbasis fast path, general
                  h(theta, z) path, axial force, sleeve displacement
 - ``policy``     the paper's grid policy (coarse grid at low, dense at high eccentricity)
+- ``params``     the kernels' named parameters (``FilmParams``, ``GeneralParams``) and ``Cavitation``
 """
 from .conical import ConicalReynoldsSolver
+from .params import Cavitation, FilmParams, GeneralParams
 from .policy import GradedReynoldsModel, make_solver
 from .solver import CAVITATION_MODELS, ReynoldsSolver
 
-__all__ = ["ReynoldsSolver", "ConicalReynoldsSolver", "GradedReynoldsModel", "CAVITATION_MODELS", "make_solver"]
+__all__ = ["ReynoldsSolver", "ConicalReynoldsSolver", "GradedReynoldsModel", "CAVITATION_MODELS", "make_solver",
+           "Cavitation", "FilmParams", "GeneralParams"]

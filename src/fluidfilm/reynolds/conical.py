@@ -47,13 +47,13 @@ sleeve position costs a few scalars, not a new eigenbasis.
 """
 from __future__ import annotations
 
-
 import numpy as np
 
 from ..bearing import ConicalBearing
 from ..states import as_state_pairs
 from . import kernels
 from .mesh import FilmMesh
+from .params import Cavitation, FilmParams, GeneralParams
 from .solver import _GridSolver
 
 METHODS = ("auto", "fast", "general")
@@ -86,8 +86,14 @@ def axial_eigenbasis(bearing: ConicalBearing, mesh: FilmMesh):
     return lam, phi, phi_inv
 
 
-def build_conical_params(bearing: ConicalBearing, mesh: FilmMesh, sleeve: float, cavitation: str,
-                         basis=None) -> tuple:
+def _cone_cavitation(cavitation: str | Cavitation) -> Cavitation:
+    if cavitation not in ("gumbel", "none", Cavitation.GUMBEL, Cavitation.NONE):
+        raise ValueError(f"the conical bearing supports cavitation 'gumbel' or 'none', got {cavitation!r}")
+    return Cavitation.parse(cavitation)
+
+
+def build_conical_params(bearing: ConicalBearing, mesh: FilmMesh, sleeve: float, cavitation: str | Cavitation,
+                         basis=None) -> FilmParams:
     """Parameters of the fast path in the cylindrical kernels' layout (``solver.build_params``).
 
     Differences from the cylinder: the modes are the axial operator's
@@ -96,8 +102,7 @@ def build_conical_params(bearing: ConicalBearing, mesh: FilmMesh, sleeve: float,
     axial node is reconstructed (no mid-length symmetry on a cone).
     Swift-Stieber cavitation (PSOR) is not offered on the cone.
     """
-    if cavitation not in ("gumbel", "none"):
-        raise ValueError(f"the conical bearing supports cavitation 'gumbel' or 'none', got {cavitation!r}")
+    cav = _cone_cavitation(cavitation)
     if bearing.clearance_taper != 0.0:
         raise ValueError("the fast conical path needs matched cones (clearance_taper = 0); use method='general'")
     c_r = bearing.clearance_at(sleeve)
@@ -112,45 +117,48 @@ def build_conical_params(bearing: ConicalBearing, mesh: FilmMesh, sleeve: float,
     tau = phi_inv[:, 0].copy()
     supply_coef = cos2 * r_node[1] * r_half[0] / mesh.dz**2
     full = np.ascontiguousarray(phi)
-    return (
-        n, kernels.CAV_GUMBEL if cavitation == "gumbel" else kernels.CAV_NONE,
-        np.sin(mesh.theta), np.cos(mesh.theta), np.sin(theta_f), np.cos(theta_f),
-        1.0 / c_r,
-        1.0 / mesh.dtheta**2, 1.0 / mesh.dtheta,
-        np.ascontiguousarray(lam), np.ascontiguousarray(sig), np.ascontiguousarray(tau),
-        0.0,  # 1/dzeta^2: only PSOR reads it, not offered here
-        bearing.radius,
-        6.0 * mu * bearing.omega / (cos2 * c_r**2),
-        12.0 * mu / (cos2 * c_r**3),
-        -supply_coef * p_s,
-        mesh.w_theta * np.sin(mesh.theta), mesh.w_theta * np.cos(mesh.theta),
-        full, np.ascontiguousarray(w_zr[1:-1]),
-        w_zr[0] * p_s,
-        np.ascontiguousarray(w_zr),
-        1.0, 1e-10, 1,
-        full,
-        float(p_s),
+    return FilmParams(
+        n_theta=n, cavitation=int(cav),
+        sin_node=np.sin(mesh.theta), cos_node=np.cos(mesh.theta),
+        sin_face=np.sin(theta_f), cos_face=np.cos(theta_f),
+        inv_c=1.0 / c_r,
+        inv_dtheta2=1.0 / mesh.dtheta**2, inv_dtheta=1.0 / mesh.dtheta,
+        lam=np.ascontiguousarray(lam), sig=np.ascontiguousarray(sig), tau=np.ascontiguousarray(tau),
+        inv_dzeta2=0.0,  # only PSOR reads it, not offered here
+        radius=bearing.radius,
+        k_omega=6.0 * mu * bearing.omega / (cos2 * c_r**2),
+        k_v=12.0 * mu / (cos2 * c_r**3),
+        supply_term=-supply_coef * p_s,
+        a_sin=mesh.w_theta * np.sin(mesh.theta), a_cos=mesh.w_theta * np.cos(mesh.theta),
+        basis=full, w_rec=np.ascontiguousarray(w_zr[1:-1]),
+        boundary=w_zr[0] * p_s,
+        w_z=np.ascontiguousarray(w_zr),
+        sor_omega=1.0, sor_tol=1e-10, sor_max_iter=1,
+        full_basis=full,
+        p_supply=float(p_s),
     )
 
 
-def build_general_params(bearing: ConicalBearing, mesh: FilmMesh, sleeve: float, cavitation: str) -> tuple:
-    """Parameters of ``kernels.general_linear_field`` (layout documented there)."""
-    if cavitation not in ("gumbel", "none"):
-        raise ValueError(f"the conical bearing supports cavitation 'gumbel' or 'none', got {cavitation!r}")
+def build_general_params(bearing: ConicalBearing, mesh: FilmMesh, sleeve: float,
+                         cavitation: str | Cavitation) -> GeneralParams:
+    """Parameters of ``kernels.general_linear_field`` (``params.GeneralParams``)."""
+    cav = _cone_cavitation(cavitation)
     c_r = bearing.clearance_at(sleeve)
     z, zh, r_node, r_half, cos2 = _axial_geometry(bearing, mesh)
     taper = bearing.clearance_taper / bearing.length
     theta_f = mesh.theta + 0.5 * mesh.dtheta
     mu = bearing.viscosity
-    return (
-        mesh.n_theta, kernels.CAV_GUMBEL if cavitation == "gumbel" else kernels.CAV_NONE,
-        np.sin(mesh.theta), np.cos(mesh.theta), np.sin(theta_f), np.cos(theta_f),
-        c_r + taper * z, c_r + taper * zh, r_node, r_half,
-        1.0 / c_r, 1.0 / mesh.dtheta**2, 1.0 / mesh.dtheta, cos2 / mesh.dz**2,
-        6.0 * mu * bearing.omega / (cos2 * c_r**2), 12.0 * mu / (cos2 * c_r**3),
-        float(bearing.supply_pressure),
-        mesh.w_theta * np.sin(mesh.theta), mesh.w_theta * np.cos(mesh.theta),
-        mesh.w_z * r_node, mesh.w_theta.copy(),
+    return GeneralParams(
+        n_theta=mesh.n_theta, cavitation=int(cav),
+        sin_node=np.sin(mesh.theta), cos_node=np.cos(mesh.theta),
+        sin_face=np.sin(theta_f), cos_face=np.cos(theta_f),
+        c_node=c_r + taper * z, c_half=c_r + taper * zh, r_node=r_node, r_half=r_half,
+        inv_c_ref=1.0 / c_r, inv_dtheta2=1.0 / mesh.dtheta**2, inv_dtheta=1.0 / mesh.dtheta,
+        axial_coef=cos2 / mesh.dz**2,
+        k_omega=6.0 * mu * bearing.omega / (cos2 * c_r**2), k_v=12.0 * mu / (cos2 * c_r**3),
+        p_supply=float(bearing.supply_pressure),
+        a_sin=mesh.w_theta * np.sin(mesh.theta), a_cos=mesh.w_theta * np.cos(mesh.theta),
+        w_zr=mesh.w_z * r_node, w_theta=mesh.w_theta.copy(),
     )
 
 
@@ -180,7 +188,7 @@ class ConicalReynoldsSolver(_GridSolver):
             raise ValueError(f"method 'fast' needs matched cones, but clearance_taper = {bearing.clearance_taper!r}")
         self._bearing = bearing
         self.mesh = FilmMesh(n_theta, n_z, bearing.length)
-        self.cavitation = cavitation
+        self.cavitation = _cone_cavitation(cavitation).label
         self.method = method
         self._basis = axial_eigenbasis(bearing, self.mesh) if method == "fast" else None
         # Simpson weights of the force integrals: R(z) sits in the axial weights
@@ -203,6 +211,10 @@ class ConicalReynoldsSolver(_GridSolver):
         self._sleeve = s
         self.params = self._cache[s]
         self._c = c_r
+
+    @property
+    def adjustable(self) -> bool:
+        return True
 
     @property
     def sleeve(self) -> float:
@@ -250,7 +262,7 @@ class ConicalReynoldsSolver(_GridSolver):
         out = np.empty((self.n_theta, self.n_z))
         if self.method == "fast":
             kernels.linear_field(self.params, xa[0, 0], xa[0, 1], va[0, 0], va[0, 1],
-                                 self.params[26], self.params[27], out)
+                                 self.params.full_basis, self.params.p_supply, out)
         else:
             kernels.general_linear_field(self.params, xa[0, 0], xa[0, 1], va[0, 0], va[0, 1], out)
         return out

@@ -60,18 +60,21 @@ matched cones h does not depend on z, and the axial operator
 R(z) d/dz(R(z) d/dz) is diagonalised by a precomputed eigenbasis instead of
 the sine transform (``conical.build_conical_params``).
 
-``params`` is the tuple built by ``solver.build_params``; its layout is
-documented there.
+``params`` is a ``params.FilmParams`` (built by ``solver.build_params`` or
+``conical.build_conical_params``), ``gp`` a ``params.GeneralParams``: named
+fields, compiled by numba to a plain struct.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
 
-# cavitation codes used inside kernels
-CAV_NONE = 0
-CAV_GUMBEL = 1
-CAV_SWIFT_STIEBER = 2
+from .params import Cavitation
+
+# cavitation codes used inside kernels (plain ints: the values of ``params.Cavitation``)
+CAV_NONE = int(Cavitation.NONE)
+CAV_GUMBEL = int(Cavitation.GUMBEL)
+CAV_SWIFT_STIEBER = int(Cavitation.SWIFT_STIEBER)
 
 # Let LLVM reassociate sums so the inner loops over axial modes vectorise; no
 # finite-math assumptions (NaN/inf checks must keep working).
@@ -81,10 +84,10 @@ _FAST = {"reassoc", "contract", "arcp"}
 @njit(cache=True)
 def film_thickness(params, e1, e2, h_node, h3_node, h3_face, h_face):
     """Dimensionless film H = h/c at the nodes and faces theta_{i+1/2}."""
-    sin_n = params[2]
-    cos_n = params[3]
-    sin_f = params[4]
-    cos_f = params[5]
+    sin_n = params.sin_node
+    cos_n = params.cos_node
+    sin_f = params.sin_face
+    cos_f = params.cos_face
     n = sin_n.shape[0]
     for i in range(n):
         h = 1.0 - e1 * sin_n[i] - e2 * cos_n[i]
@@ -109,17 +112,17 @@ def position_modes(params, e1, e2, q0, qs, qc):
     (Sherman-Morrison for the periodic corners, Numerical Recipes' ``cyclic``).
     The systems are strictly diagonally dominant, so no pivoting is needed.
     """
-    n = params[0]
-    sin_n = params[2]
-    cos_n = params[3]
-    inv_dth2 = params[7]
-    inv_dth = params[8]
-    lam = params[9]  # lambda_k / dzeta^2, negative
-    sig = params[10]  # transform of the z-constant right-hand side
-    tau = params[11]  # transform of the supply-pressure row (j = 1)
-    k_omega = params[14]
-    k_v = params[15]
-    supply_term = params[16]  # -p_supply / dzeta^2
+    n = params.n_theta
+    sin_n = params.sin_node
+    cos_n = params.cos_node
+    inv_dth2 = params.inv_dtheta2
+    inv_dth = params.inv_dtheta
+    lam = params.lam  # lambda_k / dzeta^2, negative
+    sig = params.sig  # transform of the z-constant right-hand side
+    tau = params.tau  # transform of the supply-pressure row (j = 1)
+    k_omega = params.k_omega
+    k_v = params.k_v
+    supply_term = params.supply_term  # -p_supply / dzeta^2
     nk = lam.shape[0]
     with_supply = supply_term != 0.0
     h = np.empty(n)
@@ -214,12 +217,12 @@ def integrate_modes(params, q0, qs, qc, v1, v2, cavitation, phat):
     when the field is symmetric), clips it for Gumbel cavitation, and sums
     with the Simpson weights: F = -R * sum w_theta w_z p (sin, cos).
     """
-    n = params[0]
-    a_sin = params[17]  # R * w_theta * sin(theta)
-    a_cos = params[18]  # R * w_theta * cos(theta)
-    basis = params[19]  # (n_rec, n_modes) sine basis at reconstructed nodes
-    w_rec = params[20]  # folded Simpson z-weights of reconstructed nodes
-    boundary = params[21]  # contribution of the prescribed end rows per unit (sum of w_z p there)
+    n = params.n_theta
+    a_sin = params.a_sin  # R * w_theta * sin(theta)
+    a_cos = params.a_cos  # R * w_theta * cos(theta)
+    basis = params.basis  # (n_rec, n_modes) sine basis at reconstructed nodes
+    w_rec = params.w_rec  # folded Simpson z-weights of reconstructed nodes
+    boundary = params.boundary  # contribution of the prescribed end rows per unit (sum of w_z p there)
     nk = q0.shape[1]
     nj = basis.shape[0]
     f1 = 0.0
@@ -246,19 +249,19 @@ def integrate_modes(params, q0, qs, qc, v1, v2, cavitation, phat):
 def film_force(params, x1, x2, v1, v2):
     """One force evaluation: journal at (x1, x2) [m] moving at (v1, v2) [m/s] -> (F1, F2) [N].
 
-    Gumbel or no cavitation (``params[1]``).  This is the compiled force
+    Gumbel or no cavitation (``params.cavitation``).  This is the compiled force
     kernel that ``fluidfilm.rotor`` integrates; a surrogate provides a kernel
     of the same signature.
     """
-    n = params[0]
-    inv_c = params[6]
-    nk = params[9].shape[0]
+    n = params.n_theta
+    inv_c = params.inv_c
+    nk = params.lam.shape[0]
     q0 = np.empty((n, nk))
     qs = np.empty((n, nk))
     qc = np.empty((n, nk))
     phat = np.empty(nk)
     position_modes(params, x1 * inv_c, x2 * inv_c, q0, qs, qc)
-    return integrate_modes(params, q0, qs, qc, v1, v2, params[1], phat)
+    return integrate_modes(params, q0, qs, qc, v1, v2, params.cavitation, phat)
 
 
 @njit(cache=True, parallel=True)
@@ -277,10 +280,10 @@ def forces_product(params, x, v, out):
     One factorisation per position (the pressure is linear in the velocity
     before cavitation), parallel over positions.
     """
-    n = params[0]
-    inv_c = params[6]
-    nk = params[9].shape[0]
-    cav = params[1]
+    n = params.n_theta
+    inv_c = params.inv_c
+    nk = params.lam.shape[0]
+    cav = params.cavitation
     for p in prange(x.shape[0]):
         q0 = np.empty((n, nk))
         qs = np.empty((n, nk))
@@ -296,9 +299,9 @@ def forces_product(params, x, v, out):
 @njit(cache=True)
 def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
     """Pressure before cavitation on the whole (n_theta, n_z) grid, boundaries included."""
-    n = params[0]
-    inv_c = params[6]
-    nk = params[9].shape[0]
+    n = params.n_theta
+    inv_c = params.inv_c
+    nk = params.lam.shape[0]
     q0 = np.empty((n, nk))
     qs = np.empty((n, nk))
     qc = np.empty((n, nk))
@@ -328,15 +331,15 @@ def psor_swift_stieber(params, x1, x2, v1, v2, p, omega_sor, tol, max_iter):
     -1 if ``max_iter`` sweeps did not reach ``tol`` (max change relative to
     the largest pressure).
     """
-    n = params[0]
-    sin_n = params[2]
-    cos_n = params[3]
-    inv_c = params[6]
-    inv_dth2 = params[7]
-    inv_dth = params[8]
-    inv_dz2 = params[12]
-    k_omega = params[14]
-    k_v = params[15]
+    n = params.n_theta
+    sin_n = params.sin_node
+    cos_n = params.cos_node
+    inv_c = params.inv_c
+    inv_dth2 = params.inv_dtheta2
+    inv_dth = params.inv_dtheta
+    inv_dz2 = params.inv_dzeta2
+    k_omega = params.k_omega
+    k_v = params.k_v
     nz = p.shape[1]
     h = np.empty(n)
     h3 = np.empty(n)
@@ -380,9 +383,9 @@ def psor_swift_stieber(params, x1, x2, v1, v2, p, omega_sor, tol, max_iter):
 @njit(cache=True)
 def integrate_field(params, p):
     """Simpson integral of a full (n_theta, n_z) field: F = -R sum w_theta w_z p (sin, cos)."""
-    a_sin = params[17]
-    a_cos = params[18]
-    w_z = params[22]
+    a_sin = params.a_sin
+    a_cos = params.a_cos
+    w_z = params.w_z
     n = p.shape[0]
     f1 = 0.0
     f2 = 0.0
@@ -398,16 +401,16 @@ def integrate_field(params, p):
 @njit(cache=True)
 def film_force_ss(params, x1, x2, v1, v2):
     """One force evaluation with Swift-Stieber cavitation (same signature as ``film_force``)."""
-    n = params[0]
-    full_basis = params[26]
+    n = params.n_theta
+    full_basis = params.full_basis
     nz = full_basis.shape[0] + 2
     p = np.empty((n, nz))
-    linear_field(params, x1, x2, v1, v2, full_basis, params[27], p)
+    linear_field(params, x1, x2, v1, v2, full_basis, params.p_supply, p)
     for i in range(n):
         for j in range(nz):
             if p[i, j] < 0.0:
                 p[i, j] = 0.0
-    it = psor_swift_stieber(params, x1, x2, v1, v2, p, params[23], params[24], params[25])
+    it = psor_swift_stieber(params, x1, x2, v1, v2, p, params.sor_omega, params.sor_tol, params.sor_max_iter)
     if it < 0:
         raise RuntimeError("projected SOR (Swift-Stieber cavitation) did not converge; raise sor_max_iter")
     return integrate_field(params, p)
@@ -440,17 +443,13 @@ def general_linear_field(gp, x1, x2, v1, v2, out):
     angle's line as a border unknown (P_i = x_i + Y_i P_0), then the first
     angle's equation for P_0.  O(n_theta n_z^3); used when h depends on z.
 
-    gp layout (``conical.build_general_params``): 0 n_theta, 1 cavitation,
-    2-5 sin/cos at nodes and faces, 6 c(z) at nodes, 7 c(z) at half nodes,
-    8 R(z) at nodes, 9 R(z) at half nodes, 10 1/c_ref, 11 1/dtheta^2,
-    12 1/dtheta, 13 cos^2(alpha)/dz^2, 14 K_omega, 15 K_v, 16 p_supply,
-    17-18 w_theta sin/cos, 19 w_z R(z), 20 w_theta.
+    ``gp``: a ``params.GeneralParams`` (``conical.build_general_params``).
     """
-    n = gp[0]
-    sin_n, cos_n, sin_f, cos_f = gp[2], gp[3], gp[4], gp[5]
-    c_node, c_half, r_node, r_half = gp[6], gp[7], gp[8], gp[9]
-    inv_cr, inv_dth2, inv_dth, cz = gp[10], gp[11], gp[12], gp[13]
-    k_omega, k_v, p_s = gp[14], gp[15], gp[16]
+    n = gp.n_theta
+    sin_n, cos_n, sin_f, cos_f = gp.sin_node, gp.cos_node, gp.sin_face, gp.cos_face
+    c_node, c_half, r_node, r_half = gp.c_node, gp.c_half, gp.r_node, gp.r_half
+    inv_cr, inv_dth2, inv_dth, cz = gp.inv_c_ref, gp.inv_dtheta2, gp.inv_dtheta, gp.axial_coef
+    k_omega, k_v, p_s = gp.k_omega, gp.k_v, gp.p_supply
     nz = c_node.shape[0]
     m = nz - 2
     # block coefficients
@@ -539,10 +538,10 @@ def general_linear_field(gp, x1, x2, v1, v2, out):
 
 @njit(cache=True)
 def general_force(gp, x1, x2, v1, v2):
-    """Force (F1, F2) of the general path; Gumbel clipping or none (``gp[1]``)."""
-    p = np.empty((gp[0], gp[6].shape[0]))
+    """Force (F1, F2) of the general path; Gumbel clipping or none (``gp.cavitation``)."""
+    p = np.empty((gp.n_theta, gp.c_node.shape[0]))
     general_linear_field(gp, x1, x2, v1, v2, p)
-    f1, f2, _ = film_integrals(gp[17], gp[18], gp[20], gp[19], p, gp[1] == CAV_GUMBEL)
+    f1, f2, _ = film_integrals(gp.a_sin, gp.a_cos, gp.w_theta, gp.w_zr, p, gp.cavitation == CAV_GUMBEL)
     return f1, f2
 
 

@@ -7,17 +7,30 @@ sections split) is our default and a config value.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from ..bearing import ConicalBearing, JournalBearing
-from . import kernels
+from ..models import ReferenceModel
 from ..states import as_state_pairs
+from . import kernels
 from .conical import ConicalReynoldsSolver
+from .params import FilmParams
 from .solver import ReynoldsSolver
 
 
-def make_solver(bearing, n_theta: int, n_z: int, cavitation: str = "gumbel"):
+class GradedParams(NamedTuple):
+    """Kernel parameters of the graded model: both grids' and the radius [m] where the dense one starts."""
+
+    coarse: FilmParams
+    dense: FilmParams
+    dense_radius: float
+
+
+def make_solver(bearing: JournalBearing | ConicalBearing, n_theta: int, n_z: int,
+                cavitation: str = "gumbel") -> ReynoldsSolver | ConicalReynoldsSolver:
     """The finite-difference solver for this kind of bearing (cylindrical or conical)."""
     if isinstance(bearing, ConicalBearing):
         return ConicalReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation)
@@ -26,21 +39,21 @@ def make_solver(bearing, n_theta: int, n_z: int, cavitation: str = "gumbel"):
 
 @njit(cache=True)
 def graded_force(params, x1, x2, v1, v2):
-    """Force kernel of the graded model: params = (coarse, dense, eps_threshold * c)."""
-    if x1 * x1 + x2 * x2 < params[2] * params[2]:
-        return kernels.film_force(params[0], x1, x2, v1, v2)
-    return kernels.film_force(params[1], x1, x2, v1, v2)
+    """Force kernel of the graded model (``GradedParams``)."""
+    if x1 * x1 + x2 * x2 < params.dense_radius * params.dense_radius:
+        return kernels.film_force(params.coarse, x1, x2, v1, v2)
+    return kernels.film_force(params.dense, x1, x2, v1, v2)
 
 
 @njit(cache=True)
 def graded_force_ss(params, x1, x2, v1, v2):
     """``graded_force`` with Swift-Stieber cavitation."""
-    if x1 * x1 + x2 * x2 < params[2] * params[2]:
-        return kernels.film_force_ss(params[0], x1, x2, v1, v2)
-    return kernels.film_force_ss(params[1], x1, x2, v1, v2)
+    if x1 * x1 + x2 * x2 < params.dense_radius * params.dense_radius:
+        return kernels.film_force_ss(params.coarse, x1, x2, v1, v2)
+    return kernels.film_force_ss(params.dense, x1, x2, v1, v2)
 
 
-class GradedReynoldsModel:
+class GradedReynoldsModel(ReferenceModel):
     """Reference force model with the paper's grid policy (same interface as ``ReynoldsSolver``).
 
     For a conical bearing (matched cones) the sub-solvers run the conical
@@ -48,13 +61,14 @@ class GradedReynoldsModel:
     then relative to the current clearance c_r(s).
     """
 
-    def __init__(self, bearing: JournalBearing | ConicalBearing, coarse=(30, 30), dense=(55, 55),
+    def __init__(self, bearing: JournalBearing | ConicalBearing, coarse: tuple[int, int] = (30, 30),
+                 dense: tuple[int, int] = (55, 55),
                  eps_threshold: float = 0.9, cavitation: str = "gumbel"):
         if not 0.0 < float(eps_threshold) <= 1.0:
             raise ValueError(f"eps_threshold must lie in (0, 1], got {eps_threshold!r}")
         self.coarse = make_solver(bearing, *coarse, cavitation=cavitation)
         self.dense = make_solver(bearing, *dense, cavitation=cavitation)
-        if getattr(self.coarse, "method", "fast") != "fast":
+        if isinstance(self.coarse, ConicalReynoldsSolver) and self.coarse.method != "fast":
             raise ValueError("the graded model needs the fast solver path (a conical bearing with matched cones)")
         self.eps_threshold = float(eps_threshold)
         self.cavitation = cavitation
@@ -63,27 +77,32 @@ class GradedReynoldsModel:
         self._kernel = graded_force_ss if ss else graded_force
 
     def _rebuild(self) -> None:
-        self.params = (self.coarse.params, self.dense.params, self.eps_threshold * self.clearance)
+        self.params = GradedParams(self.coarse.params, self.dense.params, self.eps_threshold * self.clearance)
 
     @property
     def clearance(self) -> float:
         """Radial clearance at the current setting [m]."""
-        return float(getattr(self.coarse, "clearance", self.coarse.bearing.clearance))
+        return self.coarse.clearance
+
+    @property
+    def adjustable(self) -> bool:
+        """True for a conical bearing, whose sleeve moves."""
+        return isinstance(self.coarse, ConicalReynoldsSolver)
 
     @property
     def sleeve(self) -> float:
-        return float(getattr(self.coarse, "sleeve", 0.0))
+        return self.coarse.sleeve if isinstance(self.coarse, ConicalReynoldsSolver) else 0.0
 
     def set_sleeve(self, sleeve: float) -> None:
         """Move the sleeve of an active (conical) bearing [m]."""
-        if not hasattr(self.coarse, "set_sleeve"):
+        if not (isinstance(self.coarse, ConicalReynoldsSolver) and isinstance(self.dense, ConicalReynoldsSolver)):
             raise ValueError(f"{type(self.bearing).__name__} has no sleeve to move")
         self.coarse.set_sleeve(sleeve)
         self.dense.set_sleeve(sleeve)
         self._rebuild()
 
     @property
-    def bearing(self) -> JournalBearing:
+    def bearing(self) -> JournalBearing | ConicalBearing:
         return self.coarse.bearing
 
     @property
@@ -97,10 +116,26 @@ class GradedReynoldsModel:
         n_z = np.where(dense, self.dense.n_z, self.coarse.n_z)
         return n_theta, n_z
 
+    def forces_product(self, X, V, eps=None) -> np.ndarray:
+        """Forces for every velocity at every position: X (P, 2), V (Q, 2) -> (P, Q, 2).
+
+        Each position on its grid (``eps``: the positions' eccentricity ratios, when the caller
+        has them exactly, e.g. a dataset grid; by default |X| / clearance); one factorisation per
+        position serves all its velocities.
+        """
+        x = np.asarray(X, dtype=np.float64).reshape(-1, 2)
+        e = np.hypot(x[:, 0], x[:, 1]) / self.clearance if eps is None else np.asarray(eps, dtype=float).ravel()
+        dense = e >= self.eps_threshold
+        out = np.empty((x.shape[0], np.asarray(V).reshape(-1, 2).shape[0], 2))
+        for solver, rows in ((self.coarse, ~dense), (self.dense, dense)):
+            if rows.any():
+                out[rows] = solver.forces_product(x[rows], V)
+        return out
+
     def forces(self, X, V) -> np.ndarray:
         x, v, shape = as_state_pairs(X, V, self.clearance)
         out = np.empty_like(x)
-        dense = x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] >= self.params[2] * self.params[2]
+        dense = x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] >= self.params.dense_radius * self.params.dense_radius
         # each sub-batch runs the solvers' own parallel kernels (numba's parallel
         # loops cannot take the nested parameter tuple of ``graded_force``)
         for solver, rows in ((self.coarse, ~dense), (self.dense, dense)):

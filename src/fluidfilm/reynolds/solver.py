@@ -9,30 +9,27 @@ offers the public, vectorised API shared by every force model:
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from ..bearing import JournalBearing
+from ..models import ReferenceModel
 from ..states import as_state_pairs, check_states
 from . import kernels
 from .mesh import FilmMesh
+from .params import Cavitation, FilmParams
 
 CAVITATION_MODELS = ("gumbel", "swift-stieber", "none")
-_CAV_CODES = {"gumbel": kernels.CAV_GUMBEL, "none": kernels.CAV_NONE, "swift-stieber": kernels.CAV_SWIFT_STIEBER}
 
 
-def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str,
-                 sor_omega: float, sor_tol: float, sor_max_iter: int) -> tuple:
-    """Kernel parameters, a flat tuple (numba-friendly).  Layout:
+def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str | Cavitation,
+                 sor_omega: float, sor_tol: float, sor_max_iter: int) -> FilmParams:
+    """Kernel parameters of the cylindrical bearing (``params.FilmParams``: the fields are named there).
 
-    0 n_theta, 1 cavitation code, 2-3 sin/cos theta at nodes, 4-5 sin/cos at
-    faces theta_{i+1/2}, 6 1/c, 7 1/dtheta^2, 8 1/dtheta, 9 lambda_k/dzeta^2,
-    10 sigma_k (transform of a z-constant vector), 11 tau_k (transform of the
-    row next to the supply end), 12 1/dzeta^2, 13 R, 14 K_omega, 15 K_v,
-    16 -p_supply/dzeta^2, 17-18 R w_theta sin/cos theta, 19 sine basis at the
-    reconstructed axial nodes, 20 their (folded) Simpson weights, 21 boundary
-    rows' contribution w_z[0] p_supply, 22 w_z, 23-25 PSOR omega, tol,
-    max_iter, 26 sine basis at every interior node, 27 p_supply.
+    The axial modes are the sine modes of the second difference; with no supply
+    pressure only the odd ones (the field is symmetric about mid-length) and
+    only the nodes of one half are reconstructed (``basis``, ``w_rec``).
     """
     r = bearing.radius
     c = bearing.clearance
@@ -62,34 +59,41 @@ def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str,
     basis = np.ascontiguousarray(full_basis[j_rec - 1])
     a_sin = r * mesh.w_theta * np.sin(mesh.theta)
     a_cos = r * mesh.w_theta * np.cos(mesh.theta)
-    return (
-        n,
-        _CAV_CODES[cavitation],
-        np.sin(mesh.theta), np.cos(mesh.theta), np.sin(theta_f), np.cos(theta_f),
-        1.0 / c,
-        1.0 / mesh.dtheta**2, 1.0 / mesh.dtheta,
-        lam, sig, tau,
-        1.0 / dzeta**2,
-        r,
-        6.0 * mu * bearing.omega * r**2 / c**2,
-        12.0 * mu * r**2 / c**3,
-        -p_s / dzeta**2,
-        a_sin, a_cos,
-        basis, w_rec,
-        w_z[0] * p_s,
-        w_z.copy(),
-        float(sor_omega), float(sor_tol), int(sor_max_iter),
-        full_basis,
-        float(p_s),
+    return FilmParams(
+        n_theta=n,
+        cavitation=int(Cavitation.parse(cavitation)),
+        sin_node=np.sin(mesh.theta), cos_node=np.cos(mesh.theta),
+        sin_face=np.sin(theta_f), cos_face=np.cos(theta_f),
+        inv_c=1.0 / c,
+        inv_dtheta2=1.0 / mesh.dtheta**2, inv_dtheta=1.0 / mesh.dtheta,
+        lam=lam, sig=sig, tau=tau,
+        inv_dzeta2=1.0 / dzeta**2,
+        radius=r,
+        k_omega=6.0 * mu * bearing.omega * r**2 / c**2,
+        k_v=12.0 * mu * r**2 / c**3,
+        supply_term=-p_s / dzeta**2,
+        a_sin=a_sin, a_cos=a_cos,
+        basis=basis, w_rec=w_rec,
+        boundary=w_z[0] * p_s,
+        w_z=w_z.copy(),
+        sor_omega=float(sor_omega), sor_tol=float(sor_tol), sor_max_iter=int(sor_max_iter),
+        full_basis=full_basis,
+        p_supply=float(p_s),
     )
 
 
-class _GridSolver:
+class _GridSolver(ReferenceModel):
     """Read-only description shared by the finite-difference solvers (``_bearing`` and ``mesh`` set by them)."""
 
-    @property
-    def bearing(self):
-        return self._bearing
+    mesh: FilmMesh
+    params: Any  # FilmParams, or GeneralParams on the conical general path
+    _c: float
+
+    def forces(self, X, V) -> np.ndarray:
+        raise NotImplementedError
+
+    def _separable(self) -> bool:
+        raise NotImplementedError
 
     @property
     def n_theta(self) -> int:
@@ -146,10 +150,12 @@ class ReynoldsSolver(_GridSolver):
     """
 
     def __init__(self, bearing: JournalBearing, n_theta: int = 30, n_z: int = 30,
-                 cavitation: str = "gumbel", sor_omega: float | None = None,
+                 cavitation: str | Cavitation = "gumbel", sor_omega: float | None = None,
                  sor_tol: float = 1e-10, sor_max_iter: int = 200_000):
         if not isinstance(bearing, JournalBearing):
             raise ValueError(f"bearing must be a JournalBearing, got {type(bearing).__name__}")
+        if isinstance(cavitation, Cavitation):
+            cavitation = cavitation.label
         if cavitation not in CAVITATION_MODELS:
             raise ValueError(f"unknown cavitation model {cavitation!r}; choose one of {CAVITATION_MODELS}")
         self._bearing = bearing
@@ -214,7 +220,7 @@ class ReynoldsSolver(_GridSolver):
         np.maximum(p, 0.0, out=p)
         if self.cavitation == "swift-stieber":
             it = kernels.psor_swift_stieber(self.params, x1, x2, v1, v2, p,
-                                            self.params[23], self.params[24], self.params[25])
+                                            self.params.sor_omega, self.params.sor_tol, self.params.sor_max_iter)
             if it < 0:
                 raise RuntimeError("projected SOR did not converge; raise sor_max_iter")
         return p
@@ -224,7 +230,7 @@ class ReynoldsSolver(_GridSolver):
         xa, va, _ = as_state_pairs(x, v, self._c)
         out = np.empty((self.n_theta, self.n_z))
         kernels.linear_field(self.params, xa[0, 0], xa[0, 1], va[0, 0], va[0, 1],
-                             self.params[26], self.params[27], out)
+                             self.params.full_basis, self.params.p_supply, out)
         return out
 
     def integrate(self, p) -> np.ndarray:

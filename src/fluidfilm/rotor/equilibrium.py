@@ -42,6 +42,7 @@ def equilibrium(model, load, guess: tuple[float, float] | None = None, eps_max: 
             best = sol
         if best.cost < 1e-20:
             break
+    assert best is not None  # starts is never empty
     eps, phi = float(best.x[0]), float(best.x[1])
     X = _polar(eps, phi, c)
     attitude = math.degrees((phi_load - phi + math.pi) % (2 * math.pi) - math.pi)

@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from ..models import ForceModel
 from .model import Rotor
 
 OK, CONTACT, CONTACT_STAGE, NONFINITE = 0, 1, 2, 3
@@ -166,23 +167,23 @@ def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_
     return n_rec, status, t, n_evals
 
 
-def simulate(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
+def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
              eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
              max_substeps: int = 256, t0: float = 0.0) -> Trajectory:
-    """Integrate the rotor in ``model`` (anything with ``.forces``, ``.bearing``, ``.force_kernel``).
+    """Integrate the rotor in ``model`` (a ``fluidfilm.models.ForceModel``: its compiled ``force_kernel``).
 
     Starts at the bearing centre at rest unless ``x0``/``v0`` are given.
     Returns every ``record_every``-th step.
     """
     if not isinstance(rotor, Rotor):
         raise ValueError(f"rotor must be a Rotor, got {type(rotor).__name__}")
-    kernel_spec = getattr(model, "force_kernel", None)
-    if kernel_spec is None:
-        raise ValueError(f"{type(model).__name__} offers no compiled force_kernel; the integrator needs one")
-    kernel, params = kernel_spec
+    if not isinstance(model, ForceModel):
+        raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.models.ForceModel: forces, "
+                         "force_kernel, bearing, clearance, validity, domain report); the integrator needs one")
+    kernel, params = model.force_kernel
     bearing = model.bearing
     # an active bearing reports the clearance of its current control setting
-    c = float(getattr(model, "clearance", bearing.clearance))
+    c = float(model.clearance)
     for name, value in (("t_end", t_end), ("dt", dt)):
         if not (math.isfinite(value) and value > 0.0):
             raise ValueError(f"{name} must be a positive finite time in s, got {value!r}")
@@ -211,9 +212,7 @@ def simulate(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=No
     consts = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega, float(rotor.imbalance_direction),
               rotor.external_force[0], rotor.external_force[1] + rotor.mass * rotor.gravity, c * c,
               u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0)
-    reset = getattr(model, "reset_domain_counter", None)
-    if reset is not None:
-        reset()
+    model.reset_domain_counter()
     t_start = time.perf_counter()
     n_rec, status, t_stop, n_evals = _rk4_run(kernel, params, consts, x0, v0, float(t0), float(dt), n_steps,
                                               record_every, float(eps_stop), float(eps_substep),
@@ -225,11 +224,10 @@ def simulate(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=No
         text = f"contact: eccentricity reached eps_stop={eps_stop} at t={t_stop:.6g} s"
     else:
         text = f"diverged: non-finite state after t={t_stop:.6g} s"
-    report = getattr(model, "domain_report", None)
-    note = report() if report is not None else None
+    note = model.domain_report()
     if note:
         text = f"{text}; {note}"
-        warnings.warn(f"{getattr(model, 'name', type(model).__name__)}: {note} during the simulation",
+        warnings.warn(f"{model.name}: {note} during the simulation",
                       RuntimeWarning, stacklevel=2)
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
                       t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=wall,

@@ -6,17 +6,25 @@ used to check the integrator against analytic responses.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from ..bearing import JournalBearing
+from ..models import WHOLE_FILM, ValidityDomain
+
+
+class LinearParams(NamedTuple):
+    stiffness: float  # K [N/m]
+    damping: float    # C [N s/m]
 
 
 @njit(cache=True)
 def linear_force(params, x1, x2, v1, v2):
-    """Force kernel: params = (K, C)."""
-    return -params[0] * x1 - params[1] * v1, -params[0] * x2 - params[1] * v2
+    """Force kernel (``LinearParams``)."""
+    k, c = params.stiffness, params.damping
+    return -k * x1 - c * v1, -k * x2 - c * v2
 
 
 @dataclass(frozen=True)
@@ -25,9 +33,25 @@ class LinearBearing:
     stiffness: float
     damping: float
 
+    name = "linear"
+
     @property
     def force_kernel(self):
-        return linear_force, (float(self.stiffness), float(self.damping))
+        return linear_force, LinearParams(float(self.stiffness), float(self.damping))
+
+    @property
+    def clearance(self) -> float:
+        return float(self.bearing.clearance)
+
+    @property
+    def validity(self) -> ValidityDomain:
+        return WHOLE_FILM
+
+    def reset_domain_counter(self) -> None:
+        """Nothing to count: a linear law holds everywhere."""
+
+    def domain_report(self) -> str | None:
+        return None
 
     def forces(self, X, V) -> np.ndarray:
         X = np.asarray(X, dtype=float)

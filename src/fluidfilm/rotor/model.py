@@ -78,7 +78,7 @@ class Rotor:
         if not 0.0 < s <= 1.0:
             raise ValueError(f"load_share must lie in (0, 1], got {load_share!r}")
         return cls(mass=total_mass * s, imbalance=total_imbalance * s,
-                   external_force=tuple(s * float(f) for f in total_external_force), **kwargs)
+                   external_force=(s * float(total_external_force[0]), s * float(total_external_force[1])), **kwargs)
 
     def static_load(self) -> tuple[float, float]:
         """Constant load on the bearing: weight plus external force [N]."""

@@ -6,11 +6,10 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
-from ..bearing import bearing_from_dict
+from ..data.schema import dataset_bearing, load_dataset, load_test_set, training_domain
 from .inference import SurrogateForceModel
-from .training import ForceDataModule, read_dataset, train_network
+from .training import ForceDataModule, train_network
 
 EPS_BANDS = ((0.0, 0.5), (0.5, 0.7), (0.7, 0.9), (0.9, 1.0))
 
@@ -32,8 +31,8 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
     Returns the force model and a report with per-network and total
     training times (to the target validation error, and in all).
     """
-    frame, meta = read_dataset(dataset_dir)
-    bearing = bearing_from_dict(meta["bearing"])
+    frame, meta = load_dataset(dataset_dir)
+    bearing = dataset_bearing(meta)
     boundaries = list(split_cfg.get("boundaries", []))
     blend = float(split_cfg.get("blend_width", 0.0))
     nets, scalings, per_net = [], [], []
@@ -50,8 +49,7 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
         per_net.append({k: res[k] for k in ("time_to_target_s", "train_time_s", "epochs", "epoch_at_target",
                                             "val_rel_rmse", "n_train", "n_val")} | {"eps_low": lo, "eps_high": hi})
     reached = all(p["time_to_target_s"] is not None for p in per_net)
-    spec = meta["spec"]
-    domain = [[s["eps_low"], s["eps_high"], s["v_max"]] for s in spec["velocity_sections"]]
+    domain = training_domain(meta)
     report = {
         "networks": per_net,
         "train_time_s": float(sum(p["train_time_s"] for p in per_net)),
@@ -72,7 +70,7 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
 def held_out_errors(model, testset_dir, floor_N: float = 0.1) -> dict:
     """Relative force error |F_model - F| / max(|F|, floor) on the held-out set: median and 99th percentile,
     overall and per eccentricity band."""
-    df = pd.read_parquet(testset_dir)
+    df = load_test_set(testset_dir)
     X = df[["X1", "X2"]].to_numpy()
     V = df[["V1", "V2"]].to_numpy()
     F = df[["F1", "F2"]].to_numpy()

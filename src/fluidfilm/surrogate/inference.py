@@ -24,16 +24,60 @@ from __future__ import annotations
 import json
 import math
 import warnings
+from enum import IntEnum
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
+from ..models import ValidityDomain
 from ..states import as_state_pairs
 from .scaling import Scaling
 
-ACTIVATIONS = {"tanh": 0, "relu": 1, "silu": 2, "sigmoid": 3}
+class Activation(IntEnum):
+    """Hidden-layer activation of the networks (the kernel reads the integer value)."""
+
+    TANH = 0
+    RELU = 1
+    SILU = 2
+    SIGMOID = 3
+
+
+class Structure(IntEnum):
+    """PLAIN: the network gives the force; DAMPING: y = S(position) + C(position, velocity) v."""
+
+    PLAIN = 0
+    DAMPING = 1
+
+
+#: activation name (as in configs and model.json) -> kernel code
+ACTIVATIONS = {a.name.lower(): int(a) for a in Activation}
+# plain ints for the compiled code
+_TANH, _RELU, _SILU = int(Activation.TANH), int(Activation.RELU), int(Activation.SILU)
+_DAMPING = int(Structure.DAMPING)
+
+
+class SurrogateParams(NamedTuple):
+    """Parameters of ``surrogate_force``: R networks (regions) and their routing, scaling and domain."""
+
+    weights: tuple            # (R,) flat weights of each region's network(s) (W stored transposed)
+    tables: tuple             # (R,) (n_layers, 4) int tables [weight offset, bias offset, n_in, n_out]
+    n_layers: np.ndarray      # (R,) int
+    activation: int           # an ``Activation`` value
+    scalings: np.ndarray      # (R, 22) ``Scaling.kernel_row()`` of each region
+    boundaries: np.ndarray    # (R-1,) eccentricity ratios between regions
+    blend_width: float        # smoothstep blend across each boundary (0: hard switch)
+    domain: np.ndarray        # (S, 3) [eps_low, eps_high, v_max] of the training data
+    eps_max: float            # largest eccentricity ratio of the training data
+    counter: np.ndarray       # (1,) int64: evaluations outside the domain (mutable)
+    setting: np.ndarray       # (2,) [1/c^2 of the current clearance, sleeve] (mutable)
+    max_width: int            # widest layer
+    scratch: np.ndarray       # (3, max_width) work rows: two layer buffers and the inputs
+    structure: int            # a ``Structure`` value
+    damping_tables: tuple     # (R,) layer tables of the damping-matrix networks
+    damping_n_layers: np.ndarray  # (R,) int
 
 
 @njit(cache=True, fastmath={"reassoc", "contract"}, inline="always")
@@ -50,17 +94,17 @@ def _dense(w, b, src, dst, n_in, n_out):
 
 @njit(cache=True, inline="always")
 def _activate(buf, n, act):
-    if act == 0:
+    if act == _TANH:
         # tanh through one exp (libm's tanh is about twice as slow); exact to rounding
         for o in range(n):
             x = buf[o]
             t = math.exp(-2.0 * abs(x))
             y = (1.0 - t) / (1.0 + t)
             buf[o] = y if x >= 0.0 else -y
-    elif act == 1:
+    elif act == _RELU:
         for o in range(n):
             buf[o] = max(buf[o], 0.0)
-    elif act == 2:
+    elif act == _SILU:
         for o in range(n):
             buf[o] = buf[o] / (1.0 + math.exp(-buf[o]))
     else:
@@ -90,17 +134,18 @@ def _mlp(weights, table, n_layers, act, z, buf_a, buf_b):
 
 @njit(cache=True, inline="always")
 def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
-    weights, tables, n_layers, act, scal = params[0], params[1], params[2], params[3], params[4]
+    weights, tables, n_layers, act, scal = (params.weights, params.tables, params.n_layers, params.activation,
+                                            params.scalings)
     s = scal[r]
     physics = s[0] >= 1.0  # 1: physics, 2: physics_v
     c, omega, fscale, power = s[1], s[2], s[3], s[4]
     if s[21] == 1.0:
         # sleeve-aware: normalise by the current clearance c_r; forces scale as (c/c_r)^2
-        inv_c2 = params[10][0]
+        inv_c2 = params.setting[0]
         fscale = fscale * c * c * inv_c2
         c = 1.0 / math.sqrt(inv_c2)
     polar = s[19] == 1.0
-    z = params[12][2]
+    z = params.scratch[2]
     er1, er2 = 0.0, 1.0
     if polar:
         # the journal's frame: along (e_r) and across (e_t) the line of centres
@@ -120,16 +165,16 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         n_in = 4
     # extra inputs (the sleeve displacement of an active bearing) come from the control array
     for k in range(int(s[20])):
-        z[n_in] = params[10][1 + k]
+        z[n_in] = params.setting[1 + k]
         n_in += 1
     for k in range(n_in):
         z[k] = (z[k] - s[5 + k]) / s[10 + k]
     out = _mlp(weights[r], tables[r], n_layers[r], act, z, buf_a, buf_b)
     y1 = out[0]
     y2 = out[1]
-    if params[13] == 1:
+    if params.structure == _DAMPING:
         # damping structure: y = S(position) + C(position, velocity) v, v the velocity in units of c omega
-        out = _mlp(weights[r], params[14][r], params[15][r], act, z, buf_a, buf_b)
+        out = _mlp(weights[r], params.damping_tables[r], params.damping_n_layers[r], act, z, buf_a, buf_b)
         vo = n_in - 2
         w1 = z[vo] * s[10 + vo] + s[5 + vo]
         w2 = z[vo + 1] * s[11 + vo] + s[6 + vo]
@@ -152,20 +197,14 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
 
 @njit(cache=True)
 def surrogate_force(params, x1, x2, v1, v2):
-    """Force kernel of a (possibly split) network: same signature as the reference solver's.
-
-    params = (weights[R], tables[R], n_layers(R,), activation, scalings(R, 22),
-              boundaries(R-1,), blend_width, domain(S, 3) [eps_low, eps_high, v_max],
-              eps_max, counter(1,) int64, setting(2,) [1/c^2 of the current clearance, sleeve],
-              max_width, scratch(3, max_width),
-              structure (0 plain, 1 damping), damping tables[R], damping n_layers(R,))
-    """
-    bounds = params[5]
-    blend = params[6]
-    domain = params[7]
-    eps_max = params[8]
-    counter = params[9]
-    inv_c2 = params[10][0]
+    """Force kernel of a (possibly split) network: same signature as the reference solver's
+    (``params``: a ``SurrogateParams``)."""
+    bounds = params.boundaries
+    blend = params.blend_width
+    domain = params.domain
+    eps_max = params.eps_max
+    counter = params.counter
+    inv_c2 = params.setting[0]
     e2 = (x1 * x1 + x2 * x2) * inv_c2
     eps = math.sqrt(e2)
     # training-domain check (counted, never fatal)
@@ -179,8 +218,8 @@ def surrogate_force(params, x1, x2, v1, v2):
     if outside:
         counter[0] += 1
     # preallocated scratch rows (the integrator and the batch loop are serial)
-    buf_a = params[12][0]
-    buf_b = params[12][1]
+    buf_a = params.scratch[0]
+    buf_b = params.scratch[1]
     nb = bounds.shape[0]
     r = 0
     while r < nb and eps >= bounds[r]:
@@ -225,7 +264,7 @@ def pack_network(layers: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarra
 class SurrogateForceModel:
     """A trained network (or split set of networks) with the reference model's interface."""
 
-    def __init__(self, bearing: JournalBearing, networks: list, scalings: list[Scaling], activation: str,
+    def __init__(self, bearing: JournalBearing | ConicalBearing, networks: list, scalings: list[Scaling], activation: str,
                  boundaries=(), blend_width: float = 0.0, domain=None, eps_max: float = 1.0,
                  name: str = "surrogate", info: dict | None = None, structure: str = "plain"):
         """``networks``: one per region, each a list of (W (out, in), b) layers, or with
@@ -280,26 +319,39 @@ class SurrogateForceModel:
             raise ValueError("the damping structure takes no extra inputs")
         if self._n_extra and not isinstance(bearing, ConicalBearing):
             raise ValueError(f"extra inputs {scalings[0].extras} need an active (conical) bearing")
-        self.params = (
-            tuple(p[0] for p in packed), tuple(p[1] for p in packed),
-            np.array([t.shape[0] for _, t in packed], dtype=np.int64), ACTIVATIONS[activation],
-            np.stack([s.kernel_row() for s in scalings]), bounds, self.blend_width, self.domain, self.eps_max,
-            self._counter, self._setting, max(max_width, 5),
-            np.zeros((3, max(max_width, 5))),
-            1 if structure == "damping" else 0,
-            tuple(t for t, _ in damp), np.array([n for _, n in damp], dtype=np.int64),
+        self.params = SurrogateParams(
+            weights=tuple(p[0] for p in packed), tables=tuple(p[1] for p in packed),
+            n_layers=np.array([t.shape[0] for _, t in packed], dtype=np.int64),
+            activation=int(Activation[activation.upper()]),
+            scalings=np.stack([s.kernel_row() for s in scalings]), boundaries=bounds, blend_width=self.blend_width,
+            domain=self.domain, eps_max=self.eps_max,
+            counter=self._counter, setting=self._setting, max_width=max(max_width, 5),
+            scratch=np.zeros((3, max(max_width, 5))),
+            structure=int(Structure.DAMPING if structure == "damping" else Structure.PLAIN),
+            damping_tables=tuple(t for t, _ in damp),
+            damping_n_layers=np.array([n for _, n in damp], dtype=np.int64),
         )
         self._warned = False
 
     @property
-    def bearing(self) -> JournalBearing:
+    def bearing(self) -> JournalBearing | ConicalBearing:
         return self._bearing
 
     @property
     def force_kernel(self):
         return surrogate_force, self.params
 
+    @property
+    def validity(self) -> ValidityDomain:
+        """The training data's range, as the kernel counts it."""
+        return ValidityDomain(self.eps_max, tuple((float(a), float(b), float(v)) for a, b, v in self.domain))
+
     # ------------------------------------------------------------------ the control input (active bearings)
+    @property
+    def adjustable(self) -> bool:
+        """True when the network takes the sleeve as an input."""
+        return bool(self._n_extra)
+
     @property
     def sleeve(self) -> float:
         return float(self._setting[1])
@@ -311,7 +363,7 @@ class SurrogateForceModel:
 
     def set_sleeve(self, sleeve: float) -> None:
         """Move the sleeve [m] (a surrogate of an active bearing takes it as an input)."""
-        if not self._n_extra:
+        if not self._n_extra or not isinstance(self._bearing, ConicalBearing):
             raise ValueError(f"{self.name} takes no sleeve input")
         c = self._bearing.clearance_at(sleeve)
         self._setting[0] = 1.0 / c**2
@@ -384,7 +436,7 @@ def load_surrogate(path) -> SurrogateForceModel:
     meta = json.loads((d / "model.json").read_text())
     arrays = np.load(d / "surrogate.npz")
     structure = meta.get("structure", "plain")
-    networks = [[(arrays[f"r{r}_W{k}"], arrays[f"r{r}_b{k}"]) for k in range(n)]
+    networks: list = [[(arrays[f"r{r}_W{k}"], arrays[f"r{r}_b{k}"]) for k in range(n)]
                 for r, n in enumerate(meta["n_layers"])]
     if structure == "damping":
         networks = [(net, [(arrays[f"r{r}_dW{k}"], arrays[f"r{r}_db{k}"]) for k in range(meta["n_layers_damping"][r])])

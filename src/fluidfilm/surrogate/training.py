@@ -17,7 +17,6 @@ validation rows, in newtons.
 """
 from __future__ import annotations
 
-import json
 import math
 import time
 from pathlib import Path
@@ -28,7 +27,8 @@ import pandas as pd
 import torch
 from torch import nn
 
-from ..bearing import bearing_from_dict
+from ..bearing import ConicalBearing
+from ..data.schema import EXTRA_INPUTS, dataset_bearing, load_dataset
 from .scaling import Scaling
 
 _ACT = {"tanh": nn.Tanh, "relu": nn.ReLU, "silu": nn.SiLU, "sigmoid": nn.Sigmoid}
@@ -167,19 +167,8 @@ class _Batches(torch.utils.data.IterableDataset):
         return math.ceil(self.tensors[0].shape[0] / self.batch_size)
 
 
-def read_dataset(path, columns=("X1", "X2", "V1", "V2", "F1", "F2", "eps")) -> tuple[pd.DataFrame, dict]:
-    """The Parquet dataset and its metadata (bearing, config hash); the sleeve column S comes along if present."""
-    path = Path(path)
-    meta_file = path / "_metadata.json"
-    if not meta_file.exists():
-        raise ValueError(f"{path} is not a complete dataset (no _metadata.json); generate it first")
-    meta = json.loads(meta_file.read_text())
-    extra = [c for c in EXTRA_INPUTS if c in meta.get("columns", ()) and c not in columns]
-    return pd.read_parquet(path, columns=list(columns) + extra), meta
-
-
-# dataset columns that become extra network inputs when present (S: sleeve displacement, m)
-EXTRA_INPUTS = ("S",)
+# the data layer owns the schema and the reading (old name kept for callers)
+read_dataset = load_dataset
 
 
 class ForceDataModule(L.LightningDataModule):
@@ -206,8 +195,8 @@ class ForceDataModule(L.LightningDataModule):
     def setup(self, stage=None):
         if self.scaling is not None:
             return
-        df, meta = (self._table, self._meta) if self._table is not None else read_dataset(self.dataset_dir)
-        self.bearing = bearing_from_dict(meta["bearing"])
+        df, meta = (self._table, self._meta) if self._table is not None else load_dataset(self.dataset_dir)
+        self.bearing = dataset_bearing(meta)
         df = df[(df["eps"] >= self.eps_low) & (df["eps"] < self.eps_high)]
         if len(df) == 0:
             raise ValueError(f"no samples with eps in [{self.eps_low}, {self.eps_high})")
@@ -228,7 +217,8 @@ class ForceDataModule(L.LightningDataModule):
         self.scaling = Scaling.fit(self.scaling_kind, X[~is_val], V[~is_val], F[~is_val], b.clearance, b.omega,
                                    b.force_scale, self.power, self.frame,
                                    E=None if E is None else E[~is_val], extras=extras,
-                                   sleeve_gain=getattr(b, "tan_half_angle", 0.0) if extras == ("S",) else 0.0)
+                                   sleeve_gain=b.tan_half_angle if extras == ("S",) and isinstance(b, ConicalBearing)
+                                   else 0.0)
         z = self.scaling.inputs(X, V, E)
         y = self.scaling.targets(X, V, F, E)
         gain = self.scaling.gain(X, V, E)  # F = (network output unscaled) * gain
@@ -300,6 +290,7 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
     """
     L.seed_everything(seed, workers=True)
     dm.setup()
+    assert dm.scaling is not None  # set by setup()
     model = ForceMLP(width=model_cfg["width"], depth=model_cfg["depth"], activation=model_cfg["activation"],
                      optimizer=model_cfg.get("optimizer", "adam"), lr=model_cfg["lr"],
                      weight_decay=model_cfg.get("weight_decay", 0.0), scheduler=model_cfg.get("scheduler", "cosine"),

@@ -1,0 +1,22 @@
+"""Static proof that every model of the library implements the force-model contract.
+
+Never imported at run time; ``mypy`` (``make lint``) checks these assignments: a model that
+misses a member of ``ForceModel`` / ``AdjustableForceModel`` or gets a signature wrong fails it.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .models import AdjustableForceModel, ForceModel
+    from .reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
+    from .rotor.linear import LinearBearing
+    from .surrogate.inference import SurrogateForceModel
+
+    def _force_models(a: ReynoldsSolver, b: GradedReynoldsModel, c: ConicalReynoldsSolver,
+                      d: SurrogateForceModel, e: LinearBearing) -> list[ForceModel]:
+        return [a, b, c, d, e]
+
+    def _adjustable_models(b: GradedReynoldsModel, c: ConicalReynoldsSolver,
+                           d: SurrogateForceModel) -> list[AdjustableForceModel]:
+        return [b, c, d]

@@ -1,0 +1,92 @@
+"""The dataset's schema, writing and reading: what a surrogate may know about the data.
+
+A dataset (and a held-out test set) is a directory of Parquet part files
+``part-NNNNN.parquet`` plus ``_metadata.json`` (written last: its presence
+means the set is complete).  Every row is one state and the reference
+model's force there:
+
+=========  =======  ======  ===============================================
+column     dtype    unit    meaning
+=========  =======  ======  ===============================================
+S          float64  m       sleeve displacement (active bearings only; first)
+X1, X2     float64  m       journal position
+V1, V2     float64  m/s     journal velocity
+F1, F2     float64  N       film force on the journal
+eps        float64  -       eccentricity ratio |X| / c (c at the row's sleeve position)
+section    int8     -       position section of the dataset layout
+n_theta    int16    -       grid the reference model used for the row
+n_z        int16    -
+=========  =======  ======  ===============================================
+
+Surrogates read data through ``load_dataset`` / ``load_test_set`` and the
+bearing through ``dataset_bearing``: they depend on this module, never on
+the solver that wrote the data.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from .. import io
+from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
+
+#: columns of every row, in file order (``S`` comes first where present)
+COLUMNS = ("X1", "X2", "V1", "V2", "F1", "F2", "eps", "section", "n_theta", "n_z")
+#: columns present only for an active bearing; a surrogate takes them as extra network inputs
+EXTRA_INPUTS = ("S",)
+#: what a surrogate trains on (plus any extra inputs present)
+TRAINING_COLUMNS = ("X1", "X2", "V1", "V2", "F1", "F2", "eps")
+_INT_DTYPES = {"section": np.int8, "n_theta": np.int16, "n_z": np.int16}
+
+
+def table(cols: dict) -> pa.Table:
+    """A Parquet table in the schema's column order and dtypes from a dict of arrays."""
+    extra = {k: cols[k] for k in EXTRA_INPUTS if k in cols}
+    return pa.table({**extra, **{k: np.asarray(cols[k], dtype=_INT_DTYPES.get(k, np.float64)) if k in _INT_DTYPES
+                                 else cols[k] for k in COLUMNS}})
+
+
+def write_part(path: Path, cols: dict) -> None:
+    """Write one part file atomically (temporary file + rename)."""
+    with io.atomic_path(path, suffix=".parquet") as tmp:
+        pq.write_table(table(cols), tmp, compression="zstd")
+
+
+def part_name(index: int) -> str:
+    return f"part-{index:05d}.parquet"
+
+
+def read_metadata(path) -> dict:
+    """``_metadata.json`` of a complete dataset or test set; a clear error for an incomplete one."""
+    path = Path(path)
+    meta_file = path / "_metadata.json"
+    if not meta_file.exists():
+        raise ValueError(f"{path} is not a complete dataset (no _metadata.json); generate it first")
+    return json.loads(meta_file.read_text())
+
+
+def load_dataset(path, columns=TRAINING_COLUMNS) -> tuple[pd.DataFrame, dict]:
+    """The dataset's rows (``columns``; the sleeve column S comes along if present) and its metadata."""
+    meta = read_metadata(path)
+    extra = [c for c in EXTRA_INPUTS if c in meta.get("columns", ()) and c not in columns]
+    return pd.read_parquet(Path(path), columns=list(columns) + extra), meta
+
+
+def load_test_set(path) -> pd.DataFrame:
+    """Every row of a held-out test set."""
+    return pd.read_parquet(Path(path))
+
+
+def dataset_bearing(meta: dict) -> JournalBearing | ConicalBearing:
+    """The bearing a dataset was generated for (from its metadata)."""
+    return bearing_from_dict(meta["bearing"])
+
+
+def training_domain(meta: dict) -> list[list[float]]:
+    """[eps_low, eps_high, v_max] of each velocity section of the dataset's layout."""
+    return [[s["eps_low"], s["eps_high"], s["v_max"]] for s in meta["spec"]["velocity_sections"]]

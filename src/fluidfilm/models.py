@@ -1,0 +1,157 @@
+"""The force-model contract: what the rotor integrator, the controllers and the studies may ask of a model.
+
+A force model gives the film force of one bearing on the journal, F(X, V), in N, for journal
+positions X [m] and velocities V [m/s] in the conventions' frame.  Every model in the library -
+``ReynoldsSolver``, ``GradedReynoldsModel``, ``ConicalReynoldsSolver``, ``SurrogateForceModel``,
+``LinearBearing`` - implements ``ForceModel``; the active (conical) bearing's models implement
+``AdjustableForceModel`` as well.  A type checker proves it (``fluidfilm._conformance``, run by
+``make lint``); nothing in the library probes a model with ``getattr``/``hasattr``.
+
+The members:
+
+- ``forces(X, V)``: one state ((2,), (2,)) or any batch ((..., 2), (..., 2)) -> (..., 2) N;
+- ``force_kernel``: ``(fn, params)``, a numba-compiled ``fn(params, x1, x2, v1, v2) -> (F1, F2)``
+  that compiled callers (``rotor.simulate``) call in their own loop, with ``params`` whatever the
+  kernel needs (read-only for the caller);
+- ``name``: a display name (warnings, reports);
+- ``bearing``: the bearing the model describes (geometry, lubricant, speed);
+- ``clearance``: the radial clearance [m] at the current setting: the radius a journal
+  position must stay inside (for an adjustable bearing it moves with the sleeve);
+- ``validity``: the domain the model answers for (``ValidityDomain``); the reference solvers
+  answer for the whole clearance, a surrogate for its training data's range;
+- ``reset_domain_counter()`` / ``domain_report()``: count evaluations outside ``validity``
+  from now on / say how many there were (``None`` when none, or when the model is valid everywhere).
+
+Adding a model: see docs/adding_a_model.md.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .bearing import ConicalBearing, JournalBearing
+
+#: ``fn(params, x1, x2, v1, v2) -> (F1, F2)``, compiled with numba
+ForceKernel = Callable[..., tuple[float, float]]
+Bearing = JournalBearing | ConicalBearing
+
+
+@dataclass(frozen=True)
+class ValidityDomain:
+    """Where a model's forces are trusted.
+
+    The eccentricity ratio (relative to the current clearance) at most ``eps_max``, and, where
+    ``bands`` are given as rows ``(eps_low, eps_high, v_max)``, every velocity component within
+    that band's ``v_max`` [m/s] (the last band also covers eps above its ``eps_high``).
+    """
+
+    eps_max: float = 1.0
+    bands: tuple[tuple[float, float, float], ...] = ()
+
+    def contains(self, X: ArrayLike, V: ArrayLike, clearance: float) -> np.ndarray:
+        """Boolean mask over the leading dimensions of X, V (..., 2)."""
+        x = np.asarray(X, dtype=float)
+        v = np.asarray(V, dtype=float)
+        eps = np.hypot(x[..., 0], x[..., 1]) / clearance
+        inside = eps <= self.eps_max
+        vabs = np.abs(v).max(axis=-1)
+        for k, (lo, hi, v_max) in enumerate(self.bands):
+            band = (eps >= lo) & ((eps < hi) | (k == len(self.bands) - 1))
+            inside &= ~(band & (vabs > v_max))
+        return inside
+
+
+#: the domain of a physics-based model: any state inside the clearance
+WHOLE_FILM = ValidityDomain()
+
+
+@runtime_checkable
+class ForceModel(Protocol):
+    """The film force of one bearing: see the module docstring for each member."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def bearing(self) -> Bearing: ...
+
+    @property
+    def clearance(self) -> float: ...
+
+    @property
+    def force_kernel(self) -> tuple[ForceKernel, Any]: ...
+
+    @property
+    def validity(self) -> ValidityDomain: ...
+
+    def forces(self, X: ArrayLike, V: ArrayLike) -> np.ndarray: ...
+
+    def reset_domain_counter(self) -> None: ...
+
+    def domain_report(self) -> str | None: ...
+
+
+@runtime_checkable
+class AdjustableForceModel(ForceModel, Protocol):
+    """A force model of an active bearing whose sleeve (the control input) can be moved.
+
+``adjustable`` is False where the class serves fixed bearings too and this instance models one
+(``as_adjustable`` checks both).
+
+    ``set_sleeve(s)`` moves the sleeve to ``s`` [m] (inside the bearing's travel, else a
+    ``ValueError``); ``clearance`` and the forces follow at once.
+    """
+
+    @property
+    def adjustable(self) -> bool: ...
+
+    @property
+    def sleeve(self) -> float: ...
+
+    def set_sleeve(self, sleeve: float) -> None: ...
+
+
+class ReferenceModel:
+    """Defaults for a physics-based model: valid in the whole film, nothing to count.
+
+    Subclasses set ``_bearing`` (and ``_c`` when the clearance can move).
+    """
+
+    _bearing: Any
+
+    @property
+    def name(self) -> str:
+        return type(self).__name__
+
+    @property
+    def bearing(self) -> Any:
+        return self._bearing
+
+    @property
+    def clearance(self) -> float:
+        """Radial clearance at the current setting [m]."""
+        return float(self._bearing.clearance)
+
+    @property
+    def validity(self) -> ValidityDomain:
+        return WHOLE_FILM
+
+    def reset_domain_counter(self) -> None:
+        """Nothing is counted: a physics-based model is valid wherever the film exists."""
+
+    def domain_report(self) -> str | None:
+        return None
+
+
+def as_adjustable(model: ForceModel) -> AdjustableForceModel:
+    """``model`` as an adjustable-bearing model, or a ``ValueError`` naming it.
+
+    A model class may serve both kinds of bearing (a surrogate with or without the sleeve input, the
+    graded reference model of a journal or a conical bearing); ``adjustable`` says which it is.
+    """
+    if isinstance(model, AdjustableForceModel) and model.adjustable:
+        return model
+    raise ValueError(f"{type(model).__name__} has no sleeve input: an active (adjustable) bearing model is needed")

@@ -1,0 +1,175 @@
+"""DVC's deps cannot go stale: every stage lists every source module and config file it uses.
+
+For each stage of dvc.yaml:
+- modules: the fluidfilm modules its entry point imports, traced statically through every import
+  statement (module level and inside functions, so lazy imports count), must lie in a listed dep
+  (a file, or a directory above it); a second test checks the static trace against what Python
+  really loads (``sys.modules`` of a subprocess that imports the entry point);
+- configs: the config files Hydra composes for the stage's command line (its primary config and
+  every group option chosen, as recorded in ``hydra.runtime.choices``) must be deps, or params
+  entries that list all of the file's keys (DVC watches only the listed keys of a params file).
+"""
+from __future__ import annotations
+
+import ast
+import json
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src"
+STAGES = yaml.safe_load((ROOT / "dvc.yaml").read_text())["stages"]
+PROFILE = yaml.safe_load((ROOT / "conf" / "pipeline" / "full.yaml").read_text())
+
+
+def _expand(cmd: str) -> str:
+    """A stage command as DVC runs it on the full profile: ${python} and ${args.<stage>} filled in."""
+    return re.sub(r"\$\{([a-z_.0-9]+)\}",
+                  lambda m: str(PROFILE[m.group(1)] if "." not in m.group(1)
+                                else PROFILE["args"][m.group(1).split(".", 1)[1]]), cmd)
+
+
+def _entry_point(stage: dict) -> tuple[Path, list[str]]:
+    """(script, Hydra overrides) of a stage's command: the experiments/*.py token and the key=value tokens after it."""
+    tokens = shlex.split(_expand(stage["cmd"]))
+    idx = next(i for i, t in enumerate(tokens) if t.startswith("experiments/") and t.endswith(".py"))
+    return ROOT / tokens[idx], [t for t in tokens[idx + 1:] if "=" in t and not t.startswith("-")]
+
+
+def _module_file(name: str) -> Path | None:
+    base = SRC / Path(*name.split("."))
+    for p in (base / "__init__.py", base.with_suffix(".py")):
+        if p.exists():
+            return p
+    return None
+
+
+def _imports(path: Path, module: str | None) -> set[str]:
+    """fluidfilm modules named by the import statements of one file (``module``: its dotted name, for relative imports)."""
+    package = None
+    if module is not None:
+        package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names if a.name.split(".")[0] == "fluidfilm"}
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                assert package is not None, f"relative import in {path}"
+                parts = package.split(".")
+                base = ".".join(parts[:len(parts) - node.level + 1])
+                target = f"{base}.{node.module}" if node.module else base
+            else:
+                target = node.module or ""
+            if target.split(".")[0] != "fluidfilm":
+                continue
+            found.add(target)
+            # `from package import submodule`
+            found |= {f"{target}.{a.name}" for a in node.names if _module_file(f"{target}.{a.name}")}
+    # importing a.b.c runs a/__init__ and a/b/__init__ first
+    return {".".join(m.split(".")[:k]) for m in found for k in range(1, m.count(".") + 2)}
+
+
+def static_closure(script: Path) -> set[str]:
+    todo = _imports(script, None)
+    seen: set[str] = set()
+    while todo:
+        m = todo.pop()
+        if m in seen:
+            continue
+        f = _module_file(m)
+        if f is None:  # a name imported from a module, not a module
+            continue
+        seen.add(m)
+        todo |= _imports(f, m) - seen
+    return seen
+
+
+def _deps(stage: dict) -> list[Path]:
+    return [ROOT / d for d in stage.get("deps", [])]
+
+
+def _covered(path: Path, deps: list[Path]) -> bool:
+    return any(path == d or d in path.parents for d in deps)
+
+
+def _composed_configs(script: Path, overrides: list[str]) -> set[Path]:
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    m = re.search(r'config_name="([^"]+)"', script.read_text())
+    assert m, f"{script.name}: no @hydra.main(config_name=...)"
+    GlobalHydra.instance().clear()
+    with initialize_config_dir(config_dir=str(ROOT / "conf"), version_base="1.3"):
+        cfg = compose(config_name=m.group(1), overrides=overrides, return_hydra_config=True)
+    files = {ROOT / "conf" / f"{m.group(1)}.yaml"}
+    for group, choice in cfg.hydra.runtime.choices.items():
+        if choice is None:
+            continue
+        f = ROOT / "conf" / group.split("@")[0] / f"{choice}.yaml"
+        if f.exists():  # hydra's own groups (job_logging, ...) live in its package
+            files.add(f)
+    return files
+
+
+def _param_files_complete(stage: dict) -> set[Path]:
+    """params files whose listed keys are all of the file's top-level keys."""
+    out = set()
+    for entry in stage.get("params", []):
+        if isinstance(entry, dict):
+            for fname, keys in entry.items():
+                data = yaml.safe_load((ROOT / fname).read_text()) or {}
+                if set(data) <= set(keys or []):
+                    out.add(ROOT / fname)
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(STAGES))
+def test_stage_deps_cover_every_imported_module(name):
+    stage = STAGES[name]
+    script, _ = _entry_point(stage)
+    deps = _deps(stage)
+    assert _covered(script, deps), f"{name}: the entry point {script.relative_to(ROOT)} is not a dep"
+    missing = sorted(str(_module_file(m).relative_to(ROOT)) for m in static_closure(script)
+                     if not _covered(_module_file(m), deps))
+    assert not missing, f"stage {name} imports modules that are not in its deps: {missing}"
+
+
+@pytest.mark.parametrize("name", sorted(STAGES))
+def test_stage_deps_cover_every_composed_config(name):
+    stage = STAGES[name]
+    script, overrides = _entry_point(stage)
+    deps = _deps(stage)
+    complete = _param_files_complete(stage)
+    missing = sorted(str(f.relative_to(ROOT)) for f in _composed_configs(script, overrides)
+                     if not _covered(f, deps) and f not in complete)
+    assert not missing, f"stage {name} composes config files that are not deps: {missing}"
+
+
+def test_static_trace_contains_what_python_loads():
+    """The static trace is a superset of the modules a real import of an entry point loads."""
+    script = ROOT / "experiments" / "fig3_velocity.py"
+    code = ("import importlib.util, json, sys\n"
+            f"spec = importlib.util.spec_from_file_location('entry', {str(script)!r})\n"
+            "spec.loader.exec_module(importlib.util.module_from_spec(spec))\n"
+            "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] == 'fluidfilm')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"})
+    loaded = set(json.loads(out.stdout.strip().splitlines()[-1]))
+    assert "fluidfilm.figures" in loaded  # the trace saw the entry point's own imports
+    assert loaded <= static_closure(script), sorted(loaded - static_closure(script))
+
+
+def test_the_trace_finds_a_module_missing_from_a_stage():
+    """The check can fail: a stage that omits a module its entry point imports is caught."""
+    stage = {"cmd": "python experiments/fig3_velocity.py", "deps": ["experiments/fig3_velocity.py",
+                                                                     "src/fluidfilm/reynolds"]}
+    script, _ = _entry_point(stage)
+    uncovered = {m for m in static_closure(script) if not _covered(_module_file(m), _deps(stage))}
+    assert {"fluidfilm.figures", "fluidfilm.bearing", "fluidfilm.config"} <= uncovered
