@@ -79,3 +79,88 @@ def relative_errors(test: dict, ref: dict) -> dict:
     ks = max(abs(ref[n]) for n in NAMES[:4])
     cs = max(abs(ref[n]) for n in NAMES[4:])
     return {n: abs(test[n] - ref[n]) / (ks if n[0] == "K" else cs) for n in NAMES}
+
+
+def coefficients_gumbel_field(solver, x0, h_rel: float = 1e-4) -> dict:
+    """K and C of a Gumbel-clipped ``ReynoldsSolver`` from its linear (pre-clipping) field, the film region frozen.
+
+    With the Gumbel condition F = -int_{p>0} p_lin u dA, and since p_lin = 0
+    on the edge of the film region the edge's motion does not change F to
+    first order: dF/dq = -int_{p>0} dp_lin/dq u dA.  On a grid, central
+    differences of the clipped force instead see nodes switching in and out
+    of the film, an O(dtheta) error that does not fall smoothly with the grid
+    (the node count near the edge jumps).  So here: dp_lin/dV_j exactly (p_lin is
+    linear in V), dp_lin/dX_j by a central difference of the smooth linear
+    field, both integrated over the nodes where p_lin(x0) > 0.
+    """
+    if getattr(solver, "cavitation", None) != "gumbel" or not hasattr(solver, "linear_pressure"):
+        raise ValueError("coefficients_gumbel_field needs a ReynoldsSolver with cavitation='gumbel'")
+    b = solver.bearing
+    c, om = b.clearance, b.omega
+    x0 = np.asarray(x0, dtype=float).reshape(2)
+    zero = np.zeros(2)
+    p0 = solver.linear_pressure(x0, zero)
+    theta = solver.theta
+    w_z = solver.mesh.w_z
+    r = b.radius
+    dx = h_rel * c
+    dv = c * om  # p_lin is affine in V: any step is exact
+    K = np.empty((2, 2))
+    C = np.empty((2, 2))
+    for j in range(2):
+        e = np.zeros(2)
+        e[j] = 1.0
+        dp = (solver.linear_pressure(x0 + dx * e, zero) - solver.linear_pressure(x0 - dx * e, zero)) / (2.0 * dx)
+        # F = -R int p u dA, so K = -dF/dX = +R int dp/dX u dA over the film
+        K[:, j] = film_region_integral(p0, dp, theta, w_z, r)
+        dq = (solver.linear_pressure(x0, dv * e) - p0) / dv
+        C[:, j] = film_region_integral(p0, dq, theta, w_z, r)
+    F0 = -film_region_integral(p0, p0, theta, w_z, r)
+    return {"K": K, "C": C, "F0": F0, "load_N": float(np.hypot(*F0))}
+
+
+def film_region_integral(p0: np.ndarray, g: np.ndarray, theta: np.ndarray, w_z: np.ndarray, radius: float):
+    """R int int_{p0 > 0} g (sin(theta), cos(theta)) dtheta dz with the film edge located between nodes.
+
+    The integrand of a derivative does not vanish at the film edge, so a
+    node-masked Simpson sum is only first-order accurate there (and jumps as
+    the edge crosses nodes).  Here each theta cell is integrated by the
+    trapezoidal rule up to the edge, found by linear interpolation of p0 (the
+    edge is where p0 changes sign): second order, smooth in the position.
+    z by the Simpson weights of the grid.
+    """
+    n = theta.shape[0]
+    dth = theta[1] - theta[0]
+    a = p0
+    b_ = np.roll(p0, -1, axis=0)
+    ga = g
+    gb = np.roll(g, -1, axis=0)
+    th_a = theta[:, None] * np.ones_like(p0)
+    both = (a > 0) & (b_ > 0)
+    only_a = (a > 0) & ~(b_ > 0)
+    only_b = ~(a > 0) & (b_ > 0)
+    out = np.zeros(2)
+    for k, fn in enumerate((np.sin, np.cos)):
+        ua = fn(th_a)
+        ub = fn(th_a + dth)
+        cell = np.where(both, 0.5 * dth * (ga * ua + gb * ub), 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = np.where(only_a, a / (a - b_), np.where(only_b, b_ / (b_ - a), 0.0))
+        # film from node a to the edge at a + f dtheta
+        te = th_a + f * dth
+        ge = ga + f * (gb - ga)
+        cell += np.where(only_a, 0.5 * f * dth * (ga * ua + ge * fn(te)), 0.0)
+        # film from the edge at b - f dtheta to node b
+        te_b = th_a + (1.0 - f) * dth
+        ge_b = gb + f * (ga - gb)
+        cell += np.where(only_b, 0.5 * f * dth * (ge_b * fn(te_b) + gb * ub), 0.0)
+        out[k] = radius * float(cell.sum(axis=0) @ w_z)
+    return out
+
+
+def reference_coefficients(model, x0, h_rel: float = 1e-4) -> dict:
+    """K/C of a reference model: the frozen-film-region derivative for a Gumbel ``ReynoldsSolver``,
+    central differences of the force otherwise (Swift-Stieber, grooved bearings, surrogates)."""
+    if getattr(model, "cavitation", None) == "gumbel" and hasattr(model, "linear_pressure"):
+        return coefficients_gumbel_field(model, x0, h_rel)
+    return coefficients(model, x0, h_rel)

@@ -56,7 +56,7 @@ def eigen_growth(d: dict, mass_bar: float) -> tuple[float, float]:
 def operating_point(model, load: float, h_rel: float = 1e-4) -> dict:
     """Equilibrium under a load ``load`` [N] along +X2 (gravity), its K/C and Lund's numbers."""
     eq = equilibrium(model, (0.0, load))
-    kc = coef.coefficients(model, eq["X"], h_rel)
+    kc = coef.reference_coefficients(model, eq["X"], h_rel)
     d = coef.dimensionless(kc, model.bearing, load)
     return {"eps": eq["eps"], "attitude_deg": eq["attitude_deg"], "sommerfeld": eq["sommerfeld"],
             "load_N": load, "X": eq["X"], "K": kc["K"], "C": kc["C"], **d, **lund(d)}
