@@ -44,8 +44,8 @@ def from_groove_frame(cos_g, sin_g, b1, b2):
 
 
 @njit(cache=True)
-def sor_grooved(params, x1, x2, v1, v2, p, cavitation, omega_sor, tol, max_iter):
-    """(Projected) SOR of the discrete Reynolds equation with node column 0 (the groove) held fixed.
+def sor_grooved(params, x1, x2, v1, v2, p, fixed, cavitation, omega_sor, tol, max_iter):
+    """(Projected) SOR of the discrete Reynolds equation with the node columns ``fixed`` (grooves) held.
 
     Position and velocity are in the groove frame.  ``p``: full field with the
     boundary rows and the groove column set, and a starting guess elsewhere;
@@ -84,8 +84,10 @@ def sor_grooved(params, x1, x2, v1, v2, p, cavitation, omega_sor, tol, max_iter)
     for it in range(max_iter):
         dmax = 0.0
         pmax = 0.0
-        for i in range(1, n):
-            im = i - 1
+        for i in range(n):
+            if fixed[i]:
+                continue
+            im = i - 1 if i > 0 else n - 1
             ip = i + 1 if i < n - 1 else 0
             for j in range(1, nz - 1):
                 gs = (ae[i] * p[ip, j] + aw[i] * p[im, j] + an[i] * (p[i, j + 1] + p[i, j - 1]) - rhs[i]) * inv_ap[i]
@@ -110,6 +112,7 @@ def grooved_field(gparams, x1, x2, v1, v2, p):
     cos_g = gparams[1]
     sin_g = gparams[2]
     cav = gparams[3]
+    fixed = gparams[4]
     y1, y2 = to_groove_frame(cos_g, sin_g, x1, x2)
     w1, w2 = to_groove_frame(cos_g, sin_g, v1, v2)
     n = params[0]
@@ -121,9 +124,11 @@ def grooved_field(gparams, x1, x2, v1, v2, p):
         for j in range(1, nz - 1):
             if cav != kernels.CAV_NONE and p[i, j] < 0.0:
                 p[i, j] = 0.0
-    for j in range(nz):
-        p[0, j] = p_s
-    it = sor_grooved(params, y1, y2, w1, w2, p, cav, params[23], params[24], params[25])
+    for i in range(n):
+        if fixed[i]:
+            for j in range(nz):
+                p[i, j] = p_s
+    it = sor_grooved(params, y1, y2, w1, w2, p, fixed, cav, params[23], params[24], params[25])
     if cav == kernels.CAV_GUMBEL:
         for i in range(n):
             for j in range(nz):
@@ -155,11 +160,14 @@ class GroovedReynoldsSolver:
     Same interface as ``ReynoldsSolver`` (``forces``, ``pressure``,
     ``force_kernel``, ``bearing``, ``theta``, ``z``); ``pressure`` and
     ``theta`` are in the groove frame (theta = 0 at the groove).
-    ``n_theta`` must be even so that the node opposite the groove exists.
+    ``n_grooves`` > 1 places that many grooves equally spaced from
+    ``groove_angle`` (e.g. 2: the common two-axial-groove bearing, grooves at
+    +-90 deg from a vertical load line with ``groove_angle=pi/2``);
+    ``n_theta`` must be a multiple of it.
     """
 
     def __init__(self, bearing: JournalBearing, n_theta: int = 60, n_z: int = 31, cavitation: str = "swift-stieber",
-                 groove_angle: float = math.pi, sor_omega: float | None = None, sor_tol: float = 1e-11,
+                 groove_angle: float = math.pi, n_grooves: int = 1, sor_omega: float | None = None, sor_tol: float = 1e-11,
                  sor_max_iter: int = 400_000):
         if cavitation not in CAVITATION_MODELS:
             raise ValueError(f"unknown cavitation model {cavitation!r}; choose one of {CAVITATION_MODELS}")
@@ -171,7 +179,13 @@ class GroovedReynoldsSolver:
                                     sor_tol=sor_tol, sor_max_iter=sor_max_iter)
         self.cavitation = cavitation
         self.groove_angle = g
-        self.gparams = (self._base.params, math.cos(g), math.sin(g), _CAV[cavitation])
+        ng = int(n_grooves)
+        if ng < 1 or ng != n_grooves or n_theta % ng:
+            raise ValueError(f"n_grooves must be a positive integer dividing n_theta={n_theta}, got {n_grooves!r}")
+        fixed = np.zeros(n_theta, dtype=np.bool_)
+        fixed[:: n_theta // ng] = True
+        self.n_grooves = ng
+        self.gparams = (self._base.params, math.cos(g), math.sin(g), _CAV[cavitation], fixed)
         self._c = bearing.clearance
 
     @property
