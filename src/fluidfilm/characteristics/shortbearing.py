@@ -81,7 +81,7 @@ def force(bearing, x, v) -> np.ndarray:
 
     out = np.empty(2)
     for k in range(2):
-        out[k] = -(r * length**3 / 12.0) * quad(integrand, lo, hi, args=(k,), epsabs=0.0, epsrel=1e-13, limit=200)[0]
+        out[k] = -(r * length**3 / 12.0) * quad(integrand, lo, hi, args=(k,), epsabs=0.0, epsrel=1e-12, limit=200)[0]
     return out
 
 
