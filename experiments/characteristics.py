@@ -17,6 +17,17 @@ from fluidfilm.characteristics import study
 from fluidfilm.config import bearing_from_cfg
 
 
+def _finite_or_none(obj):
+    """Strict JSON: a threshold that does not exist (stable over the whole bracket) is written as null."""
+    if isinstance(obj, dict):
+        return {k: _finite_or_none(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_finite_or_none(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
 @hydra.main(config_path="../conf", config_name="characteristics", version_base="1.3")
 def main(cfg: DictConfig) -> None:
     ch = cfg.characteristics
@@ -113,11 +124,11 @@ def main(cfg: DictConfig) -> None:
         metrics[f"whirl_threshold_rel_err_{name}"] = float(out["whirl_threshold_rel_err"][name])
     metrics["whirl_threshold_rpm_reference"] = float(thr["reference"]["speed_rpm"])
     out["metrics"] = metrics
-    io.write_json(Path(cfg.out_json), out)
+    io.write_json(Path(cfg.out_json), _finite_or_none(out))
     with tracking.run(cfg.tracking, "characteristics", OmegaConf.to_container(cfg, resolve=True)):
         if cfg.tracking.enabled:
             import mlflow
-            mlflow.log_metrics(metrics)
+            mlflow.log_metrics({k: v for k, v in metrics.items() if math.isfinite(v)})
             for name in ("characteristics_static", "characteristics_coefficients", "characteristics_stability_map"):
                 mlflow.log_artifact(str(figs / f"{name}.png"))
     print(pd.Series(metrics).to_string())
