@@ -92,8 +92,12 @@ def main(cfg: DictConfig) -> None:
     # 4. stability: threshold speed of the paper's rotor, per model; nonlinear check with the reference
     mass = float(cfg.rotor.mass) * float(cfg.rotor.load_share)
     load = mass * float(cfg.rotor.gravity)
-    thr = {name: stab.threshold_speed(m, mass, load, tuple(ch.threshold.speed_bracket), h.get(name, h["default"]))
-           for name, m in models.items()}
+    thr = {}
+    for name, m in models.items():
+        try:
+            thr[name] = stab.threshold_speed(m, mass, load, tuple(ch.threshold.speed_bracket), h.get(name, h["default"]))
+        except ValueError as err:  # e.g. a poor surrogate unstable over the whole bracket: recorded, not fatal
+            thr[name] = {"speed_rad_s": float("nan"), "speed_rpm": float("nan"), "note": str(err)}
     checks = []
     make = lambda b: ReynoldsSolver(b, *ch.nonlinear.grid, cavitation="gumbel")  # noqa: E731
     for f in ch.nonlinear.factors:
@@ -111,7 +115,7 @@ def main(cfg: DictConfig) -> None:
                    dpi=120)
     io.write_csv(tables / "thresholds.csv", pd.DataFrame([{"model": n, **t} for n, t in thr.items()]))
     th_ref = thr["reference"]["speed_rad_s"]
-    out["threshold"] = {n: {k: float(v) for k, v in t.items()} for n, t in thr.items()}
+    out["threshold"] = {n: {k: (v if isinstance(v, str) else float(v)) for k, v in t.items()} for n, t in thr.items()}
     out["whirl_threshold_rel_err"] = {n: abs(t["speed_rad_s"] / th_ref - 1) for n, t in thr.items() if n != "reference"}
     out["nonlinear_checks"] = checks
     out["bracket_holds"] = bool(checks[0]["ratio"] < 1 < checks[-1]["ratio"] or checks[-1]["contact"])

@@ -56,6 +56,9 @@ def quick_pipeline(quick_data, tmp_path_factory):
                "controller=quick", f"tracking.uri={uri}"]
     run("train_controller.py", *control, f"training_report={reports / 'dqn_training.json'}")
     run("evaluate_control.py", *control, f"out_json={reports / 'control.json'}", f"figures_dir={reports / 'figures'}")
+    run("characteristics.py", "characteristics=quick", *(f"models.{m}={models / m}" for m in ("paper_single", "paper_split", "best")),
+        f"out_json={reports / 'characteristics.json'}", f"table_dir={reports / 'characteristics'}",
+        f"figure_dir={reports / 'figures'}", f"tracking.uri={uri}")
     run("report.py", f"report_dir={reports}", f"models_dir={models}", f"dataset_dir={dataset}", f"tracking.uri={uri}",
         f"active_dataset_dir={active_ds}")
     return tmp, uri
@@ -78,6 +81,14 @@ def test_pipeline_writes_every_headline_number(quick_pipeline):
     for panel in ("a_dqn", "b_none", "c_mpc"):
         assert (tmp / "reports" / "figures" / f"fig5_{panel}.png").stat().st_size > 10_000
     assert "Active conical bearing" in md
+    # the characteristics stage: surrogate K/C and whirl-threshold errors, the nonlinear bracket
+    for key in ("kc_max_rel_err_direct_best", "kc_max_rel_err_cross_best", "whirl_threshold_rel_err_best"):
+        assert key in metrics
+    ch = json.loads((tmp / "reports" / "characteristics.json").read_text())
+    assert ch["bracket_holds"]
+    assert ch["raimondi_boyd"]["S_max_err_pct"] < 2.0
+    assert (tmp / "reports" / "figures" / "characteristics_stability_map.png").stat().st_size > 10_000
+    assert "Bearing characteristics" in md
 
 
 def test_review_notebook_runs_on_the_quick_profile(quick_pipeline):
