@@ -54,6 +54,11 @@ def test_groove_at_supply_pressure_and_bad_input():
     s = GroovedReynoldsSolver(b, 40, 21, "gumbel", groove_angle=1.0, n_grooves=2)
     p = s.pressure([0.0, 0.5 * C], [0.0, 0.0])
     assert np.all(p[0] == 2e4) and np.all(p[20] == 2e4)
+    wide = GroovedReynoldsSolver(b, 40, 21, "gumbel", groove_angle=0.0, groove_width=math.radians(30.0))
+    held = np.all(wide.pressure([0.0, 0.5 * C], [0.0, 0.0]) == 2e4, axis=1)
+    assert held.sum() == 3 and held[0] and held[1] and held[-1]  # 30 deg over 9 deg nodes: centre +-1
+    with pytest.raises(ValueError, match="groove_width"):
+        GroovedReynoldsSolver(b, 40, 21, groove_angle=0.0, n_grooves=2, groove_width=4.0)
     with pytest.raises(ValueError, match="n_grooves"):
         GroovedReynoldsSolver(b, 40, 21, groove_angle=0.0, n_grooves=3)
     with pytest.raises(ValueError, match="feed"):

@@ -163,11 +163,12 @@ class GroovedReynoldsSolver:
     ``n_grooves`` > 1 places that many grooves equally spaced from
     ``groove_angle`` (e.g. 2: the common two-axial-groove bearing, grooves at
     +-90 deg from a vertical load line with ``groove_angle=pi/2``);
-    ``n_theta`` must be a multiple of it.
+    ``n_theta`` must be a multiple of it.  ``groove_width`` [rad]: each groove
+    holds the supply pressure at the nodes within +-width/2 of its centre (0: a line).
     """
 
     def __init__(self, bearing: JournalBearing, n_theta: int = 60, n_z: int = 31, cavitation: str = "swift-stieber",
-                 groove_angle: float = math.pi, n_grooves: int = 1, sor_omega: float | None = None, sor_tol: float = 1e-11,
+                 groove_angle: float = math.pi, n_grooves: int = 1, groove_width: float = 0.0, sor_omega: float | None = None, sor_tol: float = 1e-11,
                  sor_max_iter: int = 400_000):
         if cavitation not in CAVITATION_MODELS:
             raise ValueError(f"unknown cavitation model {cavitation!r}; choose one of {CAVITATION_MODELS}")
@@ -182,8 +183,15 @@ class GroovedReynoldsSolver:
         ng = int(n_grooves)
         if ng < 1 or ng != n_grooves or n_theta % ng:
             raise ValueError(f"n_grooves must be a positive integer dividing n_theta={n_theta}, got {n_grooves!r}")
+        width = float(groove_width)
+        if not (math.isfinite(width) and 0.0 <= width < 2.0 * math.pi / ng):
+            raise ValueError(f"groove_width must lie in [0, 2 pi / n_grooves) rad, got {groove_width!r}")
         fixed = np.zeros(n_theta, dtype=np.bool_)
-        fixed[:: n_theta // ng] = True
+        dth = 2.0 * math.pi / n_theta
+        half = int(math.floor(0.5 * width / dth + 1e-9))  # nodes within +-width/2 of a groove centre
+        for centre in range(0, n_theta, n_theta // ng):
+            for k in range(-half, half + 1):
+                fixed[(centre + k) % n_theta] = True
         self.n_grooves = ng
         self.gparams = (self._base.params, math.cos(g), math.sin(g), _CAV[cavitation], fixed)
         self._c = bearing.clearance
