@@ -204,3 +204,51 @@ def test_nonlinear_trajectories_bracket_the_threshold():
     above = stab.nonlinear_check(make, b, 2.5, 1.05 * th["speed_rpm"], n_periods=150)
     assert below["ratio"] < 0.1
     assert above["ratio"] > 2.0 or above["contact"]
+
+
+# --- surrogates: exact Jacobian ----------------------------------------------------------------------
+def _random_surrogate(kind, frame, activation, structure, boundaries, blend, seed=0):
+    from fluidfilm.surrogate import Scaling, SurrogateForceModel
+    rng = np.random.default_rng(seed)
+    b = paper_bearing()
+    n_in = 3 if frame == "polar" else 4
+
+    def net(n_out):
+        return [(rng.normal(size=(16, n_in)), rng.normal(size=16)), (rng.normal(size=(n_out, 16)) / 4, rng.normal(size=n_out))]
+
+    nets, scal = [], []
+    for _ in range(len(boundaries) + 1):
+        nets.append(net(2) if structure == "plain" else (net(2), net(4)))
+        # "standard" scales raw SI inputs: give it input spreads of the size of the states
+        unit = np.array([b.clearance, b.clearance, b.clearance * b.omega, b.clearance * b.omega]) \
+            if kind == "standard" else np.ones(n_in)
+        scal.append(Scaling(kind, b.clearance, b.omega, b.force_scale, 1.5, rng.normal(size=n_in) * 0.1 * unit,
+                            (1.0 + rng.random(n_in)) * unit, rng.normal(size=2), 1.0 + rng.random(2), frame))
+    return SurrogateForceModel(b, nets, scal, activation, boundaries, blend, structure=structure)
+
+
+@pytest.mark.parametrize("kind, frame, activation, structure, boundaries, blend", [
+    ("standard", "cartesian", "tanh", "plain", (), 0.0),
+    ("physics", "polar", "relu", "plain", (0.5, 0.7), 0.04),
+    ("physics_v", "cartesian", "silu", "damping", (0.5,), 0.0),
+    ("physics", "polar", "sigmoid", "damping", (0.4, 0.8), 0.06),
+])
+def test_surrogate_jacobian_is_the_networks_derivative(kind, frame, activation, structure, boundaries, blend):
+    """Forward-mode value = the compiled kernel's force; derivatives = central differences (~1e-7)."""
+    from fluidfilm.characteristics.jacobian import surrogate_jacobian
+    m = _random_surrogate(kind, frame, activation, structure, boundaries, blend)
+    rng = np.random.default_rng(1)
+    c, om = m.bearing.clearance, m.bearing.omega
+    # (not at a blend window's edge, where the second derivative jumps and central differences lose an order)
+    for eps in (0.2, 0.49, 0.505, 0.69, 0.75, 0.85):
+        a = rng.uniform(0, 2 * math.pi)
+        x = eps * c * np.array([math.sin(a), math.cos(a)])
+        v = rng.uniform(-0.05, 0.05, 2)
+        F, J = surrogate_jacobian(m, x, v)
+        np.testing.assert_allclose(F, m.forces(x, v), rtol=1e-12, atol=1e-12 * np.abs(F).max())
+        steps = 1e-5 * np.array([c, c, c * om, c * om])
+        for j in range(4):
+            d = np.zeros(4)
+            d[j] = steps[j]
+            num = (m.forces(x + d[:2], v + d[2:]) - m.forces(x - d[:2], v - d[2:])) / (2 * steps[j])
+            np.testing.assert_allclose(J[:, j], num, rtol=1e-5, atol=1e-6 * np.abs(J).max())

@@ -14,10 +14,11 @@ truncation error (O(h^2)) and the solver's own noise (PSOR tolerance, the
 discrete jumps of Gumbel clipping when a node changes sign): ``step_study``
 shows the coefficients at a ladder of steps, and the default 1e-4 lies on
 the plateau (tests and reports/characteristics.json record the spread).
-For the surrogates (a smooth float64 network) the same central differences
-with h_rel = 1e-5, near the optimum (machine eps)^(1/3) ~ 6e-6 of a
-central difference, are accurate to ~1e-9 relative: derivatives of the
-network itself, not of a fit to it; ``step_study`` confirms the plateau.
+For the surrogates ``reference_coefficients`` uses the exact Jacobian of the
+network (forward-mode differentiation, ``jacobian.surrogate_jacobian``);
+central differences with h_rel = 1e-5 (near the optimum (machine
+eps)^(1/3) of a central difference) agree with it to ~1e-9 relative except
+within a step of a hard split boundary, where the force jumps.
 """
 from __future__ import annotations
 
@@ -159,8 +160,13 @@ def film_region_integral(p0: np.ndarray, g: np.ndarray, theta: np.ndarray, w_z: 
 
 
 def reference_coefficients(model, x0, h_rel: float = 1e-4) -> dict:
-    """K/C of a reference model: the frozen-film-region derivative for a Gumbel ``ReynoldsSolver``,
-    central differences of the force otherwise (Swift-Stieber, grooved bearings, surrogates)."""
+    """K/C of any model by its best method: the exact (forward-mode) Jacobian of a surrogate network,
+    the film-region derivative of a Gumbel ``ReynoldsSolver``, central differences of the force
+    otherwise (Swift-Stieber, grooved bearings, other models)."""
+    from ..surrogate import SurrogateForceModel
+    if isinstance(model, SurrogateForceModel) and not model.scalings[0].extras:
+        from .jacobian import surrogate_coefficients
+        return surrogate_coefficients(model, x0)
     if getattr(model, "cavitation", None) == "gumbel" and hasattr(model, "linear_pressure"):
         return coefficients_gumbel_field(model, x0, h_rel)
     return coefficients(model, x0, h_rel)

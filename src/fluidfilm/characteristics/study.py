@@ -127,8 +127,15 @@ def loads_for_eccentricities(model, eps_values) -> list[float]:
 
 
 def step_table(model, x0, steps) -> pd.DataFrame:
-    return pd.DataFrame([{"h_rel": h, **coef.dimensionless(coef.reference_coefficients(model, x0, h), model.bearing)}
-                         for h in steps])
+    """Coefficients at a ladder of relative steps.  For a surrogate: central differences at each step,
+    then the exact Jacobian (h_rel = 0), to show the differences converge to it."""
+    from ..surrogate import SurrogateForceModel
+    exact = isinstance(model, SurrogateForceModel)
+    method = coef.coefficients if exact else coef.reference_coefficients
+    rows = [{"h_rel": h, **coef.dimensionless(method(model, x0, h), model.bearing)} for h in steps]
+    if exact:
+        rows.append({"h_rel": 0.0, **coef.dimensionless(coef.reference_coefficients(model, x0), model.bearing)})
+    return pd.DataFrame(rows)
 
 
 def timing(models: dict, x0, repeats: int = 5, h_rel: dict | None = None) -> pd.DataFrame:
