@@ -8,7 +8,9 @@ film thickness (p = 0 there).  Columns: eps, Sommerfeld number S,
 attitude angle phi [deg], friction variable (R/c) f, flow variable
 Q/(R c N L), side-flow ratio Q_s/Q.  As reproduced in the tables of
 Shigley's Mechanical Engineering Design (ch. 12, "Raimondi and Boyd"
-tables for full journal bearings) and typed from there.  The rows satisfy
+tables for full journal bearings).  No copy of the tables was at hand when
+they were typed: they still need checking against the print.  Checks so far:
+the L/D = 1 rows at eps 0.6/0.8/0.9 match tests/test_reynolds.py, and the rows satisfy
 the identity (R/c) f = 2 pi^2 S / sqrt(1 - eps^2) + eps sin(phi) / 2 of a
 full-shear friction to 0.5 % except L/D = 1, eps = 0.4 (1.3 %), a check on
 the typing.
