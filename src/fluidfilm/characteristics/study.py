@@ -156,15 +156,17 @@ def timing(models: dict, x0, repeats: int = 5, h_rel: dict | None = None) -> pd.
 # --- figures ---------------------------------------------------------------------------------------
 def plot_static(tables: pd.DataFrame):
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+    fig, ax = plt.subplots(1, 4, figsize=(18, 4))
     for (cav, feed), g in tables.groupby(["cavitation", "feed"]):
         lab = f"{cav}, feed {feed}"
         ax[0].semilogx(g.sommerfeld, g.eps, marker=".", label=lab)
         ax[1].semilogx(g.sommerfeld, g.attitude_deg, marker=".", label=lab)
         ax[2].loglog(g.sommerfeld, g.power_W, marker=".", label=lab)
+        ax[3].semilogx(g.sommerfeld, 1e6 * g.side_flow_m3s, marker=".", label=lab)
     ax[0].set_ylabel("eccentricity ratio")
     ax[1].set_ylabel("attitude angle [deg]")
     ax[2].set_ylabel("power loss [W]")
+    ax[3].set_ylabel("side flow [cm^3/s]")
     for a in ax:
         a.set_xlabel("Sommerfeld number S")
         a.grid(True, which="both", alpha=0.3)
