@@ -47,6 +47,7 @@ def main(cfg: DictConfig) -> None:
     io.write_csv(tables / "raimondi_boyd.csv", rb)
     fed = rb[(rb.feed == "max-film") & (rb.eps <= 0.9)]
     out["raimondi_boyd"] = {"S_max_err_pct": float(fed.S_err_pct.abs().max()),
+                            "eps_at_S_max_err": float(fed.eps_at_S_err.abs().max()),
                             "phi_max_err_deg": float(fed.phi_err_deg.abs().max()),
                             "friction_max_err_pct": float(fed.fric_err_pct.abs().max()),
                             "flow_max_err_pct": float(fed.flow_err_pct.abs().max()),

@@ -79,6 +79,13 @@ def test_raimondi_boyd_feed_at_max_film(l_over_d):
         assert r["side_flow_ratio"] == pytest.approx(qs, rel=0.03), eps
 
 
+def test_raimondi_boyd_eccentricity_at_their_sommerfeld_numbers():
+    """The other way round (L/D = 1): at R&B's S our eccentricity is theirs within 0.005."""
+    s = static.film_solver(bearing(1.0), "swift-stieber", "max-film", 120, 41)
+    for eps, S, *_ in RAIMONDI_BOYD[1.0][:-1]:
+        assert static.eccentricity_at_sommerfeld(s, S) == pytest.approx(eps, abs=5e-3)
+
+
 def test_feed_assumption_explains_the_attitude_gap():
     """Without a feed line the Swift-Stieber film misses R&B's attitude at eps = 0.1 by several degrees."""
     eps, S, phi = RAIMONDI_BOYD[1.0][0][:3]

@@ -44,7 +44,9 @@ def raimondi_boyd_table(grid, d: float = 0.04, clearance: float = 120e-6) -> pd.
             s = static.film_solver(b, "swift-stieber", feed, int(grid[0]), int(grid[1]))
             for eps, S, phi, fv, qv, qs in table:
                 r = static.static_point(s, eps)
-                rows.append({"l_over_d": l_over_d, "feed": feed, "eps": eps,
+                eps_s = static.eccentricity_at_sommerfeld(s, S, 0.02, 0.99)
+                rows.append({"l_over_d": l_over_d, "feed": feed, "eps": eps, "eps_at_S_pub": eps_s,
+                             "eps_at_S_err": eps_s - eps,
                              "S_pub": S, "S": r["sommerfeld"], "S_err_pct": 100 * (r["sommerfeld"] / S - 1),
                              "phi_pub": phi, "phi": r["attitude_deg"], "phi_err_deg": r["attitude_deg"] - phi,
                              "fric_pub": fv, "fric": r["friction_variable"],
