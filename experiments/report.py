@@ -20,6 +20,32 @@ def _f(x, spec=".1f"):
     return "n/a" if x is None else format(x, spec)
 
 
+def characteristics_section(ch: dict) -> str:
+    """Markdown summary of reports/characteristics.json."""
+    rows = "\n".join(f"| {n} | {100 * e['direct']:.2f} | {100 * e['cross']:.2f} | "
+                     f"{_f(100 * ch['whirl_threshold_rel_err'].get(n), '.2f')} |" for n, e in ch["kc_max_rel_err"].items())
+    checks = "\n".join(f"| {c['factor']:.2f} | {c['speed_rpm']:.0f} | {c['ratio']:.3g} | {c['status']} |"
+                        for c in ch["nonlinear_checks"])
+    return f"""
+## Bearing characteristics (stiffness, damping, whirl threshold)
+
+Onset of oil whirl of the paper's rotor ({ch['rotor_mass_per_bearing_kg']:.2f} kg per bearing), reference model:
+{ch['threshold']['reference']['speed_rpm']:.0f} rpm (whirl ratio {ch['threshold']['reference']['whirl_ratio']:.3f}).
+
+| model | K/C max error, direct % | K/C max error, cross % | threshold speed error % |
+|---|---|---|---|
+{rows}
+
+| nonlinear check, x threshold | speed rpm | amplitude last/first | status |
+|---|---|---|---|
+{checks}
+
+![stability map](figures/characteristics_stability_map.png)
+
+![coefficients](figures/characteristics_coefficients.png)
+"""
+
+
 @hydra.main(config_path="../conf", config_name="report", version_base="1.3")
 def main(cfg: DictConfig) -> None:
     rd = Path(cfg.report_dir)
@@ -68,6 +94,9 @@ def main(cfg: DictConfig) -> None:
         "active_dataset_generation_s": active_meta["generation_seconds_last_run"],
         "test_rel_err_median_active": active["metrics"]["test_rel_err_median"],
     })
+    charac = _load(rd / "characteristics.json") if (rd / "characteristics.json").exists() else None
+    if charac is not None:  # the characteristics stage: K/C and whirl-threshold errors of the surrogates
+        metrics.update(charac["metrics"])
     io.write_json(rd / "metrics.json", metrics)
 
     thr = cfg.metrics.threshold_pct
@@ -163,6 +192,8 @@ the orbit, the passive bearing's orbit grows.
 
 ![Fig. 3](figures/fig3_velocity.png)
 """
+    if charac is not None:
+        md += characteristics_section(charac)
     io.write_text(rd / "paper_comparison.md", md)
     with tracking.run(cfg.tracking, "paper_comparison", OmegaConf.to_container(cfg, resolve=True)):
         if cfg.tracking.enabled:

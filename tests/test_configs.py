@@ -21,6 +21,7 @@ GROUPS = {
     "trainer": ("train", "trainer"), "experiment": ("train", None), "rotor": ("trajectories", "rotor"),
     "integrator": ("trajectories", "integrator"), "case": ("trajectories", "cases.a"),
     "metrics": ("compare", "metrics"), "controller": ("control", "controller"),
+    "characteristics": ("characteristics", "characteristics"),
 }
 
 

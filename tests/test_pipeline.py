@@ -73,6 +73,14 @@ def test_pipeline_writes_every_headline_number(quick_reproduce):
     for panel in ("a_dqn", "b_none", "c_mpc"):
         assert (workdir / "reports" / "figures" / f"fig5_{panel}.png").stat().st_size > 10_000
     assert "Active conical bearing" in md
+    # the characteristics stage: surrogate K/C and whirl-threshold errors, the nonlinear bracket
+    for key in ("kc_max_rel_err_direct_best", "kc_max_rel_err_cross_best", "whirl_threshold_rel_err_best"):
+        assert key in metrics
+    ch = json.loads((workdir / "reports" / "characteristics.json").read_text())
+    assert ch["bracket_holds"]
+    assert ch["raimondi_boyd"]["S_max_err_pct"] < 2.0
+    assert (workdir / "reports" / "figures" / "characteristics_stability_map.png").stat().st_size > 10_000
+    assert "Bearing characteristics" in md
 
 
 def test_a_second_reproduce_finds_every_stage_up_to_date(quick_reproduce):

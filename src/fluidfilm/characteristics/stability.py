@@ -1,0 +1,139 @@
+"""Linear stability of a rigid rotor in its bearings (Lund's criterion) and its nonlinear check.
+
+A rigid, symmetric rotor whose mass per bearing is m, linearised about its
+equilibrium:  m x'' + C x' + K x = 0.  In dimensionless form (time omega t,
+Kbar = K c/W, Cbar = C c omega/W, Mbar = m c omega^2/W) the onset of
+instability is a pure whirl x ~ exp(i gamma omega t) with (Lund 1966/1987)
+
+    K0      = (Kxx Cyy + Kyy Cxx - Kxy Cyx - Kyx Cxy) / (Cxx + Cyy),
+    gamma^2 = ((K0 - Kxx)(K0 - Kyy) - Kxy Kyx) / (Cxx Cyy - Cxy Cyx),
+    Mbar_crit = K0 / gamma^2,
+
+gamma the whirl frequency ratio; the rotor is stable for Mbar < Mbar_crit
+(gamma^2 <= 0: stable for any mass).  ``eigen_growth`` computes the largest
+real part of the eigenvalues of the same linear system as a second method.
+
+Threshold speed: for a rotor of mass m carrying a load W, increasing speed
+raises S (the journal lifts to the centre) and Mbar = m c omega^2 / W, until
+Mbar = Mbar_crit(eps).  The Reynolds equation is linear in omega, so a force
+model built for speed omega_ref describes speed omega exactly with the load
+scaled by omega_ref/omega (same eps, same dimensionless K/C): this is how
+the surrogates, trained at one speed, give a threshold speed too.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from scipy.optimize import brentq
+
+from . import coefficients as coef
+from .static import equilibrium
+
+
+def lund(d: dict) -> dict:
+    """Whirl ratio gamma, K0 and the dimensionless critical mass of coefficients ``d`` (dimensionless)."""
+    kxx, kxy, kyx, kyy = d["Kxx"], d["Kxy"], d["Kyx"], d["Kyy"]
+    cxx, cxy, cyx, cyy = d["Cxx"], d["Cxy"], d["Cyx"], d["Cyy"]
+    k0 = (kxx * cyy + kyy * cxx - kxy * cyx - kyx * cxy) / (cxx + cyy)
+    g2 = ((k0 - kxx) * (k0 - kyy) - kxy * kyx) / (cxx * cyy - cxy * cyx)
+    if g2 <= 0.0:
+        return {"K0": k0, "whirl_ratio": 0.0, "critical_mass_bar": math.inf}
+    return {"K0": k0, "whirl_ratio": math.sqrt(g2), "critical_mass_bar": k0 / g2}
+
+
+def eigen_growth(d: dict, mass_bar: float) -> tuple[float, float]:
+    """(largest real part, its |imaginary part|) of Mbar x'' + Cbar x' + Kbar x = 0, in units of omega."""
+    K = np.array([[d["Kxx"], d["Kxy"]], [d["Kyx"], d["Kyy"]]])
+    C = np.array([[d["Cxx"], d["Cxy"]], [d["Cyx"], d["Cyy"]]])
+    A = np.block([[np.zeros((2, 2)), np.eye(2)], [-K / mass_bar, -C / mass_bar]])
+    lam = np.linalg.eigvals(A)
+    k = int(np.argmax(lam.real))
+    return float(lam[k].real), float(abs(lam[k].imag))
+
+
+def operating_point(model, load: float, h_rel: float = 1e-4) -> dict:
+    """Equilibrium under a load ``load`` [N] along +X2 (gravity), its K/C and Lund's numbers."""
+    eq = equilibrium(model, (0.0, load))
+    kc = coef.reference_coefficients(model, eq["X"], h_rel)
+    d = coef.dimensionless(kc, model.bearing, load)
+    return {"eps": eq["eps"], "attitude_deg": eq["attitude_deg"], "sommerfeld": eq["sommerfeld"],
+            "load_N": load, "X": eq["X"], "K": kc["K"], "C": kc["C"], **d, **lund(d)}
+
+
+def threshold_speed(model, mass: float, load: float, speed_bracket=(0.05, 20.0), h_rel: float = 1e-4) -> dict:
+    """Onset speed of oil whirl [rad/s] for a rigid rotor of ``mass`` [kg] per bearing carrying ``load`` [N].
+
+    Uses ``model`` only at its own speed (see module doc): at trial speed
+    omega the load seen by the model is W omega_ref/omega.  The bracket is
+    in multiples of the model's speed.  Returns the speed, eps, whirl
+    ratio and critical mass there; ``speed_rad_s`` is inf if the rotor is
+    stable over the whole bracket.
+    """
+    if not (math.isfinite(mass) and mass > 0.0):
+        raise ValueError(f"mass must be positive and finite, got {mass!r}")
+    b = model.bearing
+    om_ref = b.omega
+    c = b.clearance
+    cache = {}
+
+    def point(om):
+        if om not in cache:
+            cache[om] = operating_point(model, load * om_ref / om, h_rel)
+        return cache[om]
+
+    def f(log_om):
+        om = math.exp(log_om)
+        pt = point(om)
+        mbar = mass * c * om**2 / load
+        mc = pt["critical_mass_bar"]
+        return math.log(mbar / mc) if math.isfinite(mc) else -50.0
+
+    lo, hi = math.log(speed_bracket[0] * om_ref), math.log(speed_bracket[1] * om_ref)
+    flo, fhi = f(lo), f(hi)
+    if fhi < 0.0:
+        return {"speed_rad_s": math.inf, "speed_rpm": math.inf}
+    if flo > 0.0:
+        raise ValueError(f"rotor already unstable at {speed_bracket[0]} x the model speed; widen speed_bracket")
+    root = brentq(f, lo, hi, xtol=1e-10)
+    om = math.exp(root)
+    pt = point(om)
+    return {"speed_rad_s": om, "speed_rpm": om * 60.0 / (2.0 * math.pi), "eps": pt["eps"],
+            "whirl_ratio": pt["whirl_ratio"], "critical_mass_bar": pt["critical_mass_bar"],
+            "sommerfeld": b.sommerfeld(load) * om / om_ref}
+
+
+def at_speed(bearing, speed_rpm: float):
+    """The same bearing at another shaft speed."""
+    return dataclasses.replace(bearing, speed_rpm=float(speed_rpm))
+
+
+def nonlinear_check(make_model, bearing, mass: float, speed_rpm: float, perturbation: float = 0.05,
+                    n_periods: float = 400.0, dt_per_period: int = 200) -> dict:
+    """Trajectory of the rigid rotor (``fluidfilm.simulate``, gravity load m g) from its equilibrium
+    displaced by ``perturbation`` * c, at ``speed_rpm``.  ``make_model(bearing)`` builds the force model.
+
+    Returns the deviation amplitude from the equilibrium in the first and last tenth of the run and
+    their ratio (< 1: the orbit decays, > 1: it grows), and whether it ended in contact.
+    """
+    from ..rotor import Rotor, simulate
+    b = at_speed(bearing, speed_rpm)
+    model = make_model(b)
+    rotor = Rotor(mass=mass)
+    load = mass * rotor.gravity
+    eq = equilibrium(model, (0.0, load))
+    x_eq = eq["X"]
+    c = b.clearance
+    period = 2.0 * math.pi / b.omega
+    dt = period / dt_per_period
+    t_end = n_periods * period
+    x0 = x_eq + perturbation * c * np.array([1.0, 0.0])
+    traj = simulate(model, rotor, t_end=t_end, dt=dt, x0=x0, v0=np.zeros(2), record_every=10)
+    dev = np.hypot(*(traj.x - x_eq).T) / c
+    n = len(dev)
+    first = float(dev[: max(n // 10, 1)].max())
+    last = float(dev[-max(n // 10, 1):].max())
+    return {"speed_rpm": speed_rpm, "eps_eq": eq["eps"], "amp_first": first, "amp_last": last,
+            "ratio": last / first, "status": traj.status,
+            "contact": not traj.ok, "t": traj.t[::5], "dev": dev[::5]}

@@ -1,0 +1,140 @@
+"""Static characteristics: equilibrium under load, and eps, attitude, friction and flows against Sommerfeld.
+
+``film_solver(bearing, cavitation, feed, n_theta, n_z)`` builds the reference
+model for a feed assumption:
+
+- ``feed="none"``: the film is bounded by cavitation all the way round
+  (``ReynoldsSolver``; the paper's model);
+- ``feed="max-film"``: an axial groove at the supply pressure on the line of
+  maximum film thickness of the journal position analysed (Raimondi & Boyd's
+  assumption).  For a table at eccentricity eps the journal is placed on +X2,
+  so the groove sits at theta = pi;
+- ``feed=<angle in degrees>``: a groove fixed in the bearing at that angle.
+
+``static_point`` gives one row of the table; ``sommerfeld_sweep`` the table;
+``equilibrium`` the journal position under a load vector for any force
+model (reference or surrogate), started from the short-bearing solution.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import brentq, least_squares
+
+from ..reynolds.feed import GroovedReynoldsSolver
+from ..reynolds.solver import ReynoldsSolver
+from . import shortbearing
+from .film import film_flows_and_friction, raimondi_boyd_variables
+
+FEEDS = ("none", "max-film")
+
+
+def film_solver(bearing, cavitation: str = "gumbel", feed="none", n_theta: int = 90, n_z: int = 41):
+    """The reference film model for a feed assumption (see module doc)."""
+    if feed == "none":
+        return ReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation)
+    if feed == "max-film":
+        angle = math.pi
+    else:
+        try:
+            angle = math.radians(float(feed))
+        except (TypeError, ValueError):
+            raise ValueError(f"feed must be one of {FEEDS} or a groove angle in degrees, got {feed!r}") from None
+    if n_theta % 2:
+        raise ValueError(f"a grooved bearing needs an even n_theta, got {n_theta}")
+    return GroovedReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation, groove_angle=angle)
+
+
+def attitude_deg(x, force) -> float:
+    """Angle [deg] between the load line (-F, the load the film carries) and the line of centres X."""
+    w = -np.asarray(force, dtype=float)
+    x = np.asarray(x, dtype=float)
+    return math.degrees(math.atan2(abs(x[0] * w[1] - x[1] * w[0]), x @ w))
+
+
+def static_point(solver, eps: float) -> dict:
+    """Load, Sommerfeld number, attitude, friction, power loss, flows with the journal at eps on +X2."""
+    if not 0.0 <= eps < 1.0:
+        raise ValueError(f"eccentricity ratio must lie in [0, 1), got {eps!r}")
+    b = solver.bearing
+    x = np.array([0.0, eps * b.clearance])
+    zero = np.zeros(2)
+    F = np.asarray(solver.forces(x, zero))
+    W = float(np.hypot(*F))
+    p = solver.pressure(x, zero)
+    if isinstance(solver, GroovedReynoldsSolver):
+        xg = solver.to_groove_frame(x)
+        ff = film_flows_and_friction(p, solver.mesh, b, xg, feed_index=0)
+    else:
+        ff = film_flows_and_friction(p, solver.mesh, b, x)
+    row = {"eps": eps, "load_N": W, "attitude_deg": attitude_deg(x, F) if W > 0 else float("nan"),
+           "friction_N": ff["friction_N"], "power_W": ff["power_W"], "side_flow_m3s": ff["side_flow_m3s"],
+           "feed_flow_m3s": ff["feed_flow_m3s"]}
+    if W > 0:
+        row.update(raimondi_boyd_variables(b, W, ff["friction_N"], ff["feed_flow_m3s"], ff["side_flow_m3s"]))
+    return row
+
+
+def sommerfeld_sweep(solver, eps_values) -> list[dict]:
+    """``static_point`` at every eccentricity (the eps- and attitude-vs-S tables)."""
+    return [static_point(solver, float(e)) for e in eps_values]
+
+
+def eccentricity_at_sommerfeld(solver, s: float, eps_lo: float = 0.01, eps_hi: float = 0.97) -> float:
+    """Eccentricity at which the reference model gives Sommerfeld number ``s`` (S falls monotonically with eps)."""
+    b = solver.bearing
+    zero = np.zeros(2)
+
+    def g(e):
+        F = solver.forces(np.array([0.0, e * b.clearance]), zero)
+        return math.log(b.sommerfeld(float(np.hypot(*F))) / s)
+
+    return brentq(g, eps_lo, eps_hi, xtol=1e-10)
+
+
+def _polar(eps, psi, c):
+    return c * eps * np.array([math.sin(psi), math.cos(psi)])
+
+
+def equilibrium(model, load, eps_max: float = 0.995, tol: float = 1e-12) -> dict:
+    """Journal position where the film force of ``model`` (at rest) balances ``load`` = (W1, W2) [N].
+
+    A trust-region least-squares solve (scipy) in polar unknowns (eps, psi),
+    eps bounded in [0, eps_max], started from the short-bearing (Ocvirk)
+    solution at the same Sommerfeld number scaled to the bearing's L/D,
+    with fall-back starts if that one does not converge.  Robust to eps ~ 0.95.
+    """
+    W = np.asarray(load, dtype=float).reshape(2)
+    w = float(np.hypot(*W))
+    if not (math.isfinite(w) and w > 0.0):
+        raise ValueError(f"load must be a finite non-zero vector in N, got {tuple(W)}")
+    b = model.bearing
+    c = b.clearance
+    psi_load = math.atan2(W[0], W[1])
+    zero = np.zeros(2)
+    # short-bearing start: Ocvirk's eps at this load (it under-predicts the finite bearing's capacity,
+    # so its eps is an upper bound; the attitude lags the load by phi against the rotation)
+    s = b.sommerfeld(w)
+    try:
+        e0 = min(shortbearing.eccentricity_at_sommerfeld(b, s), 0.97)
+    except ValueError:
+        e0 = 0.5
+    phi0 = shortbearing.attitude_angle(max(e0, 1e-6))
+
+    def residual(q):
+        return (np.asarray(model.forces(_polar(q[0], q[1], c), zero)) + W) / w
+
+    best = None
+    for start in [(e0, psi_load + phi0), (0.7 * e0, psi_load + phi0), (0.5, psi_load + 0.8), (0.85, psi_load + 0.5)]:
+        sol = least_squares(residual, x0=list(start), bounds=([0.0, -np.inf], [eps_max, np.inf]),
+                            xtol=tol, ftol=tol, gtol=tol, method="trf")
+        if best is None or sol.cost < best.cost:
+            best = sol
+        if best.cost < 1e-20:
+            break
+    eps, psi = float(best.x[0]), float(best.x[1])
+    X = _polar(eps, psi, c)
+    F = np.asarray(model.forces(X, zero))
+    return {"eps": eps, "X": X, "attitude_deg": attitude_deg(X, F), "residual": float(np.hypot(*(F + W)) / w),
+            "load_N": w, "sommerfeld": s, "short_bearing_start_eps": e0}

@@ -1,0 +1,222 @@
+"""The characteristics study behind ``experiments/characteristics.py``: tables (DataFrames) and figures.
+
+Every function takes plain mappings and force models and returns pandas
+DataFrames (what goes to CSV) or a matplotlib figure (what goes to PNG);
+the entry point only composes them.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pandas as pd
+
+from ..bearing import JournalBearing
+from ..reynolds import ReynoldsSolver
+from . import coefficients as coef
+from . import shortbearing as sb
+from . import stability as stab
+from . import static
+from .published import RAIMONDI_BOYD, short_bearing_kc
+
+DIRECT = ("Kxx", "Kyy", "Cxx", "Cyy")
+CROSS = ("Kxy", "Kyx", "Cxy", "Cyx")
+
+
+def static_table(bearing, cavitation: str, feed, grid, eps_values) -> pd.DataFrame:
+    """eps, attitude, load, S, friction (power loss) and flows of one cavitation rule and feed assumption."""
+    s = static.film_solver(bearing, cavitation, feed, int(grid[0]), int(grid[1]))
+    rows = static.sommerfeld_sweep(s, eps_values)
+    frame = pd.DataFrame(rows)
+    frame.insert(0, "feed", str(feed))
+    frame.insert(0, "cavitation", cavitation)
+    return frame
+
+
+def raimondi_boyd_table(grid, d: float = 0.04, clearance: float = 120e-6) -> pd.DataFrame:
+    """Our values beside Raimondi & Boyd's at their eccentricities, for both feed assumptions."""
+    rows = []
+    for l_over_d, table in RAIMONDI_BOYD.items():
+        b = JournalBearing(length=l_over_d * d, diameter=d, clearance=clearance, speed_rpm=3000.0,
+                           viscosity=6.53e-4)
+        for feed in ("max-film", "none"):
+            s = static.film_solver(b, "swift-stieber", feed, int(grid[0]), int(grid[1]))
+            for eps, S, phi, fv, qv, qs in table:
+                r = static.static_point(s, eps)
+                eps_s = static.eccentricity_at_sommerfeld(s, S, 0.02, 0.99)
+                rows.append({"l_over_d": l_over_d, "feed": feed, "eps": eps, "eps_at_S_pub": eps_s,
+                             "eps_at_S_err": eps_s - eps,
+                             "S_pub": S, "S": r["sommerfeld"], "S_err_pct": 100 * (r["sommerfeld"] / S - 1),
+                             "phi_pub": phi, "phi": r["attitude_deg"], "phi_err_deg": r["attitude_deg"] - phi,
+                             "fric_pub": fv, "fric": r["friction_variable"],
+                             "fric_err_pct": 100 * (r["friction_variable"] / fv - 1),
+                             "flow_pub": qv, "flow": r["flow_variable"],
+                             "flow_err_pct": 100 * (r["flow_variable"] / qv - 1),
+                             "qs_ratio_pub": qs, "qs_ratio": r["side_flow_ratio"],
+                             "qs_ratio_err_pct": 100 * (r["side_flow_ratio"] / qs - 1)})
+    return pd.DataFrame(rows)
+
+
+def short_bearing_table(l_over_d: float, grid, eps_values, d: float = 0.04, clearance: float = 120e-6):
+    """Reference solver (Gumbel) at small L/D against Ocvirk: load, attitude, eight coefficients, critical mass."""
+    b = JournalBearing(length=l_over_d * d, diameter=d, clearance=clearance, speed_rpm=3000.0, viscosity=6.53e-4)
+    solver = ReynoldsSolver(b, int(grid[0]), int(grid[1]), "gumbel")
+    rows = []
+    for eps in eps_values:
+        st = static.static_point(solver, eps)
+        w = sb.load_capacity(b, eps)
+        op = stab.operating_point(solver, w)
+        ref = short_bearing_kc(op["eps"])
+        row = {"eps": eps, "load_err_pct": 100 * (st["load_N"] / w - 1),
+               "attitude_err_deg": st["attitude_deg"] - math.degrees(sb.attitude_angle(eps))}
+        kscale = max(abs(ref[k]) for k in coef.NAMES[:4])
+        cscale = max(abs(ref[k]) for k in coef.NAMES[4:])
+        for k in coef.NAMES:
+            row[f"{k}_closed"] = ref[k]
+            row[k] = op[k]
+            row[f"{k}_err_pct"] = 100 * (op[k] / ref[k] - 1)
+            row[f"{k}_err_scale_pct"] = 100 * abs(op[k] - ref[k]) / (kscale if k[0] == "K" else cscale)
+        mc = stab.lund(ref)["critical_mass_bar"]
+        row["Mcrit_closed"] = mc
+        row["Mcrit"] = op["critical_mass_bar"]
+        row["Mcrit_err_pct"] = 100 * (op["critical_mass_bar"] / mc - 1) if math.isfinite(mc) else float("nan")
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def coefficient_table(models: dict, loads, h_rel: dict) -> pd.DataFrame:
+    """Equilibrium, eight coefficients and Lund's numbers of every model at the same loads (same S)."""
+    rows = []
+    for name, model in models.items():
+        for w in loads:
+            op = stab.operating_point(model, float(w), h_rel.get(name, h_rel.get("default", 1e-4)))
+            rows.append({"model": name, "load_N": float(w), "sommerfeld": op["sommerfeld"], "eps": op["eps"],
+                         "attitude_deg": op["attitude_deg"], **{k: op[k] for k in coef.NAMES},
+                         "whirl_ratio": op["whirl_ratio"], "critical_mass_bar": op["critical_mass_bar"]})
+    return pd.DataFrame(rows)
+
+
+def coefficient_errors(table: pd.DataFrame, reference: str) -> pd.DataFrame:
+    """Per model, load and coefficient: error against the reference at the same load.
+
+    ``rel_err``: |K - K_ref| / max(|K_ref|, 0.1 * scale), scale the largest
+    reference coefficient of the same matrix (stiffness or damping) at that
+    load; the floor keeps a cross term passing through zero from turning a
+    tiny absolute error into an unbounded ratio (where |K_ref| > 0.1 scale it
+    is the plain relative error).  ``plain_rel_err`` is the unfloored ratio.
+    """
+    ref = table[table.model == reference].set_index("load_N")
+    rows = []
+    for _, r in table[table.model != reference].iterrows():
+        q = ref.loc[r.load_N]
+        kscale = max(abs(q[k]) for k in coef.NAMES[:4])
+        cscale = max(abs(q[k]) for k in coef.NAMES[4:])
+        for k in coef.NAMES:
+            scale = kscale if k[0] == "K" else cscale
+            diff = abs(r[k] - q[k])
+            rows.append({"model": r.model, "load_N": r.load_N, "eps_ref": q.eps, "coefficient": k,
+                         "kind": "direct" if k in DIRECT else "cross", "value": r[k], "reference": q[k],
+                         "rel_err": diff / max(abs(q[k]), 0.1 * scale),
+                         "plain_rel_err": diff / abs(q[k]) if q[k] != 0 else float("inf")})
+    return pd.DataFrame(rows)
+
+
+def loads_for_eccentricities(model, eps_values) -> list[float]:
+    """Loads [N] along +X2 at which ``model`` (rotationally symmetric) sits at each eccentricity."""
+    c = model.bearing.clearance
+    return [float(np.hypot(*model.forces(np.array([0.0, e * c]), np.zeros(2)))) for e in eps_values]
+
+
+def step_table(model, x0, steps) -> pd.DataFrame:
+    """Coefficients at a ladder of relative steps.  For a surrogate: central differences at each step,
+    then the exact Jacobian (h_rel = 0), to show the differences converge to it."""
+    from ..surrogate import SurrogateForceModel
+    exact = isinstance(model, SurrogateForceModel)
+    method = coef.coefficients if exact else coef.reference_coefficients
+    rows = [{"h_rel": h, **coef.dimensionless(method(model, x0, h), model.bearing)} for h in steps]
+    if exact:
+        rows.append({"h_rel": 0.0, **coef.dimensionless(coef.reference_coefficients(model, x0), model.bearing)})
+    return pd.DataFrame(rows)
+
+
+def timing(models: dict, x0, repeats: int = 5, h_rel: dict | None = None) -> pd.DataFrame:
+    """Median wall time of one coefficient set (eight coefficients at a given position) per model."""
+    rows = []
+    for name, model in models.items():
+        h = (h_rel or {}).get(name, 1e-4)
+        coef.reference_coefficients(model, x0, h)  # warm up (JIT)
+        ts = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            coef.reference_coefficients(model, x0, h)
+            ts.append(time.perf_counter() - t)
+        rows.append({"model": name, "time_per_set_ms": 1e3 * float(np.median(ts))})
+    return pd.DataFrame(rows)
+
+
+# --- figures ---------------------------------------------------------------------------------------
+def plot_static(tables: pd.DataFrame):
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 4, figsize=(18, 4))
+    for (cav, feed), g in tables.groupby(["cavitation", "feed"]):
+        lab = f"{cav}, feed {feed}"
+        ax[0].semilogx(g.sommerfeld, g.eps, marker=".", label=lab)
+        ax[1].semilogx(g.sommerfeld, g.attitude_deg, marker=".", label=lab)
+        ax[2].loglog(g.sommerfeld, g.power_W, marker=".", label=lab)
+        ax[3].semilogx(g.sommerfeld, 1e6 * g.side_flow_m3s, marker=".", label=lab)
+    ax[0].set_ylabel("eccentricity ratio")
+    ax[1].set_ylabel("attitude angle [deg]")
+    ax[2].set_ylabel("power loss [W]")
+    ax[3].set_ylabel("side flow [cm^3/s]")
+    for a in ax:
+        a.set_xlabel("Sommerfeld number S")
+        a.grid(True, which="both", alpha=0.3)
+    ax[0].legend(fontsize=7)
+    fig.suptitle("Static characteristics of the paper's bearing")
+    fig.tight_layout()
+    return fig
+
+
+def plot_coefficients(table: pd.DataFrame):
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(2, 4, figsize=(15, 7), sharex=True)
+    for ax, k in zip(axes.ravel(), coef.NAMES):
+        for name, g in table.groupby("model"):
+            ax.plot(g.eps, g[k], marker="o" if name.startswith("reference") else ".", label=name,
+                    lw=2 if name.startswith("reference") else 1)
+        ax.set_title(f"{k} (dimensionless)")
+        ax.grid(True, alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel("eccentricity ratio (equilibrium)")
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle("Stiffness K c/W and damping C c omega/W along the equilibrium locus")
+    fig.tight_layout()
+    return fig
+
+
+def plot_stability_map(table: pd.DataFrame, rotor_line: dict | None = None, checks: list[dict] | None = None):
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.5))
+    for name, g in table.groupby("model"):
+        m = np.isfinite(g.critical_mass_bar)
+        ax[0].loglog(g.sommerfeld[m], g.critical_mass_bar[m], marker="o" if name.startswith("reference") else ".",
+                     label=name)
+        ax[1].semilogx(g.sommerfeld, g.whirl_ratio, marker="o" if name.startswith("reference") else ".", label=name)
+    if rotor_line:
+        s = np.geomspace(table.sommerfeld.min(), table.sommerfeld.max(), 50)
+        ax[0].loglog(s, rotor_line["k"] * s**2, "k--", lw=1, label="paper rotor as speed varies")
+    for chk in checks or []:
+        ax[0].plot(chk["sommerfeld"], chk["mass_bar"], "v" if chk["ratio"] < 1 else "^", ms=10,
+                   color="green" if chk["ratio"] < 1 else "red",
+                   label=f"nonlinear {chk['factor']:.2f}x: {'decays' if chk['ratio'] < 1 else 'grows'}")
+    ax[0].set_xlabel("Sommerfeld number S")
+    ax[0].set_ylabel("critical mass m c omega^2 / W  (unstable above)")
+    ax[1].set_xlabel("Sommerfeld number S")
+    ax[1].set_ylabel("whirl frequency ratio at onset")
+    for a in ax:
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize=7)
+    fig.suptitle("Stability map (Lund's criterion, rigid rotor)")
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,253 @@
+"""A journal bearing fed through an axial groove held at the supply pressure.
+
+``ReynoldsSolver`` bounds the film by cavitation all the way round: nothing
+pins the pressure anywhere on the circumference.  Real bearings are fed
+through a groove (or hole); Raimondi & Boyd's (1958) tables, for example,
+assume p = 0 (the supply pressure) on the line of maximum film thickness.
+``GroovedReynoldsSolver`` adds that as an option: one full-length axial line
+theta = ``groove_angle`` (fixed in the bearing, measured like theta: from +X2
+towards +X1) at ``bearing.supply_pressure``.  The groove is a line of
+nodes, not a band of finite width.
+
+The groove breaks the separable fast solve, so the discrete system (the same
+conservative finite-difference scheme, grid and Simpson integration as
+``ReynoldsSolver``, see ``kernels``) is solved by (projected) SOR with the
+groove column held fixed.  The grid is rotated so that the groove sits on
+node 0: the computation is done in a frame turned by the groove angle, and
+positions, velocities and forces are rotated in and out.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..bearing import JournalBearing
+from ..states import as_state_pairs
+from . import kernels
+from .solver import CAVITATION_MODELS, ReynoldsSolver
+
+_CAV = {"none": kernels.CAV_NONE, "gumbel": kernels.CAV_GUMBEL, "swift-stieber": kernels.CAV_SWIFT_STIEBER}
+
+
+@njit(cache=True)
+def to_groove_frame(cos_g, sin_g, a1, a2):
+    """Components of a bearing-frame vector in the frame whose theta = 0 is the groove."""
+    return a1 * cos_g - a2 * sin_g, a1 * sin_g + a2 * cos_g
+
+
+@njit(cache=True)
+def from_groove_frame(cos_g, sin_g, b1, b2):
+    """Inverse of ``to_groove_frame``."""
+    return b1 * cos_g + b2 * sin_g, -b1 * sin_g + b2 * cos_g
+
+
+@njit(cache=True)
+def sor_grooved(params, x1, x2, v1, v2, p, fixed, cavitation, omega_sor, tol, max_iter):
+    """(Projected) SOR of the discrete Reynolds equation with the node columns ``fixed`` (grooves) held.
+
+    Position and velocity are in the groove frame.  ``p``: full field with the
+    boundary rows and the groove column set, and a starting guess elsewhere;
+    updated in place.  Swift-Stieber projects onto p >= 0 (Cryer's PSOR);
+    the other models solve the linear system (Gumbel clips afterwards).
+    Returns the sweep count or -1 if ``max_iter`` sweeps did not reach ``tol``.
+    """
+    n = params[0]
+    sin_n = params[2]
+    cos_n = params[3]
+    inv_c = params[6]
+    inv_dth2 = params[7]
+    inv_dth = params[8]
+    inv_dz2 = params[12]
+    k_omega = params[14]
+    k_v = params[15]
+    nz = p.shape[1]
+    h = np.empty(n)
+    h3 = np.empty(n)
+    h3f = np.empty(n)
+    hf = np.empty(n)
+    kernels.film_thickness(params, x1 * inv_c, x2 * inv_c, h, h3, h3f, hf)
+    aw = np.empty(n)
+    ae = np.empty(n)
+    an = np.empty(n)
+    inv_ap = np.empty(n)
+    rhs = np.empty(n)
+    for i in range(n):
+        im = i - 1 if i > 0 else n - 1
+        aw[i] = h3f[im] * inv_dth2
+        ae[i] = h3f[i] * inv_dth2
+        an[i] = h3[i] * inv_dz2
+        inv_ap[i] = 1.0 / (aw[i] + ae[i] + 2.0 * an[i])
+        rhs[i] = k_omega * (hf[i] - hf[im]) * inv_dth + k_v * (-v1 * sin_n[i] - v2 * cos_n[i])
+    project = cavitation == kernels.CAV_SWIFT_STIEBER
+    for it in range(max_iter):
+        dmax = 0.0
+        pmax = 0.0
+        for i in range(n):
+            if fixed[i]:
+                continue
+            im = i - 1 if i > 0 else n - 1
+            ip = i + 1 if i < n - 1 else 0
+            for j in range(1, nz - 1):
+                gs = (ae[i] * p[ip, j] + aw[i] * p[im, j] + an[i] * (p[i, j + 1] + p[i, j - 1]) - rhs[i]) * inv_ap[i]
+                new = p[i, j] + omega_sor * (gs - p[i, j])
+                if project and new < 0.0:
+                    new = 0.0
+                d = abs(new - p[i, j])
+                if d > dmax:
+                    dmax = d
+                if abs(new) > pmax:
+                    pmax = abs(new)
+                p[i, j] = new
+        if dmax <= tol * pmax or pmax == 0.0:
+            return it + 1
+    return -1
+
+
+@njit(cache=True)
+def grooved_field(gparams, x1, x2, v1, v2, p):
+    """Pressure field in the groove frame (boundaries, groove and cavitation applied); returns sweeps or -1."""
+    params = gparams[0]
+    cos_g = gparams[1]
+    sin_g = gparams[2]
+    cav = gparams[3]
+    fixed = gparams[4]
+    y1, y2 = to_groove_frame(cos_g, sin_g, x1, x2)
+    w1, w2 = to_groove_frame(cos_g, sin_g, v1, v2)
+    n = params[0]
+    nz = p.shape[1]
+    p_s = params[27]
+    # start from the groove-free linear field (clipped where cavitation applies): close to the answer
+    kernels.linear_field(params, y1, y2, w1, w2, params[26], p_s, p)
+    for i in range(n):
+        for j in range(1, nz - 1):
+            if cav != kernels.CAV_NONE and p[i, j] < 0.0:
+                p[i, j] = 0.0
+    for i in range(n):
+        if fixed[i]:
+            for j in range(nz):
+                p[i, j] = p_s
+    it = sor_grooved(params, y1, y2, w1, w2, p, fixed, cav, params[23], params[24], params[25])
+    if cav == kernels.CAV_GUMBEL:
+        for i in range(n):
+            for j in range(nz):
+                if p[i, j] < 0.0:
+                    p[i, j] = 0.0
+    return it
+
+
+@njit(cache=True)
+def grooved_force(gparams, x1, x2, v1, v2):
+    """Force kernel of the grooved bearing (the compiled signature every force model shares)."""
+    params = gparams[0]
+    n = params[0]
+    nz = params[26].shape[0] + 2
+    p = np.empty((n, nz))
+    it = grooved_field(gparams, x1, x2, v1, v2, p)
+    if it < 0:
+        raise RuntimeError("SOR of the grooved bearing did not converge; raise sor_max_iter")
+    g1, g2 = kernels.integrate_field(params, p)
+    return from_groove_frame(gparams[1], gparams[2], g1, g2)
+
+
+class GroovedReynoldsSolver:
+    """Finite-length Reynolds solver with an axial feed groove at ``groove_angle`` [rad] held at the supply pressure.
+
+    >>> s = GroovedReynoldsSolver(bearing, 90, 61, cavitation="swift-stieber", groove_angle=math.pi)
+    >>> F = s.forces(X, V)
+
+    Same interface as ``ReynoldsSolver`` (``forces``, ``pressure``,
+    ``force_kernel``, ``bearing``, ``theta``, ``z``); ``pressure`` and
+    ``theta`` are in the groove frame (theta = 0 at the groove).
+    ``n_grooves`` > 1 places that many grooves equally spaced from
+    ``groove_angle`` (e.g. 2: the common two-axial-groove bearing, grooves at
+    +-90 deg from a vertical load line with ``groove_angle=pi/2``);
+    ``n_theta`` must be a multiple of it.  ``groove_width`` [rad]: each groove
+    holds the supply pressure at the nodes within +-width/2 of its centre (0: a line).
+    """
+
+    def __init__(self, bearing: JournalBearing, n_theta: int = 60, n_z: int = 31, cavitation: str = "swift-stieber",
+                 groove_angle: float = math.pi, n_grooves: int = 1, groove_width: float = 0.0, sor_omega: float | None = None, sor_tol: float = 1e-11,
+                 sor_max_iter: int = 400_000):
+        if cavitation not in CAVITATION_MODELS:
+            raise ValueError(f"unknown cavitation model {cavitation!r}; choose one of {CAVITATION_MODELS}")
+        g = float(groove_angle)
+        if not math.isfinite(g):
+            raise ValueError(f"groove_angle must be a finite angle in rad, got {groove_angle!r}")
+        # the groove-free solver provides the grid, the kernel parameters and the starting field
+        self._base = ReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation, sor_omega=sor_omega,
+                                    sor_tol=sor_tol, sor_max_iter=sor_max_iter)
+        self.cavitation = cavitation
+        self.groove_angle = g
+        ng = int(n_grooves)
+        if ng < 1 or ng != n_grooves or n_theta % ng:
+            raise ValueError(f"n_grooves must be a positive integer dividing n_theta={n_theta}, got {n_grooves!r}")
+        width = float(groove_width)
+        if not (math.isfinite(width) and 0.0 <= width < 2.0 * math.pi / ng):
+            raise ValueError(f"groove_width must lie in [0, 2 pi / n_grooves) rad, got {groove_width!r}")
+        fixed = np.zeros(n_theta, dtype=np.bool_)
+        dth = 2.0 * math.pi / n_theta
+        half = int(math.floor(0.5 * width / dth + 1e-9))  # nodes within +-width/2 of a groove centre
+        for centre in range(0, n_theta, n_theta // ng):
+            for k in range(-half, half + 1):
+                fixed[(centre + k) % n_theta] = True
+        self.n_grooves = ng
+        self.gparams = (self._base.params, math.cos(g), math.sin(g), _CAV[cavitation], fixed)
+        self._c = bearing.clearance
+
+    @property
+    def bearing(self) -> JournalBearing:
+        return self._base.bearing
+
+    @property
+    def mesh(self):
+        return self._base.mesh
+
+    @property
+    def n_theta(self) -> int:
+        return self._base.n_theta
+
+    @property
+    def n_z(self) -> int:
+        return self._base.n_z
+
+    @property
+    def theta(self) -> np.ndarray:
+        """Node angles in the groove frame (0 at the groove)."""
+        return self._base.theta
+
+    @property
+    def z(self) -> np.ndarray:
+        return self._base.z
+
+    @property
+    def force_kernel(self):
+        return grooved_force, self.gparams
+
+    def __repr__(self) -> str:
+        return (f"GroovedReynoldsSolver({self.n_theta}x{self.n_z}, cavitation={self.cavitation!r}, "
+                f"groove_angle={math.degrees(self.groove_angle):.4g} deg)")
+
+    def forces(self, X, V) -> np.ndarray:
+        x, v, shape = as_state_pairs(X, V, self._c)
+        out = np.empty_like(x)
+        for k in range(x.shape[0]):
+            out[k] = grooved_force(self.gparams, x[k, 0], x[k, 1], v[k, 0], v[k, 1])
+        return out.reshape(shape + (2,))
+
+    def to_groove_frame(self, a) -> np.ndarray:
+        """A bearing-frame vector (position, velocity) in the groove frame."""
+        a = np.asarray(a, dtype=float).reshape(2)
+        return np.array(to_groove_frame(self.gparams[1], self.gparams[2], a[0], a[1]))
+
+    def pressure(self, x, v) -> np.ndarray:
+        """Pressure field [Pa], shape (n_theta, n_z), on the groove-frame grid (theta = 0 at the groove)."""
+        xa, va, _ = as_state_pairs(x, v, self._c)
+        if xa.shape[0] != 1:
+            raise ValueError(f"pressure takes one position and one velocity, got shapes {np.shape(x)}, {np.shape(v)}")
+        p = np.empty((self.n_theta, self.n_z))
+        it = grooved_field(self.gparams, xa[0, 0], xa[0, 1], va[0, 0], va[0, 1], p)
+        if it < 0:
+            raise RuntimeError("SOR of the grooved bearing did not converge; raise sor_max_iter")
+        return p
