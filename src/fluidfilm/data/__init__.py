@@ -3,7 +3,7 @@
 Surrogates depend on this package and on the columns it writes, never on
 the solver's internals.
 """
-from .generate import COLUMNS, generate_dataset, random_test_set
+from .generate import COLUMNS, DatasetIntegrityError, generate_dataset, random_test_set, verify_dataset
 from .spec import DatasetConfigError, DatasetSpec, config_hash
 
-__all__ = ["COLUMNS", "DatasetSpec", "DatasetConfigError", "config_hash", "generate_dataset", "random_test_set"]
+__all__ = ["COLUMNS", "DatasetIntegrityError", "verify_dataset", "DatasetSpec", "DatasetConfigError", "config_hash", "generate_dataset", "random_test_set"]

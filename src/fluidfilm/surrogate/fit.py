@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from ..bearing import bearing_from_dict
+from ..data.generate import verify_dataset
 from .inference import SurrogateForceModel
 from .training import ForceDataModule, read_dataset, train_network
 
@@ -72,6 +73,7 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
 def held_out_errors(model, testset_dir, floor_N: float = 0.1) -> dict:
     """Relative force error |F_model - F| / max(|F|, floor) on the held-out set: median and 99th percentile,
     overall and per eccentricity band."""
+    verify_dataset(testset_dir)  # checksums recorded at generation; names a damaged file
     df = pd.read_parquet(testset_dir)
     X = df[["X1", "X2"]].to_numpy()
     V = df[["V1", "V2"]].to_numpy()

@@ -29,6 +29,7 @@ import torch
 from torch import nn
 
 from ..bearing import bearing_from_dict
+from ..data.generate import verify_dataset
 from .scaling import Scaling
 
 _ACT = {"tanh": nn.Tanh, "relu": nn.ReLU, "silu": nn.SiLU, "sigmoid": nn.Sigmoid}
@@ -170,10 +171,7 @@ class _Batches(torch.utils.data.IterableDataset):
 def read_dataset(path, columns=("X1", "X2", "V1", "V2", "F1", "F2", "eps")) -> tuple[pd.DataFrame, dict]:
     """The Parquet dataset and its metadata (bearing, config hash); the sleeve column S comes along if present."""
     path = Path(path)
-    meta_file = path / "_metadata.json"
-    if not meta_file.exists():
-        raise ValueError(f"{path} is not a complete dataset (no _metadata.json); generate it first")
-    meta = json.loads(meta_file.read_text())
+    meta = verify_dataset(path)  # every part against its recorded checksum, naming a damaged file
     extra = [c for c in EXTRA_INPUTS if c in meta.get("columns", ()) and c not in columns]
     return pd.read_parquet(path, columns=list(columns) + extra), meta
 
