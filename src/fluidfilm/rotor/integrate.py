@@ -54,6 +54,8 @@ class Trajectory:
     n_force_evals: int = 0
     wall_time_s: float = 0.0
     meta: dict = field(default_factory=dict)
+    # force evaluations outside the model's training domain during this run (0 for a reference model)
+    n_outside_domain: int = 0
 
     @property
     def ok(self) -> bool:
@@ -70,7 +72,8 @@ class Trajectory:
             np.savez_compressed(tmp, t=self.t, x=self.x, v=self.v, status=np.array(self.status),
                                 t_stop=np.array(np.nan if self.t_stop is None else self.t_stop),
                                 n_force_evals=np.array(self.n_force_evals),
-                                wall_time_s=np.array(self.wall_time_s))
+                                wall_time_s=np.array(self.wall_time_s),
+                                n_outside_domain=np.array(self.n_outside_domain))
 
     @classmethod
     def from_npz(cls, path) -> "Trajectory":
@@ -78,7 +81,8 @@ class Trajectory:
         t_stop = float(d["t_stop"])
         return cls(t=d["t"], x=d["x"], v=d["v"], status=str(d["status"]),
                    t_stop=None if math.isnan(t_stop) else t_stop,
-                   n_force_evals=int(d["n_force_evals"]), wall_time_s=float(d["wall_time_s"]))
+                   n_force_evals=int(d["n_force_evals"]), wall_time_s=float(d["wall_time_s"]),
+                   n_outside_domain=int(d["n_outside_domain"]) if "n_outside_domain" in d else 0)
 
 
 @njit(cache=True)
@@ -227,10 +231,11 @@ def simulate(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=No
         text = f"diverged: non-finite state after t={t_stop:.6g} s"
     report = getattr(model, "domain_report", None)
     note = report() if report is not None else None
+    n_outside = int(getattr(model, "n_outside_domain", 0))
     if note:
         text = f"{text}; {note}"
         warnings.warn(f"{getattr(model, 'name', type(model).__name__)}: {note} during the simulation",
                       RuntimeWarning, stacklevel=2)
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
                       t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=wall,
-                      meta={"dt": dt, "t_end": t_end, "record_every": record_every})
+                      meta={"dt": dt, "t_end": t_end, "record_every": record_every}, n_outside_domain=n_outside)
