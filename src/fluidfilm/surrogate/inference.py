@@ -408,8 +408,8 @@ def _check_network(npz: Path, meta: dict, arrays) -> None:
     for r, scal in enumerate(meta["scalings"]):
         n_in = (3 if scal.get("frame", "cartesian") == "polar" else 4) + len(scal.get("extras", ()))
         chains = [("", meta["n_layers"][r], n_in, 2)]
-        if structure == "damping":
-            chains.append(("d", meta["n_layers_damping"][r], n_in, 4))
+        if structure == "damping":  # the static load S sees the position inputs only (all but the velocities)
+            chains = [("", meta["n_layers"][r], n_in - 2, 2), ("d", meta["n_layers_damping"][r], n_in, 4)]
         for tag, n_layers, width_in, n_out in chains:
             for k in range(n_layers):
                 wk, bk = f"r{r}_{tag}W{k}", f"r{r}_{tag}b{k}"
