@@ -49,6 +49,8 @@ def main(cfg: DictConfig) -> None:
         for _, r in rows.iterrows():
             summary[f"orbit_rms_pct_{name}_{r.case}"] = float(r.rms_pct)
             summary[f"orbit_hausdorff_pct_{name}_{r.case}"] = float(r.hausdorff_pct)
+            # per trajectory: force evaluations outside the surrogate's training domain (logged, not warned once)
+            summary[f"outside_domain_evals_{name}_{r.case}"] = float(r.n_outside_domain)
     io.write_json(report / "comparison.json", summary)
     with tracking.run(cfg.tracking, "compare", OmegaConf.to_container(cfg, resolve=True)):
         if cfg.tracking.enabled:

@@ -48,7 +48,8 @@ def main(cfg: DictConfig) -> None:
             import mlflow
             for r in rows:
                 mlflow.log_metrics({f"span_{r['case']}": r["span"], f"eps_max_{r['case']}": r["eps_max"],
-                                    f"wall_time_s_{r['case']}": r["wall_time_s"]})
+                                    f"wall_time_s_{r['case']}": r["wall_time_s"],
+                                    f"outside_domain_evals_{r['case']}": r["n_outside_domain"]})
 
 
 if __name__ == "__main__":

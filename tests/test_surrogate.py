@@ -104,16 +104,18 @@ def test_blending_makes_the_force_continuous_across_a_boundary():
     np.testing.assert_allclose(regions([0.5, 0.7], 0.04), [(0.0, 0.52), (0.48, 0.72), (0.68, math.inf)])
 
 
-def test_outside_the_training_domain_warns_once_and_the_trajectory_says_so(trained):
+def test_outside_the_training_domain_warns_every_call_and_the_trajectory_counts_it(trained):
     model, _ = trained
-    with pytest.warns(RuntimeWarning, match="outside the training domain"):
-        model.forces([0.0, 0.99 * C], [0.0, 0.0])
+    for _ in range(2):  # not once per process: every call that leaves the domain says so
+        with pytest.warns(RuntimeWarning, match="1 of 1 states lie outside the training domain"):
+            model.forces([0.0, 0.99 * C], [0.0, 0.0])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        model.forces([0.0, 0.99 * C], [0.0, 0.0])  # once only
+        model.forces([0.0, 0.5 * C], [0.0, 0.0])  # inside: silent
     with pytest.warns(RuntimeWarning):
         traj = simulate(model, Rotor(mass=2.5), t_end=0.01, x0=[0.0, 0.3 * C], v0=[0.0, 5.0])
     assert "outside the training domain" in traj.status
+    assert traj.n_outside_domain > 0 and f"in {traj.n_outside_domain} force evaluations" in traj.status
 
 
 def test_surrogate_runs_in_the_compiled_integrator(trained):

@@ -49,3 +49,20 @@ def write_csv(path, frame) -> None:
 def save_figure(fig, path, **kwargs) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format=Path(path).suffix.lstrip(".") or "png", **kwargs)
+
+
+def run_interruptible(main, what: str, resume: str) -> None:
+    """Run an entry point's ``main``; Ctrl-C ends it with one line instead of a traceback.
+
+    Every output is written atomically (above), so an interrupted run leaves
+    each file complete or absent; the line says what stopped and how to go on.
+    Exit status 130, as a shell reports a SIGINT.
+    """
+    import sys
+
+    try:
+        main()
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: {what}; finished outputs are kept, nothing is half-written. To resume: {resume}",
+              file=sys.stderr, flush=True)
+        raise SystemExit(130) from None

@@ -93,6 +93,9 @@ class ForceModel(Protocol):
 
     def domain_report(self) -> str | None: ...
 
+    @property
+    def n_outside_domain(self) -> int: ...
+
 
 @runtime_checkable
 class AdjustableForceModel(ForceModel, Protocol):
@@ -144,6 +147,11 @@ class ReferenceModel:
 
     def domain_report(self) -> str | None:
         return None
+
+    @property
+    def n_outside_domain(self) -> int:
+        """Evaluations outside the validity domain since the last reset: none for a physics-based model."""
+        return 0
 
 
 def as_adjustable(model: ForceModel) -> AdjustableForceModel:

@@ -7,6 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 
+# The largest journal speed any force model accepts [m/s].  Orbits in a fluid film bearing move at
+# about eps c omega (cm/s here); at 100 m/s a journal would cross a 0.1 mm clearance in a
+# microsecond, far outside the inertia-free, incompressible film of the Reynolds equation.  Larger
+# values are a units slip or a diverged integration, not a state to extrapolate a force for.
+V_MAX_PHYSICAL = 100.0
+
 
 def as_state_pairs(X, V, clearance: float):
     """Validate and broadcast positions and velocities to flat (N, 2) arrays."""
@@ -28,13 +34,25 @@ def as_state_pairs(X, V, clearance: float):
 
 
 def check_states(x: np.ndarray, v: np.ndarray, clearance: float) -> None:
-    """Raise ``ValueError`` naming the first non-finite value or eccentricity >= 1."""
+    """The domain contract of every force model (reference solvers and surrogates alike).
+
+    Raise ``ValueError`` naming the first non-finite value, an eccentricity
+    >= 1 (contact: no film) or a speed |V| above ``V_MAX_PHYSICAL``.  States
+    outside a surrogate's *training* range are legal; the surrogate counts
+    them (``SurrogateForceModel.n_outside_domain``, ``Trajectory.n_outside_domain``).
+    """
     if not np.isfinite(x).all():
         bad = x[~np.isfinite(x).all(axis=1)][0]
         raise ValueError(f"position X must be finite, got {tuple(bad)}")
     if not np.isfinite(v).all():
         bad = v[~np.isfinite(v).all(axis=1)][0]
         raise ValueError(f"velocity V must be finite, got {tuple(bad)}")
+    if v.size:
+        speed = np.hypot(v[:, 0], v[:, 1])
+        k = int(np.argmax(speed))
+        if speed[k] > V_MAX_PHYSICAL:
+            raise ValueError(f"velocity V={tuple(v[k])} m/s: |V| = {speed[k]:.6g} m/s exceeds the physical bound "
+                             f"{V_MAX_PHYSICAL:g} m/s of every force model (a units slip or a diverged state?)")
     if x.size:
         eps = np.hypot(x[:, 0], x[:, 1]) / clearance
         k = int(np.argmax(eps))

@@ -130,7 +130,6 @@ def film_region_integral(p0: np.ndarray, g: np.ndarray, theta: np.ndarray, w_z: 
     edge is where p0 changes sign): second order, smooth in the position.
     z by the Simpson weights of the grid.
     """
-    n = theta.shape[0]
     dth = theta[1] - theta[0]
     a = p0
     b_ = np.roll(p0, -1, axis=0)

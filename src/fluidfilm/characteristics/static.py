@@ -133,6 +133,7 @@ def equilibrium(model, load, eps_max: float = 0.995, tol: float = 1e-12) -> dict
             best = sol
         if best.cost < 1e-20:
             break
+    assert best is not None  # the loop ran at least once
     eps, psi = float(best.x[0]), float(best.x[1])
     X = _polar(eps, psi, c)
     F = np.asarray(model.forces(X, zero))

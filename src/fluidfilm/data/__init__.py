@@ -3,13 +3,13 @@
 Surrogates depend on this package and on the columns it writes (``load_dataset``,
 ``load_test_set``, ``dataset_bearing``), never on the solver's internals.
 """
-from .schema import (COLUMNS, EXTRA_INPUTS, dataset_bearing, load_dataset, load_test_set, read_metadata,
-                     training_domain)
+from .schema import (COLUMNS, EXTRA_INPUTS, DatasetIntegrityError, dataset_bearing, load_dataset, load_test_set,
+                     read_metadata, training_domain, verify_dataset)
 from .spec import DatasetConfigError, DatasetSpec, config_hash
 
 __all__ = ["COLUMNS", "EXTRA_INPUTS", "DatasetSpec", "DatasetConfigError", "config_hash", "generate_dataset",
            "random_test_set", "load_dataset", "load_test_set", "read_metadata", "dataset_bearing",
-           "training_domain"]
+           "training_domain", "DatasetIntegrityError", "verify_dataset"]
 
 
 def __getattr__(name: str):

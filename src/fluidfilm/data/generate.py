@@ -32,6 +32,7 @@ import contextlib
 import functools
 import json
 import os
+import shutil
 import time
 from pathlib import Path
 
@@ -41,8 +42,8 @@ import pyarrow.parquet as pq
 from .. import __version__, io
 from ..bearing import JournalBearing, bearing_from_dict
 from ..reynolds import GradedReynoldsModel
-from .schema import COLUMNS, part_name, write_part
-from .spec import DatasetSpec, config_hash
+from .schema import COLUMNS, file_sha256, part_name, write_part
+from .spec import DatasetSpec, check_reference, config_hash
 
 FORMAT_VERSION = 1
 
@@ -109,23 +110,81 @@ def _chunk_at(model, spec: DatasetSpec, job: dict) -> dict:
     return {k: np.concatenate(v) for k, v in cols.items()}
 
 
-# the schema module writes the files (kept under the old names for callers of this module)
+# the schema module writes the files and checks them (kept under the old names for callers of this module)
 _write_part = write_part
 _part_name = part_name
 
 
-def _prepare_dir(out: Path, digest: str) -> None:
-    """Create ``out``; drop temporary leftovers; drop parts made under another config."""
+def _read_state(out: Path) -> dict | None:
+    state = out / "_state.json"
+    try:
+        return json.loads(state.read_text()) if state.exists() else None
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        return None  # a damaged state file: the parts cannot be trusted
+
+
+def _staging_dir(out: Path) -> Path:
+    return out.with_name(f".{out.name}.new")
+
+
+def _choose_dir(out: Path, digest: str) -> Path:
+    """Where to build: ``out`` itself, unless it holds a finished dataset of another config.
+
+    A finished dataset is never deleted before its replacement is complete:
+    a new config is built next to it (``.<name>.new``, resumable) and swapped
+    in at the end (``_swap_in``).
+    """
+    old = out.with_name(f".{out.name}.old")
+    if old.exists():  # a swap was interrupted between its two renames
+        if out.exists():
+            shutil.rmtree(old)
+        else:
+            old.rename(out)
+    state = _read_state(out)
+    if (out / "_metadata.json").exists() and (state is None or state.get("hash") != digest):
+        return _staging_dir(out)
+    stale = _staging_dir(out)
+    if stale.exists():  # the config went back to the finished one: the half-built other one is void
+        shutil.rmtree(stale)
+    return out
+
+
+def _swap_in(work: Path, out: Path) -> None:
+    if work == out:
+        return
+    old = out.with_name(f".{out.name}.old")
+    if out.exists():
+        shutil.rmtree(old, ignore_errors=True)
+        out.rename(old)
+    work.rename(out)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _prepare_dir(out: Path, digest: str) -> dict:
+    """Create ``out``; drop temporary leftovers; drop parts made under another config; return the state."""
     out.mkdir(parents=True, exist_ok=True)
     for tmp in out.glob(".part-*"):
         tmp.unlink()
-    state = out / "_state.json"
-    current = json.loads(state.read_text())["hash"] if state.exists() else None
-    if current != digest:
+    state = _read_state(out)
+    if state is None or state.get("hash") != digest:
         for f in list(out.glob("part-*.parquet")) + [out / "_metadata.json"]:
             with contextlib.suppress(FileNotFoundError):
                 f.unlink()
-        io.write_json(state, {"hash": digest})
+        state = {"hash": digest, "parts": {}, "seconds_spent": 0.0}
+        io.write_json(out / "_state.json", state)
+    state.setdefault("parts", {})
+    state.setdefault("seconds_spent", 0.0)
+    return state
+
+
+def _damaged_parts(out: Path, state: dict) -> list[str]:
+    """Parts on disk whose bytes do not match the checksum recorded when they were written."""
+    bad = []
+    for f in sorted(out.glob("part-*.parquet")):
+        recorded = state["parts"].get(f.name)
+        if recorded is None or file_sha256(f) != recorded:
+            bad.append(f.name)
+    return bad
 
 
 @contextlib.contextmanager
@@ -150,15 +209,25 @@ def _dask_client(scheduler: str, n_workers: int | None):
 def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec, out_dir, *,
                      scheduler: str = "local", n_workers: int | None = None, progress: bool = True,
                      config: dict | None = None) -> dict:
-    """Generate (or finish) the grid dataset in ``out_dir``; returns its metadata.
+    """Generate (or finish, or repair) the grid dataset in ``out_dir``; returns its metadata.
 
     ``reference``: the grid policy {coarse, dense, eps_threshold, cavitation}.
     ``scheduler``: "local" (embedded LocalCluster), "inline" (no Dask) or a
     Dask scheduler address such as "tcp://10.0.0.5:8786".
+
+    Every part's SHA-256 is recorded as it is written (``_state.json``) and
+    listed in ``_metadata.json``; a rerun recomputes parts that are missing
+    or whose bytes no longer match (and says so).  The returned dict adds
+    what this call did: ``seconds_this_run``, ``chunks_computed_this_run``,
+    ``damaged_parts_recomputed``.
     """
     out = Path(out_dir)
+    # the whole config is checked (and the model built) before anything on disk is touched
+    check_reference(reference)
+    _reference(json.dumps(bearing.to_dict(), sort_keys=True), json.dumps(dict(reference), sort_keys=True))
     digest = config_hash(FORMAT_VERSION, bearing.to_dict(), dict(reference), spec.to_dict())
-    _prepare_dir(out, digest)
+    work = _choose_dir(out, digest)
+    state = _prepare_dir(work, digest)
     c = bearing.clearance
     n_pos = len(spec.positions(c)[0])
     step = spec.positions_per_chunk
@@ -166,35 +235,60 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
     reference_json = json.dumps(dict(reference), sort_keys=True)
     jobs: list[dict] = [{"index": i, "start": s, "stop": min(s + step, n_pos), "spec": spec, "bearing": bearing_json,
              "reference": reference_json} for i, s in enumerate(range(0, n_pos, step))]
-    pending = [j for j in jobs if not (out / _part_name(j["index"])).exists()]
+    damaged = _damaged_parts(work, state)
+    if damaged:
+        print(f"{len(damaged)} part file(s) in {work} have no recorded checksum or do not match it, and are recomputed: "
+              f"{', '.join(damaged[:5])}{' ...' if len(damaged) > 5 else ''}", flush=True)
+        for name in damaged:
+            (work / name).unlink()
+            state["parts"].pop(name, None)
+    meta_path = work / "_metadata.json"
+    pending = [j for j in jobs if not (work / _part_name(j["index"])).exists()]
+    if pending and meta_path.exists():
+        meta_path.unlink()  # metadata means complete and verified; it is not, until the parts are back
     t0 = time.perf_counter()
+    spent_before = float(state["seconds_spent"])
     if pending:
-        _run_jobs(pending, out, scheduler, n_workers, progress)
+        _run_jobs(pending, work, scheduler, n_workers, progress, state, t0, spent_before)
     elapsed = time.perf_counter() - t0
-    n_rows = sum(pq.ParquetFile(out / _part_name(j["index"])).metadata.num_rows for j in jobs)
-    meta_path = out / "_metadata.json"
+    this_run = {"seconds_this_run": elapsed, "chunks_computed_this_run": len(pending),
+                "damaged_parts_recomputed": damaged}
     if meta_path.exists() and not pending:
-        return json.loads(meta_path.read_text())
+        _swap_in(work, out)
+        return {**json.loads((out / "_metadata.json").read_text()), **this_run}
+    n_rows = sum(pq.ParquetFile(work / _part_name(j["index"])).metadata.num_rows for j in jobs)
     columns = (["S"] if spec.sleeve_positions else []) + list(COLUMNS)
+    parts = {_part_name(j["index"]): state["parts"][_part_name(j["index"])] for j in jobs}
     meta = {"n_samples": int(n_rows), "n_positions": n_pos, "n_chunks": len(jobs), "config_hash": digest,
             "fluidfilm_version": __version__, "format_version": FORMAT_VERSION, "columns": columns,
             "sleeve_positions": list(spec.sleeve_positions),
             "bearing": bearing.to_dict(), "reference": dict(reference), "spec": spec.to_dict(),
             "config": config or {}, "generation_seconds_last_run": elapsed,
-            "chunks_computed_last_run": len(pending), "scheduler": scheduler}
+            # wall time over every run that contributed parts (interrupted ones included)
+            "generation_seconds_total": spent_before + elapsed,
+            "chunks_computed_last_run": len(pending), "scheduler": scheduler, "parts": parts}
     io.write_json(meta_path, meta)
-    return meta
+    _swap_in(work, out)
+    return {**meta, **this_run}
 
 
-def _run_jobs(jobs: list, out: Path, scheduler: str, n_workers: int | None, progress: bool) -> None:
+def _run_jobs(jobs: list, out: Path, scheduler: str, n_workers: int | None, progress: bool,
+              state: dict, t0: float, spent_before: float) -> None:
     from ..progress import ProgressLog
 
     bar = ProgressLog(len(jobs), f"dataset parts ({out.name})", enabled=progress)
+
+    def store(res):
+        name = _part_name(res["index"])
+        state["parts"][name] = _write_part(out / name, res["columns"])
+        state["seconds_spent"] = spent_before + time.perf_counter() - t0
+        # the checksum is recorded after the part: a crash in between only costs recomputing that part
+        io.write_json(out / "_state.json", state)
+        bar.update()
+
     if scheduler == "inline":
         for job in jobs:
-            res = compute_chunk(job)
-            _write_part(out / _part_name(res["index"]), res["columns"])
-            bar.update()
+            store(compute_chunk(job))
         return
     from dask.distributed import as_completed
 
@@ -204,9 +298,7 @@ def _run_jobs(jobs: list, out: Path, scheduler: str, n_workers: int | None, prog
         futures = client.map(compute_chunk, jobs, pure=False)
         try:
             for fut in as_completed(futures):
-                res = fut.result()
-                _write_part(out / _part_name(res["index"]), res["columns"])
-                bar.update()
+                store(fut.result())
         except BaseException:
             client.cancel(futures)
             raise
@@ -272,12 +364,16 @@ def _random_states(spec: DatasetSpec, c: float, n: int, rng):
 
 
 def _write_test_set(out_dir, cols, n, seed, bearing, reference, spec) -> dict:
+    # written next to the old one and swapped in complete, like the dataset
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    for old in out.glob("part-*.parquet"):
-        old.unlink()
-    _write_part(out / _part_name(0), cols)
+    work = _staging_dir(out)
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir(parents=True)
+    name = _part_name(0)
+    digest = _write_part(work / name, cols)
     meta = {"n_samples": n, "seed": seed, "fluidfilm_version": __version__, "columns": list(cols),
-            "config_hash": config_hash(FORMAT_VERSION, bearing.to_dict(), dict(reference), spec.to_dict(), n, seed)}
-    io.write_json(out / "_metadata.json", meta)
+            "config_hash": config_hash(FORMAT_VERSION, bearing.to_dict(), dict(reference), spec.to_dict(), n, seed),
+            "parts": {name: digest}}
+    io.write_json(work / "_metadata.json", meta)
+    _swap_in(work, out)
     return meta

@@ -24,6 +24,8 @@ the solver that wrote the data.
 """
 from __future__ import annotations
 
+import hashlib
+
 import json
 from pathlib import Path
 
@@ -51,10 +53,53 @@ def table(cols: dict) -> pa.Table:
                                  else cols[k] for k in COLUMNS}})
 
 
-def write_part(path: Path, cols: dict) -> None:
-    """Write one part file atomically (temporary file + rename)."""
+def write_part(path: Path, cols: dict) -> str:
+    """Write one part file atomically (temporary file + rename); return the SHA-256 of the bytes written
+    (the manifest's checksum)."""
     with io.atomic_path(path, suffix=".parquet") as tmp:
         pq.write_table(table(cols), tmp, compression="zstd")
+        digest = file_sha256(tmp)
+    return digest
+
+
+def file_sha256(path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+class DatasetIntegrityError(ValueError):
+    """A dataset on disk is incomplete or damaged; the message names the file."""
+
+
+def verify_dataset(path) -> dict:
+    """Check every part of a complete dataset against the checksums in its manifest; return the metadata.
+
+    Raises ``DatasetIntegrityError`` naming the first missing or damaged file,
+    so nothing is ever trained on forces that are not the ones computed.
+    """
+    path = Path(path)
+    meta_file = path / "_metadata.json"
+    if not meta_file.exists():
+        raise DatasetIntegrityError(f"{path} is not a complete dataset (no _metadata.json); generate it first")
+    meta = json.loads(meta_file.read_text())
+    parts = meta.get("parts")
+    if parts is None:
+        raise DatasetIntegrityError(f"{meta_file} lists no part checksums (made by an older version); "
+                                    "generate the dataset again")
+    for name, digest in sorted(parts.items()):
+        f = path / name
+        if not f.exists():
+            raise DatasetIntegrityError(f"{f} is missing (listed in {meta_file})")
+        if file_sha256(f) != digest:
+            raise DatasetIntegrityError(f"{f} is damaged: its SHA-256 differs from the one recorded in "
+                                        f"{meta_file}; run make_dataset again to recompute it")
+    extra = sorted(p.name for p in path.glob("part-*.parquet") if p.name not in parts)
+    if extra:
+        raise DatasetIntegrityError(f"{path} holds part files not in its manifest: {extra[:3]}")
+    return meta
 
 
 def part_name(index: int) -> str:
@@ -73,12 +118,14 @@ def read_metadata(path) -> dict:
 def load_dataset(path, columns=TRAINING_COLUMNS) -> tuple[pd.DataFrame, dict]:
     """The dataset's rows (``columns``; the sleeve column S comes along if present) and its metadata."""
     meta = read_metadata(path)
+    verify_dataset(path)  # checksums recorded at generation; names a damaged file
     extra = [c for c in EXTRA_INPUTS if c in meta.get("columns", ()) and c not in columns]
     return pd.read_parquet(Path(path), columns=list(columns) + extra), meta
 
 
 def load_test_set(path) -> pd.DataFrame:
-    """Every row of a held-out test set."""
+    """Every row of a held-out test set (checked against its manifest's checksums first)."""
+    verify_dataset(path)
     return pd.read_parquet(Path(path))
 
 

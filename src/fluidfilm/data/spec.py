@@ -17,6 +17,8 @@ Every bad value fails here, before any work, with a message naming its key.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import hashlib
 import json
 import math
@@ -207,6 +209,37 @@ class DatasetSpec:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+CAVITATION_MODELS = ("gumbel", "swift-stieber")
+
+
+def check_reference(cfg: Mapping, where: str = "reference") -> dict:
+    """The reference grid policy {coarse, dense, eps_threshold, cavitation} as plain data, every value
+    checked (naming its key) before any work or any output is touched."""
+    out: dict[str, Any] = {}
+    for key in ("coarse", "dense"):
+        grid: Any = cfg.get(key) if hasattr(cfg, "get") else None
+        try:
+            ok = grid is not None and len(grid) == 2 and all(float(n) == int(n) >= 3 for n in grid)
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise DatasetConfigError(f"{where}.{key}={grid!r} must be a pair of grid sizes [n_theta, n_z], "
+                                     "each an integer >= 3")
+        out[key] = [int(n) for n in grid]
+    thr = _num(cfg, "eps_threshold", where)
+    if not 0.0 < thr <= 1.0:
+        raise DatasetConfigError(f"{where}.eps_threshold={thr!r} must lie in (0, 1]")
+    out["eps_threshold"] = thr
+    cav = cfg.get("cavitation", "gumbel")
+    if cav not in CAVITATION_MODELS:
+        raise DatasetConfigError(f"{where}.cavitation={cav!r} must be one of {CAVITATION_MODELS}")
+    out["cavitation"] = cav
+    unknown = sorted(set(cfg) - {"coarse", "dense", "eps_threshold", "cavitation"})
+    if unknown:
+        raise DatasetConfigError(f"{where}: unknown key(s) {unknown}")
+    return out
 
 
 def config_hash(*parts) -> str:

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..bearing import JournalBearing
 from ..models import ReferenceModel
-from ..states import as_state_pairs, check_states
+from ..states import V_MAX_PHYSICAL, as_state_pairs, check_states
 from . import kernels
 from .mesh import FilmMesh
 from .params import Cavitation, FilmParams
@@ -195,7 +195,7 @@ class ReynoldsSolver(_GridSolver):
             if not (math.isfinite(v1) and math.isfinite(v2)):
                 raise ValueError(f"velocity V must be finite, got {(v1, v2)}")
             eps = math.hypot(x1, x2) / self._c
-            if eps >= 1.0:
+            if eps >= 1.0 or math.hypot(v1, v2) > V_MAX_PHYSICAL:
                 check_states(np.array([[x1, x2]]), np.array([[v1, v2]]), self._c)
             return np.array(self._kernel(self.params, x1, x2, v1, v2))
         x, v, shape = as_state_pairs(X, V, self._c)

@@ -26,7 +26,8 @@ def run_case(model, rotor_cfg: Mapping, case_cfg: Mapping, integrator_cfg: Mappi
 def case_summary(traj: Trajectory, clearance: float, t_settle: float, ref: Trajectory | None = None,
                  threshold_pct: float | None = None) -> dict:
     """Orbit statistics of a case, and its distances from a reference orbit when one is given."""
-    out = {"status": traj.status, "wall_time_s": traj.wall_time_s, "n_force_evals": traj.n_force_evals}
+    out = {"status": traj.status, "wall_time_s": traj.wall_time_s, "n_force_evals": traj.n_force_evals,
+           "n_outside_domain": traj.n_outside_domain}
     out.update(orbit_stats(traj, clearance, t_settle))
     if ref is not None:
         d = compare_orbits(traj, ref, clearance, t_settle)

@@ -55,6 +55,8 @@ class Trajectory:
     n_force_evals: int = 0
     wall_time_s: float = 0.0
     meta: dict = field(default_factory=dict)
+    # force evaluations outside the model's training domain during this run (0 for a reference model)
+    n_outside_domain: int = 0
 
     @property
     def ok(self) -> bool:
@@ -71,7 +73,8 @@ class Trajectory:
             np.savez_compressed(tmp, t=self.t, x=self.x, v=self.v, status=np.array(self.status),
                                 t_stop=np.array(np.nan if self.t_stop is None else self.t_stop),
                                 n_force_evals=np.array(self.n_force_evals),
-                                wall_time_s=np.array(self.wall_time_s))
+                                wall_time_s=np.array(self.wall_time_s),
+                                n_outside_domain=np.array(self.n_outside_domain))
 
     @classmethod
     def from_npz(cls, path) -> "Trajectory":
@@ -79,7 +82,8 @@ class Trajectory:
         t_stop = float(d["t_stop"])
         return cls(t=d["t"], x=d["x"], v=d["v"], status=str(d["status"]),
                    t_stop=None if math.isnan(t_stop) else t_stop,
-                   n_force_evals=int(d["n_force_evals"]), wall_time_s=float(d["wall_time_s"]))
+                   n_force_evals=int(d["n_force_evals"]), wall_time_s=float(d["wall_time_s"]),
+                   n_outside_domain=int(d["n_outside_domain"]) if "n_outside_domain" in d else 0)
 
 
 @njit(cache=True)
@@ -126,37 +130,51 @@ def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_
             k = int(math.ceil((ref / (1.0 - e2)) ** 1.5))
             if k > max_substeps:
                 k = max_substeps
-        h = dt / k
-        for sub in range(k):
-            a1, a2, ok1 = _acceleration(kernel, params, x1, x2, v1, v2, t, consts)
-            b1, b2, ok2 = _acceleration(kernel, params, x1 + 0.5 * h * v1, x2 + 0.5 * h * v2,
-                                        v1 + 0.5 * h * a1, v2 + 0.5 * h * a2, t + 0.5 * h, consts)
-            kx1 = v1 + 0.5 * h * a1
-            kx2 = v2 + 0.5 * h * a2
-            c1, c2_, ok3 = _acceleration(kernel, params, x1 + 0.5 * h * kx1, x2 + 0.5 * h * kx2,
-                                         v1 + 0.5 * h * b1, v2 + 0.5 * h * b2, t + 0.5 * h, consts)
-            lx1 = v1 + 0.5 * h * b1
-            lx2 = v2 + 0.5 * h * b2
-            d1, d2, ok4 = _acceleration(kernel, params, x1 + h * lx1, x2 + h * lx2,
-                                        v1 + h * c1, v2 + h * c2_, t + h, consts)
-            mx1 = v1 + h * c1
-            mx2 = v2 + h * c2_
-            n_evals += 4
-            if not (ok1 and ok2 and ok3 and ok4):
+        sx1, sx2, sv1, sv2 = x1, x2, v1, v2
+        while True:
+            # a stage outside the clearance says the step is too long, not that the journal touched:
+            # the step is redone with twice the substeps (up to max_substeps) before contact is reported
+            x1, x2, v1, v2 = sx1, sx2, sv1, sv2
+            t = t0 + step * dt
+            h = dt / k
+            stage_out = False
+            for sub in range(k):
+                a1, a2, ok1 = _acceleration(kernel, params, x1, x2, v1, v2, t, consts)
+                b1, b2, ok2 = _acceleration(kernel, params, x1 + 0.5 * h * v1, x2 + 0.5 * h * v2,
+                                            v1 + 0.5 * h * a1, v2 + 0.5 * h * a2, t + 0.5 * h, consts)
+                kx1 = v1 + 0.5 * h * a1
+                kx2 = v2 + 0.5 * h * a2
+                c1, c2_, ok3 = _acceleration(kernel, params, x1 + 0.5 * h * kx1, x2 + 0.5 * h * kx2,
+                                             v1 + 0.5 * h * b1, v2 + 0.5 * h * b2, t + 0.5 * h, consts)
+                lx1 = v1 + 0.5 * h * b1
+                lx2 = v2 + 0.5 * h * b2
+                d1, d2, ok4 = _acceleration(kernel, params, x1 + h * lx1, x2 + h * lx2,
+                                            v1 + h * c1, v2 + h * c2_, t + h, consts)
+                mx1 = v1 + h * c1
+                mx2 = v2 + h * c2_
+                n_evals += 4
+                if not (ok1 and ok2 and ok3 and ok4):
+                    stage_out = True
+                    break
+                nx1 = x1 + h / 6.0 * (v1 + 2.0 * kx1 + 2.0 * lx1 + mx1)
+                nx2 = x2 + h / 6.0 * (v2 + 2.0 * kx2 + 2.0 * lx2 + mx2)
+                nv1 = v1 + h / 6.0 * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
+                nv2 = v2 + h / 6.0 * (a2 + 2.0 * b2 + 2.0 * c2_ + d2)
+                if not (math.isfinite(nx1) and math.isfinite(nx2) and math.isfinite(nv1) and math.isfinite(nv2)):
+                    status = 3
+                    break
+                x1, x2, v1, v2 = nx1, nx2, nv1, nv2
+                t = t0 + (step + (sub + 1.0) / k) * dt
+                # contact is checked after every substep, independent of how often the output is recorded
+                if x1 * x1 + x2 * x2 >= stop2:
+                    status = 1
+                    break
+            if stage_out and status == 0 and k < max_substeps:
+                k = min(2 * k, max_substeps)
+                continue
+            if stage_out:
                 status = 2
-                break
-            nx1 = x1 + h / 6.0 * (v1 + 2.0 * kx1 + 2.0 * lx1 + mx1)
-            nx2 = x2 + h / 6.0 * (v2 + 2.0 * kx2 + 2.0 * lx2 + mx2)
-            nv1 = v1 + h / 6.0 * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
-            nv2 = v2 + h / 6.0 * (a2 + 2.0 * b2 + 2.0 * c2_ + d2)
-            if not (math.isfinite(nx1) and math.isfinite(nx2) and math.isfinite(nv1) and math.isfinite(nv2)):
-                status = 3
-                break
-            x1, x2, v1, v2 = nx1, nx2, nv1, nv2
-            t = t0 + (step + (sub + 1.0) / k) * dt
-            if x1 * x1 + x2 * x2 >= stop2:
-                status = 1
-                break
+            break
         if status != 0:
             break
         if (step + 1) % record_every == 0:
@@ -185,16 +203,26 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     # an active bearing reports the clearance of its current control setting
     c = float(model.clearance)
     for name, value in (("t_end", t_end), ("dt", dt)):
-        if not (math.isfinite(value) and value > 0.0):
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) or not (
+                math.isfinite(value) and value > 0.0):
             raise ValueError(f"{name} must be a positive finite time in s, got {value!r}")
     if dt > t_end:
         raise ValueError(f"dt={dt!r} s is longer than t_end={t_end!r} s")
+    for name, value in (("eps_stop", eps_stop), ("eps_substep", eps_substep)):
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
+            raise ValueError(f"{name} must be a number, got {value!r}")
     if not 0.0 < eps_stop < 1.0:
         raise ValueError(f"eps_stop must lie in (0, 1), got {eps_stop!r}")
     if not 0.0 < eps_substep < 1.0:
         raise ValueError(f"eps_substep must lie in (0, 1), got {eps_substep!r}")
-    if int(record_every) < 1:
-        raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
+    for name, value in (("record_every", record_every), ("max_substeps", max_substeps)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
+        raise ValueError(f"t0 must be a finite time in s, got {t0!r}")
+    for name, value in (("x0", x0), ("v0", v0)):
+        if value is not None and np.shape(value) != (2,):
+            raise ValueError(f"{name} must be a pair ({name[0].upper()}1, {name[0].upper()}2), got shape {np.shape(value)}")
     x0 = np.zeros(2) if x0 is None else np.asarray(x0, dtype=float).reshape(2)
     v0 = np.zeros(2) if v0 is None else np.asarray(v0, dtype=float).reshape(2)
     if not (np.isfinite(x0).all() and np.isfinite(v0).all()):
@@ -225,10 +253,11 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     else:
         text = f"diverged: non-finite state after t={t_stop:.6g} s"
     note = model.domain_report()
+    n_outside = int(model.n_outside_domain)
     if note:
         text = f"{text}; {note}"
         warnings.warn(f"{model.name}: {note} during the simulation",
                       RuntimeWarning, stacklevel=2)
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
                       t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=wall,
-                      meta={"dt": dt, "t_end": t_end, "record_every": record_every})
+                      meta={"dt": dt, "t_end": t_end, "record_every": record_every}, n_outside_domain=n_outside)

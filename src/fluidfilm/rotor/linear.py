@@ -53,6 +53,10 @@ class LinearBearing:
     def domain_report(self) -> str | None:
         return None
 
+    @property
+    def n_outside_domain(self) -> int:
+        return 0
+
     def forces(self, X, V) -> np.ndarray:
         X = np.asarray(X, dtype=float)
         V = np.asarray(V, dtype=float)

@@ -312,6 +312,8 @@ class SurrogateForceModel:
         # the current setting, read by the kernel: 1/c^2 (eccentricity for routing and domain) and the
         # sleeve displacement; mutable, so a controller moves the sleeve without rebuilding anything
         self._setting = np.array([1.0 / bearing.clearance**2, 0.0])
+        # the clearance itself, not 1/sqrt(1/c^2): rounding there let eps = 1 pass the domain check as 0.9999...
+        self._clearance = float(bearing.clearance)
         self._n_extra = len(scalings[0].extras)
         if any(len(sc.extras) != self._n_extra for sc in scalings):
             raise ValueError("all networks of a split model must take the same extra inputs")
@@ -331,7 +333,6 @@ class SurrogateForceModel:
             damping_tables=tuple(t for t, _ in damp),
             damping_n_layers=np.array([n for _, n in damp], dtype=np.int64),
         )
-        self._warned = False
 
     @property
     def bearing(self) -> JournalBearing | ConicalBearing:
@@ -359,7 +360,7 @@ class SurrogateForceModel:
     @property
     def clearance(self) -> float:
         """Radial clearance at the current sleeve position [m]."""
-        return float(self._setting[0] ** -0.5)
+        return self._clearance
 
     def set_sleeve(self, sleeve: float) -> None:
         """Move the sleeve [m] (a surrogate of an active bearing takes it as an input)."""
@@ -368,6 +369,7 @@ class SurrogateForceModel:
         c = self._bearing.clearance_at(sleeve)
         self._setting[0] = 1.0 / c**2
         self._setting[1] = float(sleeve)
+        self._clearance = float(c)
 
     @property
     def n_parameters(self) -> int:
@@ -385,17 +387,24 @@ class SurrogateForceModel:
 
     # ------------------------------------------------------------------ evaluation
     def forces(self, X, V) -> np.ndarray:
-        x, v, shape = as_state_pairs(X, V, self.clearance)
+        x, v, shape = as_state_pairs(X, V, self.clearance)  # the shared domain contract (states.py)
         before = int(self._counter[0])
         out = np.empty_like(x)
         if x.shape[0]:
             _surrogate_batch(self.params, x, v, out)
-        if self._counter[0] > before and not self._warned:
-            self._warned = True
-            warnings.warn(f"{self.name}: {int(self._counter[0]) - before} of {len(x)} states lie outside the "
-                          f"training domain (eps <= {self.eps_max:g}, velocities within the data's range); "
-                          "forces there are extrapolated", RuntimeWarning, stacklevel=2)
+        n_out = int(self._counter[0]) - before
+        if n_out:
+            # every call says how many (the count in the text keeps Python from showing it only once)
+            warnings.warn(f"{self.name}: {n_out} of {len(x)} states lie outside the training domain "
+                          f"(eps <= {self.eps_max:g}, velocities within the data's range); forces there are "
+                          f"extrapolated ({int(self._counter[0])} such evaluations since the last reset)",
+                          RuntimeWarning, stacklevel=2)
         return out.reshape(shape + (2,))
+
+    @property
+    def n_outside_domain(self) -> int:
+        """Force evaluations outside the training domain since the last ``reset_domain_counter``."""
+        return int(self._counter[0])
 
     def __repr__(self) -> str:
         return (f"SurrogateForceModel({self.name!r}, {len(self.networks)} network(s), boundaries="
@@ -418,23 +427,95 @@ class SurrogateForceModel:
                 arrays[f"r{r}_db{k}"] = b
         with io.atomic_path(d / "surrogate.npz", suffix=".npz") as tmp:
             np.savez(tmp, **arrays)
+            weights_sha256 = _sha256(tmp)
         meta = {"name": self.name, "activation": self.activation, "boundaries": self.boundaries.tolist(),
                 "blend_width": self.blend_width, "domain": self.domain.tolist(), "eps_max": self.eps_max,
                 "structure": self.structure,
                 "n_layers": [len(n if self.structure == "plain" else n[0]) for n in self.networks],
                 "n_layers_damping": [0 if self.structure == "plain" else len(n[1]) for n in self.networks],
                 "scalings": [s.to_dict() for s in self.scalings],
-                "bearing": self._bearing.to_dict(), "info": self.info}
+                "bearing": self._bearing.to_dict(), "info": self.info,
+                # checked on load: a damaged or swapped weights file is refused, naming it
+                "weights_sha256": weights_sha256,
+                "array_shapes": {k: list(np.shape(v)) for k, v in arrays.items()}}
         io.write_json(d / "model.json", meta)
 
 
+class SurrogateFileError(ValueError):
+    """A saved surrogate is missing, damaged or inconsistent; the message names the file and the fault."""
+
+
+def _sha256(path) -> str:
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _check_network(npz: Path, meta: dict, arrays) -> None:
+    structure = meta.get("structure", "plain")
+    for r, scal in enumerate(meta["scalings"]):
+        n_in = (3 if scal.get("frame", "cartesian") == "polar" else 4) + len(scal.get("extras", ()))
+        chains = [("", meta["n_layers"][r], n_in, 2)]
+        if structure == "damping":  # the static load S sees the position inputs only (all but the velocities)
+            chains = [("", meta["n_layers"][r], n_in - 2, 2), ("d", meta["n_layers_damping"][r], n_in, 4)]
+        for tag, n_layers, width_in, n_out in chains:
+            for k in range(n_layers):
+                wk, bk = f"r{r}_{tag}W{k}", f"r{r}_{tag}b{k}"
+                for key in (wk, bk):
+                    if key not in arrays:
+                        raise SurrogateFileError(f"{npz}: array {key} is missing (model.json lists {n_layers} layers "
+                                                 f"for network {r})")
+                W, b = arrays[wk], arrays[bk]
+                last = k == n_layers - 1
+                if W.ndim != 2 or W.shape[1] != width_in or b.shape != (W.shape[0],) or (last and W.shape[0] != n_out):
+                    want = f"({n_out if last else 'width'}, {width_in})"
+                    raise SurrogateFileError(f"{npz}: {wk} has shape {W.shape} and {bk} {b.shape}; the saved "
+                                             f"configuration (model.json) needs {wk} of shape {want} and a matching bias")
+                if not (np.isfinite(W).all() and np.isfinite(b).all()):
+                    raise SurrogateFileError(f"{npz}: {wk if not np.isfinite(W).all() else bk} holds non-finite "
+                                             "values (NaN or inf); the model would give NaN forces")
+                width_in = W.shape[0]
+    shapes = meta.get("array_shapes")
+    if shapes is not None:
+        for key, shape in shapes.items():
+            if key in arrays and list(arrays[key].shape) != list(shape):
+                raise SurrogateFileError(f"{npz}: {key} has shape {arrays[key].shape}, saved as {tuple(shape)}")
+
+
 def load_surrogate(path) -> SurrogateForceModel:
-    """Load a saved surrogate (a ``models/<name>/`` directory) as a force model."""
+    """Load a saved surrogate (a ``models/<name>/`` directory) as a force model.
+
+    Refuses, naming the file and the fault: a missing or unreadable file, a
+    weights file whose SHA-256 differs from the one written at save time,
+    arrays whose shapes disagree with the saved configuration, non-finite
+    weights.
+    """
     d = Path(path)
-    if not (d / "model.json").exists() or not (d / "surrogate.npz").exists():
-        raise ValueError(f"{d} holds no saved surrogate (model.json and surrogate.npz)")
-    meta = json.loads((d / "model.json").read_text())
-    arrays = np.load(d / "surrogate.npz")
+    meta_file, npz = d / "model.json", d / "surrogate.npz"
+    for f in (meta_file, npz):
+        if not f.exists():
+            raise SurrogateFileError(f"{f} is missing: {d} holds no saved surrogate (model.json and surrogate.npz)")
+    try:
+        meta = json.loads(meta_file.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as err:
+        raise SurrogateFileError(f"{meta_file} is not valid JSON ({err}); the file is damaged") from None
+    recorded = meta.get("weights_sha256")
+    if recorded is not None and _sha256(npz) != recorded:
+        raise SurrogateFileError(f"{npz} is damaged or was replaced: its SHA-256 differs from the one recorded "
+                                 f"in {meta_file} at save time")
+    try:
+        with np.load(npz) as z:
+            arrays = {k: z[k] for k in z.files}
+    except Exception as err:  # zipfile/pickle/OS errors alike: say which file
+        raise SurrogateFileError(f"{npz} cannot be read ({type(err).__name__}: {err})") from None
+    try:
+        _check_network(npz, meta, arrays)
+    except KeyError as err:
+        raise SurrogateFileError(f"{meta_file} lacks the key {err}") from None
     structure = meta.get("structure", "plain")
     networks: list = [[(arrays[f"r{r}_W{k}"], arrays[f"r{r}_b{k}"]) for k in range(n)]
                 for r, n in enumerate(meta["n_layers"])]

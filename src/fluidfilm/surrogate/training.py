@@ -143,18 +143,21 @@ class ForceMLP(L.LightningModule):
 class _Batches(torch.utils.data.IterableDataset):
     """Whole batches sliced from in-memory tensors (no per-sample collation), reshuffled each epoch."""
 
-    def __init__(self, tensors, batch_size: int, shuffle: bool, seed: int):
+    def __init__(self, tensors, batch_size: int, shuffle: bool, seed: int, epoch_of=None):
         self.tensors = tensors
         self.batch_size = int(batch_size)
         self.shuffle = shuffle
         self.seed = seed
         self.epoch = 0
+        # the trainer's epoch, so a run resumed from a checkpoint draws the same order as one never stopped
+        self.epoch_of = epoch_of
 
     def __iter__(self):
         n = self.tensors[0].shape[0]
         if self.shuffle:
-            g = torch.Generator().manual_seed(self.seed + self.epoch)
-            self.epoch += 1
+            epoch = self.epoch_of() if self.epoch_of is not None else self.epoch
+            g = torch.Generator().manual_seed(self.seed + epoch)
+            self.epoch = epoch + 1
             order = torch.randperm(n, generator=g)
         for start in range(0, n, self.batch_size):
             if self.shuffle:
@@ -231,7 +234,8 @@ class ForceDataModule(L.LightningDataModule):
         self.eps_data_max = float(df["eps"].max())
 
     def train_dataloader(self):
-        return torch.utils.data.DataLoader(_Batches(self.train_tensors, self.batch_size, True, self.seed),
+        epoch_of = (lambda: self.trainer.current_epoch) if self.trainer is not None else None  # noqa: E731
+        return torch.utils.data.DataLoader(_Batches(self.train_tensors, self.batch_size, True, self.seed, epoch_of),
                                            batch_size=None)
 
     def val_dataloader(self):
@@ -281,12 +285,44 @@ class TargetStop(L.Callback):
         self.epoch_at_target = state["epoch_at_target"]
 
 
+class AtomicLastCheckpoint(L.pytorch.callbacks.ModelCheckpoint):
+    """``last.ckpt`` after every epoch, written aside and renamed into place: a kill during the write
+    leaves the previous epoch's checkpoint whole, never a truncated one that cannot be resumed."""
+
+    # Lightning saves ``last`` only alongside a top-k checkpoint, so with save_top_k=0 it wrote one at the
+    # very end of training and a killed run restarted from nothing; here it is written every epoch, at the
+    # point where Lightning's own per-epoch checkpoint would be.
+    def on_train_epoch_end(self, trainer, pl_module) -> None:
+        if not self._should_skip_saving_checkpoint(trainer) and self._should_save_on_train_epoch_end(trainer):
+            self._save_last_checkpoint(trainer, self._monitor_candidates(trainer))
+
+    def on_validation_end(self, trainer, pl_module) -> None:
+        if not self._should_skip_saving_checkpoint(trainer) and not self._should_save_on_train_epoch_end(trainer):
+            self._save_last_checkpoint(trainer, self._monitor_candidates(trainer))
+
+    def _save_checkpoint(self, trainer, filepath: str) -> None:
+        import os
+
+        tmp = f"{filepath}.partial"
+        trainer.save_checkpoint(tmp, self.save_weights_only)
+        if trainer.is_global_zero:
+            os.replace(tmp, filepath)
+        self._last_global_step_saved = trainer.global_step
+        self._last_checkpoint_saved = filepath
+        if trainer.is_global_zero:
+            for logger in trainer.loggers:
+                logger.after_save_checkpoint(self)
+
+
 def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, target: float | None,
                   ckpt_dir=None, logger=None, seed: int = 0) -> dict:
     """Fit one network; returns its layers (numpy), scaling and timings.
 
-    With ``ckpt_dir``, the last epoch is checkpointed there and a rerun
-    resumes from it.
+    With ``ckpt_dir``, every epoch ends with an atomic ``last.ckpt`` there, and
+    a rerun resumes from it: weights, optimiser, learning-rate schedule,
+    the shuffle order (drawn from the trainer's epoch) and the training clock,
+    so in deterministic mode kill + resume ends with the weights and metrics
+    of an uninterrupted run.
     """
     L.seed_everything(seed, workers=True)
     dm.setup()
@@ -312,7 +348,7 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
     ckpt_path = None
     if ckpt_dir is not None:
         ckpt_dir = Path(ckpt_dir)
-        callbacks.append(L.pytorch.callbacks.ModelCheckpoint(dirpath=ckpt_dir, save_last=True, save_top_k=0))
+        callbacks.append(AtomicLastCheckpoint(dirpath=ckpt_dir, save_last=True, save_top_k=0))
         if (ckpt_dir / "last.ckpt").exists():
             ckpt_path = str(ckpt_dir / "last.ckpt")
     trainer = L.Trainer(max_epochs=trainer_cfg["max_epochs"], max_time=trainer_cfg.get("max_time"),
