@@ -62,7 +62,8 @@ def _controller_objects(cfg):
 
 
 def _options():
-    for group in sorted(p.name for p in CONF.iterdir() if p.is_dir() and p.name != "hydra"):
+    # conf/pipeline holds DVC's pipeline profiles (dvc.yaml `vars`), not a Hydra group
+    for group in sorted(p.name for p in CONF.iterdir() if p.is_dir() and p.name not in ("hydra", "pipeline")):
         for option in sorted(p.stem for p in (CONF / group).glob("*.yaml")):
             yield group, option
 
@@ -86,3 +87,18 @@ def test_every_option_composes(group, option):
         bearing_from_cfg(cfg.bearing)
     if group == "controller":
         _controller_objects(cfg)
+
+
+@pytest.mark.parametrize("profile", sorted(p.stem for p in (CONF / "pipeline").glob("*.yaml")))
+def test_pipeline_profile_names_every_stage(profile):
+    """Each pipeline profile gives overrides for exactly the stages of dvc.yaml, and the workspace interpreter."""
+    import yaml
+
+    prof = yaml.safe_load((CONF / "pipeline" / f"{profile}.yaml").read_text())
+    stages = yaml.safe_load((CONF.parent / "dvc.yaml").read_text())["stages"]
+    assert prof["python"] == ".venv/bin/python"
+    assert prof["profile"] == profile
+    assert set(prof["args"]) == set(stages)
+    for name, stage in stages.items():
+        assert stage["cmd"].startswith("${python} experiments/"), name
+        assert stage["cmd"].endswith("${args.%s}" % name), name
