@@ -22,8 +22,11 @@ def _f(x, spec=".1f"):
 
 def characteristics_section(ch: dict) -> str:
     """Markdown summary of reports/characteristics.json."""
-    rows = "\n".join(f"| {n} | {100 * e['direct']:.2f} | {100 * e['cross']:.2f} | "
-                     f"{_f(100 * ch['whirl_threshold_rel_err'].get(n), '.2f')} |" for n, e in ch["kc_max_rel_err"].items())
+    def pct(x):  # None: not finite (e.g. a surrogate stable over the whole speed bracket)
+        return None if x is None else 100.0 * x
+
+    rows = "\n".join(f"| {n} | {_f(pct(e['direct']), '.2f')} | {_f(pct(e['cross']), '.2f')} | "
+                     f"{_f(pct(ch['whirl_threshold_rel_err'].get(n)), '.2f')} |" for n, e in ch["kc_max_rel_err"].items())
     checks = "\n".join(f"| {c['factor']:.2f} | {c['speed_rpm']:.0f} | {c['ratio']:.3g} | {c['status']} |"
                         for c in ch["nonlinear_checks"])
     return f"""
