@@ -259,3 +259,16 @@ def test_surrogate_jacobian_is_the_networks_derivative(kind, frame, activation, 
             d[j] = steps[j]
             num = (m.forces(x + d[:2], v + d[2:]) - m.forces(x - d[:2], v - d[2:])) / (2 * steps[j])
             np.testing.assert_allclose(J[:, j], num, rtol=1e-5, atol=1e-6 * np.abs(J).max())
+
+
+def test_published_flows_respect_the_couette_inflow_bound():
+    """The typed Raimondi & Boyd flows obey physics: the flow entering at the maximum film thickness (p = 0
+    there, rising downstream) cannot exceed the Couette flow pi (1 + eps) in units of R c N L."""
+    import math
+
+    from fluidfilm.characteristics.published import RAIMONDI_BOYD
+
+    for l_over_d, rows in RAIMONDI_BOYD.items():
+        ratios = [q / (math.pi * (1 + eps)) for eps, _, _, _, q, _ in rows]
+        assert all(r <= 1.0 for r in ratios), (l_over_d, ratios)
+        assert all(b <= a + 1e-3 for a, b in zip(ratios, ratios[1:])), (l_over_d, ratios)  # falls with eps
