@@ -107,7 +107,72 @@ def render_control(reports: Path) -> str:
                    "mean friction power", "sleeve travel", "time per decision"], rows)
 
 
+def _csv_table(path: Path, columns: dict[str, str], query=None) -> str:
+    import pandas as pd
+
+    if not path.exists():
+        raise FileNotFoundError(f"{path} is missing: run `make reproduce`")
+    df = pd.read_csv(path)
+    if query is not None:
+        df = df.query(query)
+    rows = [[format(r[c], spec) if spec else str(r[c]) for c, spec in columns.items()] for _, r in df.iterrows()]
+    return _table(list(columns), rows)
+
+
+def render_raimondi_boyd(reports: Path) -> str:
+    return _csv_table(reports / "characteristics" / "raimondi_boyd.csv",
+                      {"l_over_d": "g", "eps": "g", "S_pub": "g", "S": ".4g", "S_err_pct": ".2f", "phi_pub": "g",
+                       "phi": ".2f", "phi_err_deg": ".2f", "fric_pub": "g", "fric": ".4g", "fric_err_pct": ".2f",
+                       "flow_pub": "g", "flow": ".4g", "flow_err_pct": ".2f", "qs_ratio_pub": "g", "qs_ratio": ".3f",
+                       "qs_ratio_err_pct": ".2f"}, "feed == 'max-film'")
+
+
+def render_raimondi_boyd_no_feed(reports: Path) -> str:
+    return _csv_table(reports / "characteristics" / "raimondi_boyd.csv",
+                      {"l_over_d": "g", "eps": "g", "S_err_pct": ".2f", "phi_err_deg": ".2f", "fric_err_pct": ".2f"},
+                      "feed == 'none'")
+
+
+def render_characteristics(reports: Path) -> str:
+    ch = _load(reports, "characteristics.json")
+    rb, sb = ch["raimondi_boyd"], ch["short_bearing"]
+    thr = ch["threshold"]["reference"]
+    lines = [
+        "Validation of the reference model (limits in brackets):", "",
+        _table(["check", "worst measured"], [
+            ["Raimondi & Boyd 1958, L/D = 1, 1/2, 1/4, eps 0.1-0.9, Swift-Stieber, feed at max. film: "
+             "S (2 %), attitude (1°), friction (3 %), flow (3 %), side-flow ratio (3 %)",
+             f"{rb['S_max_err_pct']:.2f} %, {rb['phi_max_err_deg']:.2f}°, {rb['friction_max_err_pct']:.2f} %, "
+             f"{rb['flow_max_err_pct']:.2f} %, {rb['side_flow_ratio_max_err_pct']:.2f} %"],
+            ["same bearing, film bounded by cavitation all round (no feed line): attitude",
+             f"{rb['phi_max_err_deg_no_feed']:.1f}° (the feed assumption, not the solver)"],
+            [f"short bearing (Ocvirk, Gümbel), L/D = {sb['l_over_d']:g}: load, attitude, 8 coefficients, critical "
+             "mass (1 %)", f"{sb['load_max_err_pct']:.2f} %, {sb['attitude_max_err_deg']:.3f}°, "
+             f"{sb['kc_max_err_scale_pct']:.2f} %, {sb['critical_mass_max_err_pct']:.2f} %"],
+        ]),
+        f"Onset of oil whirl of the paper's rotor ({ch['rotor_mass_per_bearing_kg']:.2f} kg per bearing, reference "
+        f"30x30): **{thr['speed_rpm']:.0f} rpm** (whirl frequency ratio {thr['whirl_ratio']:.3f}); the nonlinear "
+        "model " + ("confirms it" if ch["bracket_holds"] else "does **not** confirm it") + ": "
+        + "; ".join(f"{c['factor']:.2f}x ({c['speed_rpm']:.0f} rpm): {'grows' if c['ratio'] > 1 else 'decays'} "
+                    f"(amplitude last/first {c['ratio']:.2g}{', contact' if c['contact'] else ''})"
+                    for c in ch["nonlinear_checks"]) + ".", "",
+        "Surrogates against the reference (eps 0.1-0.9 along the equilibrium locus; error relative to "
+        "max(|K_ref|, 0.1 x matrix scale)):", "",
+    ]
+    rows = []
+    for name, e in ch["kc_max_rel_err"].items():
+        t = ch["whirl_threshold_rel_err"].get(name)
+        rows.append([name, _num(100 * e["direct"], ".2f", " %"), _num(100 * e["cross"], ".2f", " %"),
+                     "n/a" if t is None else f"{100 * t:.2f} %"])
+    lines.append(_table(["model", "K/C max error, direct terms", "K/C max error, cross terms",
+                         "whirl threshold error"], rows))
+    return "\n".join(lines)
+
+
 RENDERERS: dict[str, Callable[[Path], str]] = {
+    "characteristics": render_characteristics,
+    "raimondi_boyd": render_raimondi_boyd,
+    "raimondi_boyd_no_feed": render_raimondi_boyd_no_feed,
     "reproduce_timing": render_reproduce_timing,
     "headline": render_headline,
     "control": render_control,
@@ -152,23 +217,27 @@ def fill(text: str, reports: Path, strict: bool = False) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m fluidfilm.readme", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--readme", default="README.md")
+    parser.add_argument("--readme", default="README.md", help="the README; docs/*.md beside it are filled too")
     parser.add_argument("--reports", default="reports")
     parser.add_argument("--check", action="store_true", help="only compare; exit 1 when README.md is stale")
     args = parser.parse_args(argv)
-    path = Path(args.readme)
-    old = path.read_text()
-    new = fill(old, Path(args.reports), strict=args.check)
-    if args.check:
-        if new != old:
-            print(f"{path} is stale: run `python -m fluidfilm.readme`", file=sys.stderr)
-            return 1
-        return 0
-    if new != old:
+    readme = Path(args.readme)
+    stale = []
+    for path in [readme, *sorted((readme.parent / "docs").glob("*.md"))]:
+        old = path.read_text()
+        new = fill(old, Path(args.reports), strict=args.check)
+        if new == old:
+            continue
+        if args.check:
+            stale.append(str(path))
+            continue
         tmp = path.with_suffix(".md.tmp")
         tmp.write_text(new)
         tmp.replace(path)
         print(f"{path}: generated blocks updated from {args.reports}/")
+    if stale:
+        print(f"stale: {', '.join(stale)}: run `python -m fluidfilm.readme`", file=sys.stderr)
+        return 1
     return 0
 
 
