@@ -169,7 +169,16 @@ def render_characteristics(reports: Path) -> str:
     return "\n".join(lines)
 
 
+def render_characteristics_timing(reports: Path) -> str:
+    ch = _load(reports, "characteristics.json")
+    t = ch["timing_ms_per_coefficient_set"]
+    base = t.get("reference")
+    rows = [[name, f"{ms:.3g} ms", f"{base / ms:.2g}x" if base else "-"] for name, ms in t.items()]
+    return _table(["model", "time per coefficient set", "vs reference 30x30"], rows)
+
+
 RENDERERS: dict[str, Callable[[Path], str]] = {
+    "characteristics_timing": render_characteristics_timing,
     "characteristics": render_characteristics,
     "raimondi_boyd": render_raimondi_boyd,
     "raimondi_boyd_no_feed": render_raimondi_boyd_no_feed,
