@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import re
 import runpy
+import subprocess
+import sys
 
 import numpy as np
 from conftest import ROOT
@@ -40,3 +42,15 @@ def test_the_documented_model_implements_the_interface_and_matches_the_solver_to
                                rtol=1e-12)
     # started at the equilibrium of a rotor without imbalance, the journal stays there
     assert traj.ok and np.abs(traj.x - x0).max() < 1e-3 * c
+
+
+def test_a_model_from_a_script_leaves_the_integrators_cache_readable(tmp_path):
+    """numba caches the integrator per argument type; a type from a script other processes cannot
+    import must not end up in that cache (a later simulate() anywhere would fail to read it)."""
+    ns = _run_doc(tmp_path)
+    assert ns["traj"].ok
+    code = ("from fluidfilm import LinearBearing, Rotor, paper_bearing, simulate\n"
+            "print(simulate(LinearBearing(paper_bearing(), 1e6, 1e3), Rotor(mass=1.0), t_end=1e-3).status)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={"PYTHONPATH": str(ROOT / "src"), "PATH": "/usr/bin:/bin"})
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]
