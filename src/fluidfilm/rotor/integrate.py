@@ -39,7 +39,9 @@ import numpy as np
 from numba import njit
 
 from ..models import ForceModel
-from .model import Rotor
+from .model import Rotor, ramped
+
+_ramped = njit(inline="always")(ramped)
 
 OK, CONTACT, CONTACT_STAGE, NONFINITE = 0, 1, 2, 3
 
@@ -92,7 +94,7 @@ def _acceleration(kernel, params, x1, x2, v1, v2, t, consts):
     f1, f2 = kernel(params, x1, x2, v1, v2)
     if ramp_time > 0.0:
         # imbalance growing uniformly over the ramp (Fig. 5's developing fault)
-        unb += (unb_final - unb) * min(t / ramp_time, 1.0)
+        unb = _ramped(unb, unb_final, t, ramp_time)
     ph = omega * t
     return (f1 + unb * math.cos(ph) + g1) * inv_m, (f2 + sgn * unb * math.sin(ph) + g2) * inv_m, True
 
