@@ -102,3 +102,35 @@ def test_pipeline_profile_names_every_stage(profile):
     for name, stage in stages.items():
         assert stage["cmd"].startswith("${python} experiments/"), name
         assert stage["cmd"].endswith("${args.%s}" % name), name
+
+
+def _plain_values(d: dict) -> dict:
+    """The file's own values: no Hydra directives, no interpolations."""
+    return {k: v for k, v in d.items() if k != "defaults" and not (isinstance(v, str) and "${" in v)}
+
+
+@pytest.mark.parametrize("group, option", list(_options()))
+def test_every_option_lands_with_its_values_under_its_key(group, option):
+    """The composed config holds what the option's YAML file says (read here with plain yaml, not Hydra)."""
+    import yaml
+
+    path = CONF / group / f"{option}.yaml"
+    text = path.read_text()
+    primary, key = GROUPS[group]
+    if key is None or "@package" in text:
+        pytest.skip("a global package: it spreads over the primary config")
+    own = _plain_values(yaml.safe_load(text) or {})
+    assert own, f"{path} holds no values"
+    package = "" if key == group else f"@{key}"
+    composed = OmegaConf.to_container(OmegaConf.select(_compose(primary, [f"{group}{package}={option}"]), key),
+                                      resolve=True)
+    _assert_holds(composed, own, f"{group}={option}: {key}")
+
+
+def _assert_holds(composed, own, where):
+    """Every value of ``own`` is in ``composed`` (nested mappings may carry more keys from their defaults)."""
+    for k, v in own.items():
+        if isinstance(v, dict):
+            _assert_holds(composed[k], _plain_values(v), f"{where}.{k}")
+        else:
+            assert composed[k] == v, f"{where}.{k} is {composed[k]!r}, the file says {v!r}"

@@ -11,12 +11,17 @@ Every force model (reference solver, graded reference, surrogates) offers
 and its parameters), so the rotor integrator and controllers never care
 which one they run.
 """
+from importlib import metadata as _metadata
+
 from .bearing import ConicalBearing, JournalBearing, bearing_from_dict, paper_bearing
 from .reynolds import CAVITATION_MODELS, ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
 from .rotor import LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, simulate
 from .surrogate import SurrogateForceModel, load_surrogate
 
-__version__ = "0.1.0"
+try:  # one place for the version: pyproject.toml, read from the installed package's metadata
+    __version__ = _metadata.version("fluidfilm")
+except _metadata.PackageNotFoundError:  # running from a source tree that is not installed
+    __version__ = "0+unknown"
 
 __all__ = [
     "JournalBearing",

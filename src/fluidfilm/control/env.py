@@ -45,6 +45,7 @@ import numpy as np
 from ..bearing import ConicalBearing
 from ..models import ForceModel, as_adjustable
 from ..rotor import Rotor, simulate
+from ..rotor.model import ramped
 
 
 @dataclass(frozen=True)
@@ -187,7 +188,7 @@ class ActiveBearingEnv(gym.Env):
     def present_imbalance(self) -> float:
         """Total rotor imbalance [kg m] at the present time of the scenario."""
         sc = self.scenario
-        return sc.imbalance_start + (sc.imbalance_end - sc.imbalance_start) * min(self.t / sc.ramp_time, 1.0)
+        return ramped(sc.imbalance_start, sc.imbalance_end, self.t, sc.ramp_time)
 
     def _observe(self, amp: float, eps_max: float) -> np.ndarray:
         cw = self.c0 * self.bearing.omega

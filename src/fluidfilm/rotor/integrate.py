@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import time
+import types
 import warnings
 from dataclasses import dataclass, field
 
@@ -38,7 +39,9 @@ import numpy as np
 from numba import njit
 
 from ..models import ForceModel
-from .model import Rotor
+from .model import Rotor, ramped
+
+_ramped = njit(inline="always")(ramped)
 
 OK, CONTACT, CONTACT_STAGE, NONFINITE = 0, 1, 2, 3
 
@@ -95,7 +98,7 @@ def _acceleration(kernel, params, x1, x2, v1, v2, t, consts):
     f1, f2 = kernel(params, x1, x2, v1, v2)
     if ramp_time > 0.0:
         # imbalance growing uniformly over the ramp (Fig. 5's developing fault)
-        unb += (unb_final - unb) * min(t / ramp_time, 1.0)
+        unb = _ramped(unb, unb_final, t, ramp_time)
     ph = omega * t
     return (f1 + unb * math.cos(ph) + g1) * inv_m, (f2 + sgn * unb * math.sin(ph) + g2) * inv_m, True
 
@@ -185,6 +188,25 @@ def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_
     return n_rec, status, t, n_evals
 
 
+# Models from outside the library (a user's script, a notebook) get an uncached twin of the loop:
+# numba's on-disk cache of ``_rk4_run`` records the argument types, and a kernel or parameter type
+# defined in a module that a later process cannot import would make that cache unreadable.
+def _uncached(dispatcher, **replace):
+    """A non-caching copy of a compiled function, its global names in ``replace`` swapped."""
+    fn = dispatcher.py_func
+    glb = dict(fn.__globals__, **replace)
+    return njit(types.FunctionType(fn.__code__, glb, fn.__name__, fn.__defaults__, fn.__closure__))
+
+
+_rk4_run_uncached = _uncached(_rk4_run, _acceleration=_uncached(_acceleration))
+
+
+def _library_types(kernel, params) -> bool:
+    fn = getattr(kernel, "py_func", kernel)
+    return fn.__module__.split(".")[0] == "fluidfilm" and \
+        type(params).__module__.split(".")[0] in ("fluidfilm", "builtins")
+
+
 def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
              eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
              max_substeps: int = 256, t0: float = 0.0) -> Trajectory:
@@ -242,7 +264,8 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
               u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0)
     model.reset_domain_counter()
     t_start = time.perf_counter()
-    n_rec, status, t_stop, n_evals = _rk4_run(kernel, params, consts, x0, v0, float(t0), float(dt), n_steps,
+    run = _rk4_run if _library_types(kernel, params) else _rk4_run_uncached
+    n_rec, status, t_stop, n_evals = run(kernel, params, consts, x0, v0, float(t0), float(dt), n_steps,
                                               record_every, float(eps_stop), float(eps_substep),
                                               int(max_substeps), out_t, out_x, out_v)
     wall = time.perf_counter() - t_start

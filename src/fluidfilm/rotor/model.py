@@ -5,6 +5,15 @@ import math
 from dataclasses import dataclass
 
 
+def ramped(start: float, final: float, t: float, ramp_time: float) -> float:
+    """A value growing uniformly from ``start`` at t = 0 to ``final`` at t = ``ramp_time``, then held.
+
+    The one definition of the imbalance ramp (paper Fig. 5's developing fault): ``Rotor``, the
+    compiled integrator (``integrate._acceleration`` runs it jitted) and the control environment.
+    """
+    return start + (final - start) * min(max(t / ramp_time, 0.0), 1.0)
+
+
 @dataclass(frozen=True)
 class Rotor:
     """What one bearing carries (paper eq. 4), SI units.
@@ -68,7 +77,7 @@ class Rotor:
         """m_u*d at time t [kg m] (the ramp, if any)."""
         if self.imbalance_final is None or self.ramp_time == 0.0:
             return self.imbalance
-        return self.imbalance + (self.imbalance_final - self.imbalance) * min(max(t / self.ramp_time, 0.0), 1.0)
+        return ramped(self.imbalance, self.imbalance_final, t, self.ramp_time)
 
     @classmethod
     def shared(cls, total_mass: float, total_imbalance: float = 0.0, total_external_force=(0.0, 0.0),

@@ -35,6 +35,8 @@ from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
 from ..models import ValidityDomain
 from ..states import as_state_pairs
 from .scaling import Scaling
+from .transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
+                         standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb)
 
 class Activation(IntEnum):
     """Hidden-layer activation of the networks (the kernel reads the integer value)."""
@@ -142,20 +144,19 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
     if s[21] == 1.0:
         # sleeve-aware: normalise by the current clearance c_r; forces scale as (c/c_r)^2
         inv_c2 = params.setting[0]
-        fscale = fscale * c * c * inv_c2
+        fscale = sleeve_force_scale_nb(fscale, c, inv_c2)
         c = 1.0 / math.sqrt(inv_c2)
     polar = s[19] == 1.0
     z = params.scratch[2]
     er1, er2 = 0.0, 1.0
     if polar:
         # the journal's frame: along (e_r) and across (e_t) the line of centres
-        rr = math.sqrt(x1 * x1 + x2 * x2)
-        if rr > 0.0:
-            er1, er2 = x1 / rr, x2 / rr
+        er1, er2 = radial_axis_nb(x1, x2)
         cw = c * omega
-        z[0] = rr / c
-        z[1] = (v1 * er1 + v2 * er2) / cw
-        z[2] = (v1 * er2 - v2 * er1) / cw
+        vr, vt = to_polar_nb(er1, er2, v1, v2)
+        z[0] = speed_nb(x1, x2) / c  # |X| / c
+        z[1] = vr / cw
+        z[2] = vt / cw
         n_in = 3
     else:
         if physics:
@@ -168,7 +169,7 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         z[n_in] = params.setting[1 + k]
         n_in += 1
     for k in range(n_in):
-        z[k] = (z[k] - s[5 + k]) / s[10 + k]
+        z[k] = standardise_nb(z[k], s[5 + k], s[10 + k])
     out = _mlp(weights[r], tables[r], n_layers[r], act, z, buf_a, buf_b)
     y1 = out[0]
     y2 = out[1]
@@ -180,18 +181,17 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         w2 = z[vo + 1] * s[11 + vo] + s[6 + vo]
         y1 += out[0] * w1 + out[1] * w2
         y2 += out[2] * w1 + out[3] * w2
-    f1 = y1 * s[17] + s[15]
-    f2 = y2 * s[18] + s[16]
+    f1 = unstandardise_nb(y1, s[15], s[17])
+    f2 = unstandardise_nb(y2, s[16], s[18])
     if physics:
-        d = 1.0 - e2
-        g = fscale / (d * math.sqrt(d) if power == 1.5 else d**power)
+        g = film_gain_nb(fscale, e2, power)
         if s[0] == 2.0:
-            g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)
+            g *= velocity_factor_nb(speed_nb(v1, v2), c, omega)
         f1 *= g
         f2 *= g
     if polar:
-        # back to (X1, X2): F = f_r e_r + f_t e_t, e_t = (e_r2, -e_r1)
-        return f1 * er1 + f2 * er2, f1 * er2 - f2 * er1
+        # back to (X1, X2): F = f_r e_r + f_t e_t
+        return from_polar_nb(er1, er2, f1, f2)
     return f1, f2
 
 
@@ -205,7 +205,7 @@ def surrogate_force(params, x1, x2, v1, v2):
     eps_max = params.eps_max
     counter = params.counter
     inv_c2 = params.setting[0]
-    e2 = (x1 * x1 + x2 * x2) * inv_c2
+    e2 = eps2_nb(x1, x2, inv_c2)
     eps = math.sqrt(e2)
     # training-domain check (counted, never fatal)
     outside = eps > eps_max

@@ -41,6 +41,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from . import transforms as tf
+
 SCALINGS = ("standard", "physics", "physics_v")
 FRAMES = ("cartesian", "polar")
 KIND_CODES = {"standard": 0.0, "physics": 1.0, "physics_v": 2.0}
@@ -99,16 +101,19 @@ class Scaling:
         return self.clearance
 
     def _eps2(self, X, E=None):
-        return (X[..., 0] ** 2 + X[..., 1] ** 2) / self._clear(E) ** 2
+        return tf.eps2(X[..., 0], X[..., 1], 1.0 / self._clear(E) ** 2)
 
     def gain(self, X, V, E=None) -> np.ndarray:
         """Force per unit of raw network target at each state (1 for standard scaling)."""
         if self.kind == "standard":
             return np.ones(np.shape(X)[:-1])
         c = self._clear(E)
-        g = self.force_scale * (self.clearance / c) ** 2 / (1.0 - self._eps2(X, E)) ** self.power
+        inv_c2 = 1.0 / c**2
+        fscale = tf.sleeve_force_scale(self.force_scale, self.clearance, inv_c2) if self.sleeve_gain \
+            else self.force_scale
+        g = tf.film_gain(fscale, tf.eps2(X[..., 0], X[..., 1], inv_c2), self.power)
         if self.kind == "physics_v":
-            g = g * (1.0 + np.hypot(V[..., 0], V[..., 1]) / (c * self.omega))
+            g = g * tf.velocity_factor(tf.speed(V[..., 0], V[..., 1]), c, self.omega)
         return g
 
     @property
@@ -117,30 +122,27 @@ class Scaling:
 
     def _axes(self, X):
         """Unit vectors along (e_r) and across (e_t) the line of centres; e_r = +X2 at the centre."""
-        r = np.hypot(X[..., 0], X[..., 1])
-        safe = np.where(r > 0, r, 1.0)
-        er = np.stack([np.where(r > 0, X[..., 0] / safe, 0.0), np.where(r > 0, X[..., 1] / safe, 1.0)], axis=-1)
-        et = np.stack([er[..., 1], -er[..., 0]], axis=-1)
-        return er, et
+        er1, er2 = tf.radial_axis(X[..., 0], X[..., 1])
+        return np.stack([er1, er2], axis=-1), np.stack([er2, -er1], axis=-1)
 
     def to_frame(self, X, F) -> np.ndarray:
         """Forces (or velocities) in the model's frame."""
         if self.frame == "cartesian":
             return F
-        er, et = self._axes(X)
-        return np.stack([(F * er).sum(-1), (F * et).sum(-1)], axis=-1)
+        er1, er2 = tf.radial_axis(X[..., 0], X[..., 1])
+        return np.stack(tf.to_polar(er1, er2, F[..., 0], F[..., 1]), axis=-1)
 
     def from_frame(self, X, G) -> np.ndarray:
         if self.frame == "cartesian":
             return G
-        er, et = self._axes(X)
-        return G[..., :1] * er + G[..., 1:2] * et
+        er1, er2 = tf.radial_axis(X[..., 0], X[..., 1])
+        return np.stack(tf.from_polar(er1, er2, G[..., 0], G[..., 1]), axis=-1)
 
     def _raw_inputs(self, X, V, E=None):
         c = self._clear(E)
         c = c[..., None] if np.ndim(c) else c
         if self.frame == "polar":
-            eps = np.hypot(X[..., 0], X[..., 1])[..., None] / c
+            eps = tf.speed(X[..., 0], X[..., 1])[..., None] / c  # |X| / c
             vf = self.to_frame(X, V) / (c * self.omega)
             z = np.concatenate([eps, vf], axis=-1)
         elif self.kind != "standard":
@@ -158,14 +160,14 @@ class Scaling:
         return self.to_frame(X, F) / self.gain(X, V, E)[..., None]
 
     def inputs(self, X, V, E=None) -> np.ndarray:
-        return (self._raw_inputs(X, V, E) - self.in_mean) / self.in_std
+        return tf.standardise(self._raw_inputs(X, V, E), self.in_mean, self.in_std)
 
     def targets(self, X, V, F, E=None) -> np.ndarray:
-        return (self._raw_targets(X, V, F, E) - self.out_mean) / self.out_std
+        return tf.standardise(self._raw_targets(X, V, F, E), self.out_mean, self.out_std)
 
     def forces(self, X, V, y, E=None) -> np.ndarray:
         """Inverse of ``targets``: network outputs -> forces [N]."""
-        return self.from_frame(X, (y * self.out_std + self.out_mean) * self.gain(X, V, E)[..., None])
+        return self.from_frame(X, tf.unstandardise(y, self.out_mean, self.out_std) * self.gain(X, V, E)[..., None])
 
     # ------------------------------------------------------------------ io
     def to_dict(self) -> dict:
