@@ -173,4 +173,4 @@ the orbit, the passive bearing's orbit grows.
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the report", "run the same command again")
