@@ -96,3 +96,20 @@ def test_ctrl_c_in_a_sweep_is_one_line_and_the_runs_end_killed(data, tmp_path):
     assert parent.info.status == "KILLED"
     assert [r.info.status for r in jobs.values()] == ["KILLED"]
     assert not (tmp_path / "models").exists()  # no half-written model folder
+
+
+def test_submitit_route_two_job_sweep_lands_as_one_parent_with_two_children(data, tmp_path):
+    """Item 14: the SLURM launcher's family run locally (``submitit_local``): each job a separate process."""
+    proc = run_entry("train_surrogate", "-m", "hydra/launcher=submitit_local", "hydra.launcher.timeout_min=20",
+                     "seed=0,1", *_args(data, tmp_path), timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    parent, jobs = _runs(tmp_path)
+    assert parent.info.status == "FINISHED"
+    assert sorted(jobs) == ["tiny-none-standard-s0", "tiny-none-standard-s1"]
+    assert all(r.info.status == "FINISHED" and "test_rel_err_median" in r.data.metrics for r in jobs.values())
+    # each job ran in its own process with its own Hydra output folder, and wrote its own model
+    job_dirs = sorted(p.parent.parent for p in (tmp_path / "multirun").rglob(".hydra/config.yaml"))
+    assert [p.name for p in job_dirs] == ["0", "1"]
+    assert list((tmp_path / "multirun" / ".submitit").iterdir())  # submitit's own job records
+    for n in jobs:
+        assert (tmp_path / "models" / n / "card.md").exists()
