@@ -62,7 +62,8 @@ def test_ctrl_c_of_the_dataset_run_is_one_line_and_resumes_to_the_same_data(tmp_
     proc = _make_dataset(tmp_path, "dask.scheduler=inline")
     out, err = proc.communicate(timeout=300)
     assert proc.returncode == 0, err[-2000:]
-    assert f"for {48 - n_done} of 48 chunks" in out  # only what was missing, and the time of this run
+    n = len(DatasetSpec.from_cfg(quick_cfg()).positions(120e-6)[0])  # one position per chunk here
+    assert f"for {n - n_done} of {n} chunks" in out  # only what was missing, and the time of this run
     verify_dataset(ds)
     pd.testing.assert_frame_equal(_frame(ds), inline, check_exact=True)
 
@@ -114,7 +115,7 @@ def test_dask_route_on_a_separately_started_cluster_equals_the_inline_run(tmp_pa
     assert proc.returncode == 0, err[-3000:]
     ds = tmp_path / "dataset"
     verify_dataset(ds)
-    assert len(list(ds.glob("part-*.parquet"))) == 48
+    assert len(list(ds.glob("part-*.parquet"))) == len(DatasetSpec.from_cfg(quick_cfg()).positions(120e-6)[0])
     # nothing lost, nothing duplicated: the very same rows as the inline run
     pd.testing.assert_frame_equal(_frame(ds), inline, check_exact=True)
     if kill_a_worker:
