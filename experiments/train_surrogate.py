@@ -97,8 +97,12 @@ def main(cfg: DictConfig) -> dict:
         model.save(tmp)
         io.write_json(tmp / "report.json", {"report": report, "metrics": metrics, "config": c})
         io.write_text(tmp / "card.md", model_card(name, report, metrics, c))
-        shutil.rmtree(out, ignore_errors=True)
+        old = out.with_name(out.name + ".old")
+        shutil.rmtree(old, ignore_errors=True)
+        if out.exists():
+            out.rename(old)  # the old model stays whole until the new one is in place
         tmp.rename(out)
+        shutil.rmtree(old, ignore_errors=True)
         if parent is not None:
             import mlflow
 
