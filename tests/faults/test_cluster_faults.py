@@ -92,14 +92,14 @@ def cluster(tmp_path):
     with Client(address, timeout=120) as client:
         client.wait_for_workers(2, timeout=120)
     yield address, procs
-    for p in procs:
+    for p in reversed(procs):  # workers first, so none waits to reconnect to a scheduler that is gone
         if p.poll() is None:
             p.terminate()
-    for p in procs:
         try:
-            p.wait(timeout=30)
+            p.wait(timeout=10)
         except subprocess.TimeoutExpired:
             p.kill()
+            p.wait()
     logs.close()
 
 
