@@ -63,4 +63,4 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the model comparison", "run the same command again")

@@ -68,4 +68,4 @@ def main(cfg: DictConfig) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the controller evaluation", "run the same command again")

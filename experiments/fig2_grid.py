@@ -35,4 +35,4 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the Fig. 2 grid study", "run the same command again")

@@ -26,4 +26,4 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the Fig. 3 velocity study", "run the same command again")

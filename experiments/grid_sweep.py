@@ -6,7 +6,7 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import tracking
+from fluidfilm import io, tracking
 from fluidfilm.config import bearing_from_cfg, solver_from_cfg
 from fluidfilm.figures import grid_error_study
 
@@ -30,4 +30,4 @@ def main(cfg: DictConfig) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the grid-density sweep", "run the same command again")

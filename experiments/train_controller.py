@@ -34,4 +34,4 @@ def main(cfg: DictConfig) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the controller training", "run the same command again")

@@ -8,14 +8,16 @@ times, test-set accuracy and speed to MLflow.  An interrupted run resumes
 from the last checkpoint of each network.
 """
 import json
+import os
 import shutil
 from pathlib import Path
 
 import hydra
 from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import GradedReynoldsModel, io, tracking
+from fluidfilm import GradedReynoldsModel, io, sweeps, tracking
 from fluidfilm.data import config_hash
 from fluidfilm.speed import sample_states, time_per_force_eval
 from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors
@@ -49,8 +51,14 @@ def model_card(name: str, report: dict, metrics: dict, cfg: dict) -> str:
 
 @hydra.main(config_path="../conf", config_name="train", version_base="1.3")
 def main(cfg: DictConfig) -> dict:
-    choices = HydraConfig.get().runtime.choices
-    name = cfg.name or f"{choices['model']}-{choices['split']}-{choices['scaling']}-s{cfg.seed}"
+    hc = HydraConfig.get()
+    choices = hc.runtime.choices
+    multirun = hc.mode == RunMode.MULTIRUN
+    # in a sweep every job gets its own name, hence its own model folder and MLflow run name
+    keys = os.environ.get(sweeps.SWEEP_KEYS_ENV)  # set by the sweep callback in the launching process
+    name = sweeps.job_name(cfg.name or f"{choices['model']}-{choices['split']}-{choices['scaling']}-s{cfg.seed}",
+                           hc.overrides.task, choices, multirun, None if keys is None else keys.split(","))
+    sweeps.guard_tracked(Path(cfg.out_dir) / name, Path(__file__).resolve().parents[1], multirun)
     c = OmegaConf.to_container(cfg, resolve=True)
     digest = config_hash(c["model"], c["split"], c["scaling"], c["trainer"], c["seed"], c["dataset_dir"])
     ckpt_root = Path(cfg.checkpoint_dir) / name / digest
@@ -89,8 +97,12 @@ def main(cfg: DictConfig) -> dict:
         model.save(tmp)
         io.write_json(tmp / "report.json", {"report": report, "metrics": metrics, "config": c})
         io.write_text(tmp / "card.md", model_card(name, report, metrics, c))
-        shutil.rmtree(out, ignore_errors=True)
+        old = out.with_name(out.name + ".old")
+        shutil.rmtree(old, ignore_errors=True)
+        if out.exists():
+            out.rename(old)  # the old model stays whole until the new one is in place
         tmp.rename(out)
+        shutil.rmtree(old, ignore_errors=True)
         if parent is not None:
             import mlflow
 
@@ -107,4 +119,5 @@ def main(cfg: DictConfig) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "surrogate training", "run the same command again; each network resumes from "
+                         "its last epoch checkpoint (checkpoint_dir)")

@@ -51,4 +51,4 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the training-time study", "run the same command again")

@@ -53,4 +53,4 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the reference trajectories", "run the same command again")

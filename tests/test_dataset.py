@@ -57,11 +57,11 @@ def test_velocity_grading_has_the_configured_range_core_share_and_count():
 def test_paper_layout_counts():
     spec = DatasetSpec.from_cfg(load_cfg("paper"))
     x, sec, eps = spec.positions(120e-6)
-    assert len(x) == 2 * 12 * 40
+    assert len(x) == 2 * 12 * 40 - 39  # the centre once, not once per angle
     np.testing.assert_allclose(np.hypot(*x.T) / 120e-6, eps, rtol=1e-12)
     assert eps[sec == 0].max() < 0.9 <= eps[sec == 1].min()
     assert eps.max() == pytest.approx(0.98)
-    assert spec.n_samples(120e-6) == 960 * 80 * 80  # 6,144,000 with the paper's stated 80 values per component
+    assert spec.n_samples(120e-6) == 921 * 80 * 80  # 5,894,400 with the paper's stated 80 values per component
 
 
 def test_dataset_has_the_columns_and_count_the_config_promises(quick_dataset):

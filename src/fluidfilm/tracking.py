@@ -128,10 +128,19 @@ def run(tracking: Mapping | None, run_name: str, params: Mapping | None = None,
     parent = os.environ.get("FLUIDFILM_PARENT_RUN_ID")
     if parent:
         all_tags["mlflow.parentRunId"] = parent
-    with mlflow.start_run(experiment_id=exp_id, run_name=run_name, tags=all_tags, nested=nested) as active:
+    active = mlflow.start_run(experiment_id=exp_id, run_name=run_name, tags=all_tags, nested=nested)
+    try:
         if params:
             mlflow.log_params(flatten(params))
         yield active
+    except KeyboardInterrupt:
+        mlflow.end_run(status="KILLED")  # the user stopped it: not a failure of the code
+        raise
+    except BaseException:
+        mlflow.end_run(status="FAILED")
+        raise
+    else:
+        mlflow.end_run(status="FINISHED")
 
 
 class MlflowSweepCallback:
@@ -146,8 +155,14 @@ class MlflowSweepCallback:
 
     def __init__(self, **_):
         self.parent_id = None
+        self.failed_jobs = 0
 
     def on_multirun_start(self, config, **kwargs):
+        from .sweeps import SWEEP_KEYS_ENV, swept_keys
+
+        # which keys the sweep varies, for the jobs' names (jobs inherit the environment)
+        task = list(config.hydra.overrides.task) if "hydra" in config else []
+        os.environ[SWEEP_KEYS_ENV] = ",".join(swept_keys(task))
         tr = config.get("tracking")
         if not tr or not tr.get("enabled", True):
             return
@@ -160,18 +175,45 @@ class MlflowSweepCallback:
         self.parent_id = run.info.run_id
         self._uri = tr["uri"]
         os.environ["FLUIDFILM_PARENT_RUN_ID"] = self.parent_id
+        # Hydra skips on_multirun_end when a job raises or the user presses Ctrl-C; the parent must not
+        # stay RUNNING for ever, so whatever ends the process ends it too (FAILED or KILLED)
+        import atexit
 
-    def on_multirun_end(self, config, **kwargs):
+        atexit.register(self._end_parent_at_exit)
+
+    def _end(self, status: str) -> None:
         if self.parent_id is None:
             return
         import mlflow
 
-        mlflow.tracking.MlflowClient(self._uri).set_terminated(self.parent_id)
+        mlflow.tracking.MlflowClient(self._uri).set_terminated(self.parent_id, status=status)
+        self.parent_id = None
         os.environ.pop("FLUIDFILM_PARENT_RUN_ID", None)
+
+    def _end_parent_at_exit(self) -> None:
+        # reached only if on_multirun_end was not: a failed job or an interruption.  Jobs may have run in
+        # other processes (joblib, submitit), so their own runs say which: any FAILED child makes it FAILED
+        if self.parent_id is None:
+            return
+        failed = self.failed_jobs
+        if not failed:
+            import mlflow
+
+            client = mlflow.tracking.MlflowClient(self._uri)
+            exp_id = client.get_run(self.parent_id).info.experiment_id
+            failed = len(client.search_runs([exp_id], f"tags.mlflow.parentRunId = '{self.parent_id}' "
+                                                      "and attributes.status = 'FAILED'"))
+        self._end("FAILED" if failed else "KILLED")
+
+    def on_multirun_end(self, config, **kwargs):
+        self._end("FAILED" if self.failed_jobs else "FINISHED")
 
     # the other hooks Hydra calls
     def on_run_start(self, config, **kwargs): ...
     def on_run_end(self, config, **kwargs): ...
     def on_job_start(self, config, **kwargs): ...
-    def on_job_end(self, config, job_return, **kwargs): ...
+    def on_job_end(self, config, job_return, **kwargs):
+        status = getattr(getattr(job_return, "status", None), "name", None)
+        if status == "FAILED":
+            self.failed_jobs += 1
     def on_compose_config(self, config, **kwargs): ...

@@ -143,3 +143,16 @@ def test_part_without_recorded_checksum_is_not_trusted(copy_of):
     meta = _make(out)
     assert meta["damaged_parts_recomputed"] == [name]
     verify_dataset(out)
+
+
+# --------------------------------------------------------------------------- item 12
+def test_no_state_is_repeated_in_the_dataset(finished, quick_spec):
+    """At eps = 0 every angle is the same state: it must appear once, not once per angle."""
+    df = pd.read_parquet(finished / "dataset")
+    assert not df.duplicated(["X1", "X2", "V1", "V2"]).any()
+    centre = df[df.eps == 0.0]
+    assert len(centre) == len(quick_spec.velocity_pairs(quick_spec.velocity_section_index(0.0)))
+    # every other ring keeps all its angles
+    sec = quick_spec.position_sections[0]
+    ring = df[(df.eps == sec.eccentricities()[1])]
+    assert ring.groupby(["X1", "X2"]).ngroups == sec.n_angle

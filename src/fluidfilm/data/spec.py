@@ -63,12 +63,20 @@ class PositionSection:
     def eccentricities(self) -> np.ndarray:
         return np.linspace(self.eps_start, self.eps_stop, self.n_eps, endpoint=self.endpoint)
 
-    def positions(self, clearance: float) -> np.ndarray:
-        """(n_eps * n_angle, 2) positions [m]; angle from +X2 towards +X1, eps-major order."""
+    def polar_grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """(eps, angle) of every position, eps-major.  At eps = 0 every angle is the same point (the
+        bearing's centre), so it appears once: n_angle copies would repeat identical rows and weigh the
+        centre n_angle times in training."""
         eps = self.eccentricities()
         ang = 2 * np.pi * np.arange(self.n_angle) / self.n_angle
         e, a = np.meshgrid(eps, ang, indexing="ij")
-        return clearance * np.stack([(e * np.sin(a)).ravel(), (e * np.cos(a)).ravel()], axis=1)
+        keep = (e > 0.0) | (a == 0.0)
+        return e[keep], a[keep]
+
+    def positions(self, clearance: float) -> np.ndarray:
+        """(P, 2) positions [m]; angle from +X2 towards +X1, eps-major order, the centre once."""
+        e, a = self.polar_grid()
+        return clearance * np.stack([e * np.sin(a), e * np.cos(a)], axis=1)
 
 
 @dataclass(frozen=True)
@@ -194,7 +202,7 @@ class DatasetSpec:
             x = p.positions(clearance)
             xs.append(x)
             sec.append(np.full(len(x), k, dtype=np.int16))
-            eps.append(np.repeat(p.eccentricities(), p.n_angle))
+            eps.append(p.polar_grid()[0])
         return np.concatenate(xs), np.concatenate(sec), np.concatenate(eps)
 
     def n_samples(self, clearance: float) -> int:

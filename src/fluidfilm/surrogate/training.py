@@ -357,7 +357,17 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
                         enable_model_summary=False, num_sanity_val_steps=0, deterministic=True,
                         check_val_every_n_epoch=1, enable_checkpointing=ckpt_dir is not None)
     t0 = time.perf_counter()
-    trainer.fit(model, datamodule=dm, ckpt_path=ckpt_path)
+    try:
+        trainer.fit(model, datamodule=dm, ckpt_path=ckpt_path)
+    except SystemExit:
+        # Lightning turns Ctrl-C into sys.exit(1) (after saving nothing further) and ignores SIGINT from
+        # then on; callers see it as what it is, an interruption, with Ctrl-C working again
+        if trainer.interrupted:
+            import signal
+
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+            raise KeyboardInterrupt from None
+        raise
     wall = time.perf_counter() - t0
     if "val_rel_rmse" not in trainer.callback_metrics:
         # resumed from a checkpoint of a finished run: nothing was trained, so measure it once

@@ -1,0 +1,115 @@
+"""Items 3, 4, 11: sweep jobs apart, MLflow runs ended honestly, Ctrl-C in one line."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import mlflow
+import pytest
+
+from fluidfilm import paper_bearing
+from fluidfilm.data import DatasetSpec, generate_dataset, random_test_set
+
+from .conftest import REFERENCE, ROOT, quick_cfg, run_entry
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    root = tmp_path_factory.mktemp("sweep_data")
+    spec = DatasetSpec.from_cfg(quick_cfg())
+    generate_dataset(paper_bearing(), REFERENCE, spec, root / "dataset", scheduler="inline", progress=False)
+    random_test_set(paper_bearing(), REFERENCE, spec, root / "testset", n=100)
+    return root
+
+
+def _args(data, tmp_path, *extra):
+    return ["model=tiny", "trainer=quick", "trainer.max_epochs=1", "trainer.batch_size=512",
+            f"dataset_dir={data / 'dataset'}", f"testset_dir={data / 'testset'}", f"out_dir={tmp_path / 'models'}",
+            f"checkpoint_dir={tmp_path / 'ckpt'}", f"tracking.uri=sqlite:///{tmp_path / 'mlflow.db'}",
+            "tracking.experiment=faults", f"hydra.sweep.dir={tmp_path / 'multirun'}", *extra]
+
+
+def _runs(tmp_path):
+    client = mlflow.tracking.MlflowClient(f"sqlite:///{tmp_path / 'mlflow.db'}")
+    exp = client.get_experiment_by_name("faults")
+    runs = client.search_runs([exp.experiment_id])
+    parents = [r for r in runs if "sweep_dir" in r.data.tags]
+    assert len(parents) == 1
+    jobs = [r for r in runs if r.data.tags.get("mlflow.parentRunId") == parents[0].info.run_id]
+    return parents[0], {r.data.tags.get("model_name"): r for r in jobs}
+
+
+def test_sweep_over_a_plain_key_gives_each_job_its_own_folder_and_run_name(data, tmp_path):
+    proc = run_entry("train_surrogate", "-m", "model.width=4,6", *_args(data, tmp_path))
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    names = ["tiny-none-standard-s0-model.width=4", "tiny-none-standard-s0-model.width=6"]
+    parent, jobs = _runs(tmp_path)
+    assert sorted(jobs) == names and parent.info.status == "FINISHED"
+    assert sorted(r.info.run_name for r in jobs.values()) == names
+    import json
+
+    for n, width in zip(names, (4, 6)):
+        report = json.loads((tmp_path / "models" / n / "report.json").read_text())
+        assert report["config"]["model"]["width"] == width  # not overwritten by the other job
+        assert jobs[n].info.status == "FINISHED"
+
+
+def test_failed_sweep_job_ends_its_run_and_the_parent_as_failed(data, tmp_path):
+    proc = run_entry("train_surrogate", "-m", "model.activation=tanh,bogus", *_args(data, tmp_path))
+    assert proc.returncode != 0
+    parent, jobs = _runs(tmp_path)
+    assert parent.info.status == "FAILED"
+    by_act = {r.data.params["model.activation"]: r.info.status for r in jobs.values()}
+    assert by_act == {"tanh": "FINISHED", "bogus": "FAILED"}
+    assert (tmp_path / "models" / "tiny-none-standard-s0-model.activation=tanh" / "card.md").exists()
+
+
+def test_sweep_refuses_to_write_a_dvc_tracked_output(data, tmp_path):
+    target = ROOT / "models" / "best"
+    before = sorted(p.name for p in target.iterdir()) if target.exists() else None
+    args = [a for a in _args(data, tmp_path) if not a.startswith("out_dir=")]
+    proc = run_entry("train_surrogate", "-m", "seed=0,1", "name=best", "out_dir=models", *args)
+    assert proc.returncode != 0
+    assert "output of the DVC pipeline" in proc.stderr + proc.stdout
+    assert (sorted(p.name for p in target.iterdir()) if target.exists() else None) == before
+
+
+def test_ctrl_c_in_a_sweep_is_one_line_and_the_runs_end_killed(data, tmp_path):
+    args = _args(data, tmp_path, "trainer.max_epochs=500")
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    proc = subprocess.Popen([sys.executable, "experiments/train_surrogate.py", "-m", "seed=0,1", *args], cwd=ROOT,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 300
+    while time.time() < deadline and not list((tmp_path / "ckpt").rglob("last.ckpt")):
+        time.sleep(0.05)
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err[-3000:]
+    assert "Traceback" not in err
+    last = [line for line in err.splitlines() if line.strip()][-1]
+    assert last.startswith("interrupted: surrogate training") and "run the same command again" in last
+    parent, jobs = _runs(tmp_path)
+    assert parent.info.status == "KILLED"
+    assert [r.info.status for r in jobs.values()] == ["KILLED"]
+    assert not (tmp_path / "models").exists()  # no half-written model folder
+
+
+def test_submitit_route_two_job_sweep_lands_as_one_parent_with_two_children(data, tmp_path):
+    """Item 14: the SLURM launcher's family run locally (``submitit_local``): each job a separate process."""
+    proc = run_entry("train_surrogate", "-m", "hydra/launcher=submitit_local", "hydra.launcher.timeout_min=20",
+                     "seed=0,1", *_args(data, tmp_path), timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    parent, jobs = _runs(tmp_path)
+    assert parent.info.status == "FINISHED"
+    assert sorted(jobs) == ["tiny-none-standard-s0", "tiny-none-standard-s1"]
+    assert all(r.info.status == "FINISHED" and "test_rel_err_median" in r.data.metrics for r in jobs.values())
+    # each job ran in its own process with its own Hydra output folder, and wrote its own model
+    job_dirs = sorted(p.parent.parent for p in (tmp_path / "multirun").rglob(".hydra/config.yaml"))
+    assert [p.name for p in job_dirs] == ["0", "1"]
+    assert list((tmp_path / "multirun" / ".submitit").iterdir())  # submitit's own job records
+    for n in jobs:
+        assert (tmp_path / "models" / n / "card.md").exists()
