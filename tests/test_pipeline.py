@@ -31,19 +31,22 @@ def quick_pipeline(quick_data, tmp_path_factory):
     tmp = tmp_path_factory.mktemp("pipeline")
     uri = f"sqlite:///{tmp / 'mlflow.db'}"
     common = [f"dataset_dir={dataset}", f"testset_dir={testset}", f"out_dir={tmp / 'models'}",
-              f"checkpoint_dir={tmp / 'ckpt'}", f"tracking.uri={uri}", "trainer=quick", "trainer.max_epochs=20",
-              "model=tiny"]
+              f"checkpoint_dir={tmp / 'ckpt'}", f"tracking.uri={uri}", "trainer=quick", "trainer.max_epochs=20"]
     for exp in ("paper_single", "paper_split", "best"):
         # (the quick grid has no positions in some of best's five regions: three regions there)
-        extra = ["split=paper_blend"] if exp == "best" else []
+        extra = ["split=paper_blend", "model=tiny"] if exp == "best" else []
+        if exp != "best":  # the paper's protocol trains the paper's network, on a smaller sample here
+            extra = ["protocol_samples=3000", "protocol.max_epochs=25"]
         run("train_surrogate.py", f"experiment={exp}", *common, *extra)
     reports = tmp / "reports"
-    run("train_time.py", f"dataset_dir={dataset}", "seeds=[0,1]", "trainer=quick", "trainer.max_epochs=5",
-        "studies.paper_setup.target_val_rel_rmse=0.95", "studies.physics_scaling.target_val_rel_rmse=0.9", "model=tiny", f"out={reports / 'train_time.json'}", f"tracking.uri={uri}")
+    run("train_time.py", f"dataset_dir={dataset}", "samples_per_seed=2000", "seeds_min=2", "seeds_max=2",
+        "protocol.max_epochs=25", "ranking_check.samples_per_seed=4000", "ranking_check.seeds=1",
+        "bootstrap_resamples=200", f"out={reports / 'train_time.json'}", f"tracking.uri={uri}")
     models = tmp / "models"
     run("compare.py", f"models.single={models / 'paper_single'}", f"models.split={models / 'paper_split'}",
         f"models.best={models / 'best'}", "integrator.t_end=0.06", "integrator.t_settle=0.04", "timing_repeats=1",
-        "force_eval_states=500", f"out_dir={tmp / 'traj'}", f"figure_dir={reports / 'figures'}",
+        "force_eval_states=500", "sparse_reference.force_states=20", "sparse_reference.trajectory_steps=5",
+        f"out_dir={tmp / 'traj'}", f"figure_dir={reports / 'figures'}",
         f"report_dir={reports}", f"tracking.uri={uri}")
     # the active conical bearing: sleeve dataset, surrogate, DQN on it, evaluation on the reference
     active_ds, active_ts = tmp / "active_dataset", tmp / "active_testset"

@@ -284,6 +284,20 @@ def train_protocol_model(frame: pd.DataFrame, meta: dict, protocol: Mapping, bou
     kind = protocol.get("name", "paper")
     if kind not in PROTOCOLS:
         raise ValueError(f"unknown training protocol {kind!r}; choose one of {PROTOCOLS}")
+    threads = protocol.get("threads")
+    if threads:
+        # one BLAS thread per process: parallel work runs as processes, and OpenBLAS threads that
+        # spin-wait on a busy machine slow a 352 x 352 Cholesky down a hundredfold
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(int(threads)):
+            return _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden,
+                                         log_network)
+    return _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden, log_network)
+
+
+def _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden, log_network):
+    kind = protocol.get("name", "paper")
     bearing = bearing_from_dict(meta["bearing"])
     rows = subsample(len(frame), n_samples, seed)
     sub = frame.iloc[rows].reset_index(drop=True)
