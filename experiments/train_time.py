@@ -84,12 +84,13 @@ def study(frame, meta, protocol: dict, boundaries, n_samples: int, seeds_min: in
         seeds = list(range(next_seed, next_seed + batch))
         next_seed += batch
         subs = [frame.iloc[subsample(len(frame), n_samples, s)].reset_index(drop=True) for s in seeds]
-        rows += Parallel(n_jobs=n_jobs)(delayed(run_seed)(sub, meta, protocol, boundaries, s)
-                                        for sub, s in zip(subs, seeds))
-        for r in rows[-batch:]:
+        for r in Parallel(n_jobs=n_jobs, return_as="generator")(delayed(run_seed)(sub, meta, protocol, boundaries, s)
+                                                                for sub, s in zip(subs, seeds)):
+            rows.append(r)
             print(f"  seed {r['seed']}: single {r['single']['train_time_s']:.1f} s "
                   f"{r['single']['stop_reasons']}, split {r['split']['train_time_s']:.1f} s "
-                  f"{r['split']['stop_reasons']}, reduction {r['reduction_pct']:.1f} %", flush=True)
+                  f"{r['split']['stop_reasons']}, reduction {r['reduction_pct']:.1f} %, to equal accuracy "
+                  f"{r['time_to_equal_accuracy_split_s']}", flush=True)
         red = [r["reduction_pct"] for r in rows]
         lo, hi, hw = ci_half_width(red, n_resamples)
         elapsed = time.perf_counter() - t0

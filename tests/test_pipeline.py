@@ -39,9 +39,9 @@ def quick_pipeline(quick_data, tmp_path_factory):
             extra = ["protocol_samples=3000", "protocol.max_epochs=25"]
         run("train_surrogate.py", f"experiment={exp}", *common, *extra)
     reports = tmp / "reports"
-    run("train_time.py", f"dataset_dir={dataset}", "samples_per_seed=2000", "seeds_min=2", "seeds_max=2",
-        "protocol.max_epochs=25", "ranking_check.samples_per_seed=4000", "ranking_check.seeds=1",
-        "bootstrap_resamples=200", f"out={reports / 'train_time.json'}", f"tracking.uri={uri}")
+    run("train_time.py", f"dataset_dir={dataset}", "samples_per_seed=1500", "seeds_min=2", "seeds_max=2",
+        "protocol.max_epochs=10", "ranking_check.samples_per_seed=3000", "ranking_check.seeds=1",
+        "bootstrap_resamples=200", "n_jobs=1", f"out={reports / 'train_time.json'}", f"tracking.uri={uri}")
     models = tmp / "models"
     run("compare.py", f"models.single={models / 'paper_single'}", f"models.split={models / 'paper_split'}",
         f"models.best={models / 'best'}", "integrator.t_end=0.06", "integrator.t_settle=0.04", "timing_repeats=1",
