@@ -72,7 +72,16 @@ def test_pipeline_writes_every_headline_number(quick_pipeline):
         assert isinstance(metrics[key], float), key
     for case in "abcdefg":
         assert f"orbit_rms_pct_single_{case}" in metrics and f"orbit_rms_pct_split_{case}" in metrics
+    # the paper's experiment (issue 13): protocol, CI, seeds, per-band error, paper-like reference
+    assert metrics["train_time_protocol"] == "paper" and metrics["train_time_seeds"] == 2
+    assert metrics["train_time_samples_per_seed"] == 1500
+    assert metrics["train_time_converged"] in (True, False) and metrics["train_time_reduction_ci95"] >= 0
+    assert 0 <= metrics["test_rel_err_median_paper_split_eps_below_0.7"] < 100
+    for m in ("single", "split"):
+        assert metrics[f"speedup_force_{m}_vs_sparse_reference"] > 1
+        assert metrics[f"speedup_trajectory_{m}_vs_sparse_reference"] > 1
     md = (tmp / "reports" / "paper_comparison.md").read_text()
+    assert "| case | single: paper | single: ours | split: paper | split: ours |" in md
     assert "| training time reduction, split vs single | 26 % |" in md
     assert (tmp / "reports" / "figures" / "fig4_comparison.png").stat().st_size > 10_000
     assert metrics["speedup_trajectory_split"] > 0

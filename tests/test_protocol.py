@@ -159,7 +159,7 @@ def test_network_jacobian_equals_finite_differences_and_block_normal_equations_t
         np.testing.assert_allclose(x, y, rtol=1e-10, atol=1e-10 * np.abs(y).max())
 
 
-def _toy_data(n=1500, seed=0):
+def _toy_data(n=1000, seed=0):
     """A smooth two-output function of four inputs in [-1, 1], divided 70/15/15."""
     rng = np.random.default_rng(seed)
     z = rng.uniform(-1, 1, (n, 4))
@@ -181,7 +181,7 @@ def test_paper_network_fits_a_smooth_function_and_stops_by_validation():
     assert res["test_mse"] < 1e-4
     assert res["val_mse"] == pytest.approx(min(res["history"]["val_mse"]))
     # the same data with Adam: stops by the same rule, worse in as many epochs
-    adam = train_network_adam(data, n_hidden=12, seed=0, max_epochs=300, batch_size=64)
+    adam = train_network_adam(data, n_hidden=12, seed=0, max_epochs=100, batch_size=128)
     assert adam["stop_reason"] in ("validation", "max_epochs")
     assert adam["test_mse"] < 0.05
 
