@@ -21,6 +21,7 @@ from fluidfilm import GradedReynoldsModel, io, sweeps, tracking
 from fluidfilm.data import config_hash
 from fluidfilm.speed import sample_states, time_per_force_eval
 from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors
+from fluidfilm.surrogate.training import read_dataset
 
 
 def _fmt(value, spec=".1f"):
@@ -47,6 +48,39 @@ def model_card(name: str, report: dict, metrics: dict, cfg: dict) -> str:
 |---|---|---|---|---|---|---|
 {nets}
 """
+
+
+def _train_by_protocol(cfg, c, name, parent):
+    import pandas as pd
+
+    from fluidfilm.surrogate.protocol import band_test_errors, train_protocol_model
+
+    m = c["model"]
+    if m["depth"] != 1 or m["activation"] != "tanh":
+        raise ValueError(f"the training protocols train one hidden tanh layer (the paper's network), got model "
+                         f"depth={m['depth']}, activation={m['activation']!r}")
+    frame, meta = read_dataset(cfg.dataset_dir)
+
+    def log_network(r, res):
+        final = {k: res[k] for k in ("epochs", "best_epoch", "train_time_s", "train_mse", "val_mse", "test_mse",
+                                     "train_rel_rmse", "val_rel_rmse", "test_rel_rmse", "n_train", "n_val", "n_test")}
+        tracking.log_child_run(parent, f"{name}/network{r}", final, {k: res["history"][k] for k in
+                                                                     ("val_mse", "train_mse", "wall_s")},
+                               {"stop_reason": res["stop_reason"], "eps_low": res["eps_low"],
+                                "eps_high": res["eps_high"]}, uri=cfg.tracking.uri)
+        print(f"  network {r} (eps {res['eps_low']:g}-{res['eps_high']:g}): {res['epochs']} epochs, "
+              f"stopped by {res['stop_reason']}, val rel. RMSE {res['val_rel_rmse']:.4f}, "
+              f"{res['train_time_s']:.1f} s", flush=True)
+
+    model, report = train_protocol_model(frame, meta, c["protocol"], c["split"]["boundaries"], seed=cfg.seed,
+                                         n_samples=cfg.protocol_samples, name=name, n_hidden=int(m["width"]),
+                                         log_network=log_network)
+    c["scaling"] = {"kind": "minmax", "power": 0.0}  # what the protocol used, for the saved config
+    report.pop("_sub")
+    report.pop("_division")
+    report["dataset_hash"] = meta.get("config_hash")
+    band = band_test_errors(model, pd.read_parquet(cfg.testset_dir), floor_N=cfg.error_floor_N)
+    return model, report, band
 
 
 @hydra.main(config_path="../conf", config_name="train", version_base="1.3")
@@ -76,11 +110,16 @@ def main(cfg: DictConfig) -> dict:
                 return MLFlowLogger(experiment_name=cfg.tracking.experiment, tracking_uri=cfg.tracking.uri,
                                     run_id=child.info.run_id)
 
-        model, report = fit_surrogate(cfg.dataset_dir, c["model"], c["split"], c["scaling"], c["trainer"],
-                                      cfg.trainer.target_val_rel_rmse, seed=cfg.seed, name=name,
-                                      ckpt_root=ckpt_root, logger_for=logger_for,
-                                      val_fraction=cfg.trainer.val_fraction, batch_size=cfg.trainer.batch_size)
-        metrics = held_out_errors(model, cfg.testset_dir, cfg.error_floor_N)
+        if c.get("protocol"):
+            # the paper's protocol (or Adam under its rules): see fluidfilm.surrogate.protocol
+            model, report, band = _train_by_protocol(cfg, c, name, parent)
+        else:
+            band = {}
+            model, report = fit_surrogate(cfg.dataset_dir, c["model"], c["split"], c["scaling"], c["trainer"],
+                                          cfg.trainer.target_val_rel_rmse, seed=cfg.seed, name=name,
+                                          ckpt_root=ckpt_root, logger_for=logger_for,
+                                          val_fraction=cfg.trainer.val_fraction, batch_size=cfg.trainer.batch_size)
+        metrics = held_out_errors(model, cfg.testset_dir, cfg.error_floor_N) | band
         x, v = sample_states(model.bearing.clearance)
         reference = GradedReynoldsModel(model.bearing)
         t_model = time_per_force_eval(model, x, v)

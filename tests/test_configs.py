@@ -20,7 +20,7 @@ GROUPS = {
     "model": ("train", "model"), "split": ("train", "split"), "scaling": ("train", "scaling"),
     "trainer": ("train", "trainer"), "experiment": ("train", None), "rotor": ("trajectories", "rotor"),
     "integrator": ("trajectories", "integrator"), "case": ("trajectories", "cases.a"),
-    "metrics": ("compare", "metrics"), "controller": ("control", "controller"),
+    "metrics": ("compare", "metrics"), "controller": ("control", "controller"), "protocol": ("train", "protocol"),
     "characteristics": ("characteristics", "characteristics"),
 }
 

@@ -64,12 +64,22 @@ def test_pipeline_writes_every_headline_number(quick_reproduce):
         assert isinstance(metrics[key], float), key
     for case in "abcdefg":
         assert f"orbit_rms_pct_single_{case}" in metrics and f"orbit_rms_pct_split_{case}" in metrics
+    # the paper's experiment: protocol, CI, seeds, per-band error, paper-like reference
+    assert metrics["train_time_protocol"] == "paper" and metrics["train_time_seeds"] == 2
+    assert metrics["train_time_samples_per_seed"] == 1500
+    assert metrics["train_time_converged"] in (True, False) and metrics["train_time_reduction_ci95"] >= 0
+    assert 0 <= metrics["test_rel_err_median_paper_split_eps_below_0.7"] < 100
+    for m in ("single", "split"):
+        assert metrics[f"speedup_force_{m}_vs_sparse_reference"] > 1
+        assert metrics[f"speedup_trajectory_{m}_vs_sparse_reference"] > 1
     md = (workdir / "reports" / "paper_comparison.md").read_text()
+    assert "| case | single: paper | single: ours | split: paper | split: ours |" in md
     assert "| training time reduction, split vs single | 26 % |" in md
     assert (workdir / "reports" / "figures" / "fig4_comparison.png").stat().st_size > 10_000
     assert metrics["speedup_trajectory_split"] > 0
     assert isinstance(metrics["controller_amplitude_reduction_pct"], float)
-    assert metrics["active_dataset_samples"] == 20_412
+    # conf/dataset/active_quick.yaml: (5 x 12 positions, the 12 at eps = 0 kept once, + 2 x 12) x 3 sleeves x 9 x 9
+    assert metrics["active_dataset_samples"] == (5 * 12 - 11 + 2 * 12) * 3 * 9 * 9 == 17_739
     for panel in ("a_dqn", "b_none", "c_mpc"):
         assert (workdir / "reports" / "figures" / f"fig5_{panel}.png").stat().st_size > 10_000
     assert "Active conical bearing" in md

@@ -90,3 +90,53 @@ def summarise_training_times(rows: pd.DataFrame) -> dict:
     out["train_time_reduction_pct_per_seed_max"] = float(red.max())
     out["n_seeds"] = int(len(piv))
     return out
+
+
+def sparse_reference_speed(sparse, table: pd.DataFrame, rotor_cfg: Mapping, cases: Mapping[str, Mapping],
+                           integrator_cfg: Mapping, surrogates: Mapping[str, object], n_states: int = 200,
+                           n_steps: int = 50, repeats: int = 3) -> dict:
+    """Speed-ups of surrogates over the paper-like sparse reference, per force and per trajectory.
+
+    Per force: the same compiled loop over the same states as ``speed_comparison`` (the sparse model's
+    kernel calls back into Python), fewer states since one solve takes milliseconds.
+    Per trajectory: a full case would take minutes per case, so each case runs ``n_steps`` steps through
+    the same integrator with the sparse model; its measured seconds per force evaluation (callback
+    included), scaled by the dense grid's extra cost for the share of the reference trajectory's recorded
+    states above the grid threshold, times the reference trajectory's number of force evaluations, is the
+    sparse model's estimated trajectory time.  The surrogates' trajectory times are the measured ones in
+    ``table``.
+    """
+    from .rotor.cases import run_case
+    from .speed import sample_states, time_per_force_eval
+
+    c = sparse.bearing.clearance
+    x, v = sample_states(c, n_states)
+    t_sparse = time_per_force_eval(sparse, x, v, repeats)
+    # the dense grid's cost relative to the coarse one, per force at the same states
+    xd = x / np.maximum(np.hypot(*x.T), 1e-30)[:, None] * 0.93 * c
+    t_dense = time_per_force_eval(sparse, xd[: max(20, n_states // 4)], v[: max(20, n_states // 4)], repeats)
+    out = {"sparse_time_per_force_us": 1e6 * t_sparse, "sparse_time_per_force_dense_us": 1e6 * t_dense}
+    for name, model in surrogates.items():
+        out[f"speedup_force_{name}_vs_sparse_reference"] = t_sparse / time_per_force_eval(model, x, v, repeats)
+    est_total = 0.0
+    per_case = {}
+    # compile the integrator for the callback kernel once, outside any timing
+    first = next(iter(cases.values()))
+    run_case(sparse, rotor_cfg, first, dict(integrator_cfg) | {"t_end": integrator_cfg["dt"]})
+    for case_name, case in cases.items():
+        short = dict(integrator_cfg) | {"t_end": n_steps * integrator_cfg["dt"]}
+        traj = run_case(sparse, rotor_cfg, case, short)
+        per_eval = traj.wall_time_s / max(traj.n_force_evals, 1)
+        ref = table[(table.case == case_name) & (table.model == "reference")].iloc[0]
+        dense_share = float(ref["dense_share"]) if "dense_share" in ref.index else 0.0
+        est = ref.n_force_evals * per_eval * (1.0 + dense_share * (t_dense / t_sparse - 1.0))
+        per_case[case_name] = {"per_eval_in_integrator_us": 1e6 * per_eval, "estimated_s": est}
+        est_total += est
+    out["sparse_trajectory_per_eval_us_median"] = float(np.median([p["per_eval_in_integrator_us"]
+                                                                   for p in per_case.values()]))
+    out["sparse_trajectory_time_estimated_s"] = est_total
+    out["sparse_per_case"] = per_case
+    for name in surrogates:
+        rows = table[table.model == name]
+        out[f"speedup_trajectory_{name}_vs_sparse_reference"] = est_total / float(rows.wall_time_s.sum())
+    return out

@@ -217,3 +217,26 @@ class MlflowSweepCallback:
         if status == "FAILED":
             self.failed_jobs += 1
     def on_compose_config(self, config, **kwargs): ...
+
+
+def log_child_run(parent, run_name: str, metrics: Mapping, history: Mapping | None = None,
+                  params: Mapping | None = None, uri: str | None = None) -> None:
+    """A nested run under ``parent`` (an active run, or None: nothing logged) with final ``metrics``
+    and per-epoch ``history`` {name: [value per epoch]} (one training network of a model)."""
+    if parent is None:
+        return
+    import mlflow
+
+    client = mlflow.tracking.MlflowClient(uri or mlflow.get_tracking_uri())
+    child = client.create_run(parent.info.experiment_id, run_name=run_name,
+                              tags={"mlflow.parentRunId": parent.info.run_id})
+    rid = child.info.run_id
+    for k, v in (params or {}).items():
+        client.log_param(rid, k, v)
+    for k, v in metrics.items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and v is not None:
+            client.log_metric(rid, k, float(v))
+    for k, values in (history or {}).items():
+        for step, v in enumerate(values, start=1):
+            client.log_metric(rid, k, float(v), step=step)
+    client.set_terminated(rid)

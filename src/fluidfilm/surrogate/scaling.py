@@ -43,9 +43,19 @@ import numpy as np
 
 from . import transforms as tf
 
-SCALINGS = ("standard", "physics", "physics_v")
+SCALINGS = ("standard", "physics", "physics_v", "minmax")
 FRAMES = ("cartesian", "polar")
-KIND_CODES = {"standard": 0.0, "physics": 1.0, "physics_v": 2.0}
+# minmax is an affine map like standard (only its centre and half-range differ): same kernel code
+KIND_CODES = {"standard": 0.0, "physics": 1.0, "physics_v": 2.0, "minmax": 0.0}
+AFFINE = ("standard", "minmax")
+
+
+def _centre_half_range(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(max + min)/2 and (max - min)/2 per column: (a - centre)/half maps [min, max] onto [-1, 1]."""
+    lo, hi = a.min(axis=0), a.max(axis=0)
+    half = 0.5 * (hi - lo)
+    # a constant column maps to 0 (mapminmax passes it through unchanged)
+    return 0.5 * (hi + lo), np.where(half > 0, half, 1.0)
 
 
 @dataclass
@@ -75,7 +85,7 @@ class Scaling:
         if frame not in FRAMES:
             raise ValueError(f"unknown frame {frame!r}; choose one of {FRAMES}")
         extras = tuple(extras)
-        if extras and kind != "standard" and not (extras == ("S",) and sleeve_gain > 0):
+        if extras and kind not in AFFINE and not (extras == ("S",) and sleeve_gain > 0):
             raise ValueError(f"extra inputs {extras} with scaling kind {kind!r} need the sleeve input S and "
                              f"sleeve_gain = dc/dS > 0 (got {sleeve_gain!r}): the physics scalings need the "
                              "clearance of each sample")
@@ -87,8 +97,12 @@ class Scaling:
                 float(sleeve_gain) if extras == ("S",) else 0.0)
         z = s._raw_inputs(X, V, E)
         y = s._raw_targets(X, V, F, E)
-        s.in_mean, s.in_std = z.mean(axis=0), z.std(axis=0) + 1e-12
-        s.out_mean, s.out_std = y.mean(axis=0), y.std(axis=0) + 1e-12
+        if kind == "minmax":
+            s.in_mean, s.in_std = _centre_half_range(z)
+            s.out_mean, s.out_std = _centre_half_range(y)
+        else:
+            s.in_mean, s.in_std = z.mean(axis=0), z.std(axis=0) + 1e-12
+            s.out_mean, s.out_std = y.mean(axis=0), y.std(axis=0) + 1e-12
         return s
 
     # ------------------------------------------------------------------ transforms
@@ -105,7 +119,7 @@ class Scaling:
 
     def gain(self, X, V, E=None) -> np.ndarray:
         """Force per unit of raw network target at each state (1 for standard scaling)."""
-        if self.kind == "standard":
+        if self.kind in AFFINE:
             return np.ones(np.shape(X)[:-1])
         c = self._clear(E)
         inv_c2 = 1.0 / c**2
@@ -145,7 +159,7 @@ class Scaling:
             eps = tf.speed(X[..., 0], X[..., 1])[..., None] / c  # |X| / c
             vf = self.to_frame(X, V) / (c * self.omega)
             z = np.concatenate([eps, vf], axis=-1)
-        elif self.kind != "standard":
+        elif self.kind not in AFFINE:
             z = np.concatenate([X / c, V / (c * self.omega)], axis=-1)
         else:
             z = np.concatenate([X, V], axis=-1)

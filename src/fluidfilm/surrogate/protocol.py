@@ -1,0 +1,426 @@
+"""The paper's training protocol (its tool's fitting network), and mini-batch Adam under the same rules.
+
+The paper trained MATLAB fitting networks.  What that means, and what this
+module does:
+
+- one hidden layer of 50 tanh (``tansig``) neurons, linear outputs;
+- inputs (X1, X2, V1, V2) and outputs (F1, F2) mapped linearly from the
+  data's [min, max] to [-1, 1] (``mapminmax``; the ``minmax`` scaling),
+  each network with its own map, fitted on all the rows it is given (the
+  tool maps before it divides);
+- a random 70/15/15 division into training, validation and test rows
+  (``dividerand``);
+- stopping when the validation error has not improved for 6 consecutive
+  epochs (``max_fail``), or at 1000 epochs, or at a minimum gradient, and
+  keeping the weights of the best validation epoch;
+- Levenberg-Marquardt, full batch (``trainlm``; ``levenberg_marquardt``).
+
+The second protocol, ``adam``, keeps all of the above but replaces the
+optimiser with mini-batch Adam and a learning rate halved whenever the
+validation error stalls for two epochs.
+
+The split model of the paper is three such networks on eccentricity
+0-0.5, 0.5-0.7 and above 0.7.  Both structures see the same rows: one
+random subsample of the dataset per seed, one division of it; each split
+network takes the rows of its band from each part.
+
+Errors in the reports: ``*_mse`` in the mapped units (what the stopping
+rule watches, as the tool does), ``*_rel_rmse`` physical,
+sqrt(sum |F_pred - F|^2 / sum |F|^2) in newtons.
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..bearing import bearing_from_dict
+from .fit import regions
+from .inference import SurrogateForceModel
+from .levenberg_marquardt import (LMSettings, init_nguyen_widrow, levenberg_marquardt, mlp_forward, mlp_sse,
+                                  normal_equations, unpack)
+from .scaling import Scaling
+
+PROTOCOLS = ("paper", "adam")
+INPUTS = ["X1", "X2", "V1", "V2"]
+OUTPUTS = ["F1", "F2"]
+
+
+# --------------------------------------------------------------------------- division
+@dataclass(frozen=True)
+class Division:
+    """Row indices of the training, validation and test parts."""
+    train: np.ndarray
+    val: np.ndarray
+    test: np.ndarray
+
+
+def divide_random(n: int, fractions=(0.70, 0.15, 0.15), seed: int = 0) -> Division:
+    """Random division of n rows into parts of the given shares (MATLAB ``dividerand``).
+
+    Part sizes: validation and test round(share * n), training the rest, so
+    the three are disjoint and cover every row.
+    """
+    f = np.asarray(fractions, dtype=float)
+    if f.shape != (3,) or (f < 0).any() or not math.isclose(f.sum(), 1.0, abs_tol=1e-9) or f[0] <= 0:
+        raise ValueError(f"fractions must be three non-negative shares summing to 1 with a training share > 0, "
+                         f"got {fractions!r}")
+    if int(n) < 3:
+        raise ValueError(f"cannot divide {n} rows into three parts")
+    order = np.random.default_rng(seed).permutation(int(n))
+    n_val = int(round(f[1] * n))
+    n_test = int(round(f[2] * n))
+    n_train = int(n) - n_val - n_test
+    return Division(np.sort(order[:n_train]), np.sort(order[n_train:n_train + n_val]),
+                    np.sort(order[n_train + n_val:]))
+
+
+# --------------------------------------------------------------------------- stopping rule
+class ValidationStop:
+    """Stop when the validation error has not improved for ``max_fail`` consecutive epochs.
+
+    ``update(epoch, error, weights)`` returns "validation" when the rule
+    fires; the best epoch's error and a copy of its weights are kept, and
+    those are the weights the network ends with (as in the paper's tool).
+    """
+
+    def __init__(self, max_fail: int = 6):
+        if int(max_fail) < 1:
+            raise ValueError(f"max_fail must be a positive integer, got {max_fail!r}")
+        self.max_fail = int(max_fail)
+        self.best = math.inf
+        self.best_epoch = 0
+        self.best_weights = None
+        self.fails = 0
+
+    def update(self, epoch: int, error: float, weights=None) -> str | None:
+        if not math.isfinite(error):
+            return "non_finite"
+        if error < self.best:
+            self.best, self.best_epoch, self.fails = float(error), int(epoch), 0
+            if weights is not None:
+                self.best_weights = np.array(weights, copy=True)
+            return None
+        self.fails += 1
+        return "validation" if self.fails >= self.max_fail else None
+
+
+# --------------------------------------------------------------------------- one network
+@dataclass
+class NetworkData:
+    """One network's rows: mapped inputs/outputs per part, and the raw forces for physical errors."""
+    scaling: Scaling
+    z: dict
+    y: dict
+    F: dict
+
+
+def network_data(frame: pd.DataFrame, parts: Mapping[str, np.ndarray], bearing) -> NetworkData:
+    """Fit the min-max map on all rows of the network (training, validation and test) and map each part."""
+    rows = np.concatenate(list(parts.values()))
+    X = frame[["X1", "X2"]].to_numpy()[rows]
+    V = frame[["V1", "V2"]].to_numpy()[rows]
+    F = frame[OUTPUTS].to_numpy()[rows]
+    sc = Scaling.fit("minmax", X, V, F, bearing.clearance, bearing.omega, bearing.force_scale, power=0.0)
+    z, y, f = {}, {}, {}
+    for name, idx in parts.items():
+        Xp = frame[["X1", "X2"]].to_numpy()[idx]
+        Vp = frame[["V1", "V2"]].to_numpy()[idx]
+        f[name] = frame[OUTPUTS].to_numpy()[idx]
+        z[name] = np.ascontiguousarray(sc.inputs(Xp, Vp))
+        y[name] = np.ascontiguousarray(sc.targets(Xp, Vp, f[name]))
+    return NetworkData(sc, z, y, f)
+
+
+def _physical_sq(scaling: Scaling, y_pred: np.ndarray, F: np.ndarray) -> float:
+    """sum |F_pred - F|^2 [N^2] for network outputs in mapped units (affine map: no state needed)."""
+    Fp = y_pred * scaling.out_std + scaling.out_mean
+    return float(((Fp - F) ** 2).sum())
+
+
+def _layers(theta, n_in, n_hidden, n_out=2):
+    W1, b1, W2, b2 = unpack(theta, n_in, n_hidden, n_out)
+    return [(W1.copy(), b1.copy()), (W2.copy(), b2.copy())]
+
+
+def train_network_lm(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_fail: int = 6,
+                     settings: LMSettings | None = None, chunk: int = 8192) -> dict:
+    """Levenberg-Marquardt on the training rows, stopped by the validation rule; the best epoch's weights."""
+    z_tr, y_tr = data.z["train"], data.y["train"]
+    z_va, y_va = data.z["val"], data.y["val"]
+    if len(z_tr) == 0 or len(z_va) == 0:
+        raise ValueError(f"a network needs training and validation rows, got {len(z_tr)} and {len(z_va)}")
+    n_in, n_out = z_tr.shape[1], y_tr.shape[1]
+    theta0 = init_nguyen_widrow(n_in, n_hidden, n_out, np.random.default_rng(seed))
+    stop = ValidationStop(max_fail)
+    hist = {"wall_s": [], "val_mse": [], "val_sq_N2": [], "train_mse": []}
+
+    def on_epoch(epoch, theta, wall):
+        pred, _ = mlp_forward(theta, z_va, n_hidden, n_out)
+        mse = float(((pred - y_va) ** 2).mean())
+        hist["wall_s"].append(wall)
+        hist["val_mse"].append(mse)
+        hist["val_sq_N2"].append(_physical_sq(data.scaling, pred, data.F["val"]))
+        return stop.update(epoch, mse, theta)
+
+    # the starting point counts as epoch 0 of the validation record, as in the tool
+    pred0, _ = mlp_forward(theta0, z_va, n_hidden, n_out)
+    stop.update(0, float(((pred0 - y_va) ** 2).mean()), theta0)
+    res = levenberg_marquardt(theta0, lambda t: normal_equations(t, z_tr, y_tr, n_hidden, chunk),
+                              lambda t: mlp_sse(t, z_tr, y_tr, n_hidden), y_tr.size, settings, on_epoch)
+    hist["train_mse"] = [h["sse"] / y_tr.size for h in res.history]
+    theta = stop.best_weights if stop.best_weights is not None else res.theta
+    return _finish(data, _layers(theta, n_in, n_hidden, n_out), res.epochs, stop.best_epoch, res.stop_reason,
+                   res.wall_s, hist)
+
+
+def train_network_adam(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_fail: int = 6,
+                       max_epochs: int = 1000, lr: float = 3e-3, batch_size: int = 512, max_time_s: float = math.inf,
+                       threads: int | None = None) -> dict:
+    """Mini-batch Adam (learning rate halved after 2 epochs without improvement), same stopping rule."""
+    import torch
+
+    if threads:
+        torch.set_num_threads(int(threads))
+    torch.manual_seed(seed)
+    z_tr = torch.as_tensor(data.z["train"], dtype=torch.float32)
+    y_tr = torch.as_tensor(data.y["train"], dtype=torch.float32)
+    z_va = torch.as_tensor(data.z["val"], dtype=torch.float32)
+    y_va_np = data.y["val"]
+    n_in, n_out = z_tr.shape[1], y_tr.shape[1]
+    theta0 = init_nguyen_widrow(n_in, n_hidden, n_out, np.random.default_rng(seed))
+    W1, b1, W2, b2 = (torch.tensor(a, dtype=torch.float32, requires_grad=True)
+                      for a in unpack(theta0, n_in, n_hidden, n_out))
+    params = [W1, b1, W2, b2]
+    opt = torch.optim.Adam(params, lr=lr)
+    sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=2)
+    stop = ValidationStop(max_fail)
+    gen = torch.Generator().manual_seed(seed)
+    hist = {"wall_s": [], "val_mse": [], "val_sq_N2": [], "train_mse": []}
+
+    def weights():
+        return np.concatenate([p.detach().double().numpy().ravel() for p in params])
+
+    def predict(z):
+        with torch.no_grad():
+            return (torch.tanh(z @ W1.T + b1) @ W2.T + b2).double().numpy()
+
+    stop.update(0, float(((predict(z_va) - y_va_np) ** 2).mean()), weights())
+    reason, epoch = "max_epochs", 0
+    t0 = time.perf_counter()
+    for epoch in range(1, int(max_epochs) + 1):
+        order = torch.randperm(len(z_tr), generator=gen)
+        total = 0.0
+        for s in range(0, len(order), batch_size):
+            idx = order[s:s + batch_size]
+            loss = ((torch.tanh(z_tr[idx] @ W1.T + b1) @ W2.T + b2 - y_tr[idx]) ** 2).mean()
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+            opt.step()
+            total += float(loss.detach()) * len(idx)
+        pred = predict(z_va)
+        mse = float(((pred - y_va_np) ** 2).mean())
+        sched.step(mse)
+        wall = time.perf_counter() - t0
+        hist["wall_s"].append(wall)
+        hist["val_mse"].append(mse)
+        hist["val_sq_N2"].append(_physical_sq(data.scaling, pred, data.F["val"]))
+        hist["train_mse"].append(total / len(z_tr))
+        r = stop.update(epoch, mse, weights())
+        if r:
+            reason = r
+            break
+        if wall > max_time_s:
+            reason = "max_time"
+            break
+    wall = time.perf_counter() - t0
+    return _finish(data, _layers(stop.best_weights, n_in, n_hidden, n_out), epoch, stop.best_epoch, reason, wall,
+                   hist)
+
+
+def _finish(data: NetworkData, layers, epochs, best_epoch, reason, wall, hist) -> dict:
+    theta = np.concatenate([a.ravel() for W, b in layers for a in (W, b)])
+    n_in, n_hidden = layers[0][0].shape[1], layers[0][0].shape[0]
+    out = {"layers": layers, "scaling": data.scaling, "epochs": int(epochs), "best_epoch": int(best_epoch),
+           "stop_reason": reason, "converged": reason == "validation", "train_time_s": float(wall),
+           "history": hist}
+    for part in ("train", "val", "test"):
+        z, y, F = data.z[part], data.y[part], data.F[part]
+        out[f"n_{part}"] = int(len(z))
+        if len(z):
+            pred, _ = mlp_forward(theta, z, n_hidden, y.shape[1])
+            out[f"{part}_mse"] = float(((pred - y) ** 2).mean())
+            out[f"{part}_rel_rmse"] = math.sqrt(_physical_sq(data.scaling, pred, F) / max(float((F ** 2).sum()),
+                                                                                          1e-300))
+        else:
+            out[f"{part}_mse"] = out[f"{part}_rel_rmse"] = None
+    return out
+
+
+# --------------------------------------------------------------------------- a whole model
+def subsample(n_rows: int, n_samples: int | None, seed: int) -> np.ndarray:
+    """Sorted random rows (without replacement) of a table of ``n_rows``; all rows for None or >= n_rows."""
+    if n_samples is None or int(n_samples) >= n_rows:
+        return np.arange(n_rows)
+    if int(n_samples) < 3:
+        raise ValueError(f"n_samples must be at least 3, got {n_samples!r}")
+    return np.sort(np.random.default_rng(seed).choice(n_rows, int(n_samples), replace=False))
+
+
+def train_protocol_model(frame: pd.DataFrame, meta: dict, protocol: Mapping, boundaries=(), seed: int = 0,
+                         n_samples: int | None = None, name: str = "surrogate", n_hidden: int = 50,
+                         log_network=None) -> tuple[SurrogateForceModel, dict]:
+    """Train a single (no boundaries) or split model under ``protocol`` on one subsample and division.
+
+    ``protocol``: {"name": "paper" | "adam", "fractions": [...], "max_fail", "max_epochs", "max_time_s",
+    and for adam "lr", "batch_size"}.  ``log_network(r, result)`` is called after each network.
+    Returns the force model and a report (per network: rows, epochs, best epoch, stop reason, errors,
+    wall time, validation history).
+    """
+    kind = protocol.get("name", "paper")
+    if kind not in PROTOCOLS:
+        raise ValueError(f"unknown training protocol {kind!r}; choose one of {PROTOCOLS}")
+    threads = protocol.get("threads")
+    if threads:
+        # one BLAS thread per process: parallel work runs as processes, and OpenBLAS threads that
+        # spin-wait on a busy machine slow a 352 x 352 Cholesky down a hundredfold
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(int(threads)):
+            return _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden,
+                                         log_network)
+    return _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden, log_network)
+
+
+def _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden, log_network):
+    kind = protocol.get("name", "paper")
+    bearing = bearing_from_dict(meta["bearing"])
+    rows = subsample(len(frame), n_samples, seed)
+    sub = frame.iloc[rows].reset_index(drop=True)
+    div = divide_random(len(sub), protocol.get("fractions", (0.70, 0.15, 0.15)), seed)
+    eps = sub["eps"].to_numpy()
+    bounds = [float(b) for b in boundaries]
+    nets, scalings, per_net = [], [], []
+    for r, (lo, hi) in enumerate(regions(bounds)):
+        parts = {p: idx[(eps[idx] >= lo) & (eps[idx] < hi)] for p, idx in
+                 (("train", div.train), ("val", div.val), ("test", div.test))}
+        data = network_data(sub, parts, bearing)
+        common = dict(n_hidden=n_hidden, seed=seed * 100 + r, max_fail=int(protocol.get("max_fail", 6)))
+        if kind == "paper":
+            settings = LMSettings(max_epochs=int(protocol.get("max_epochs", 1000)),
+                                  max_time_s=float(protocol.get("max_time_s") or math.inf),
+                                  min_grad=float(protocol.get("min_grad", 1e-7)))
+            res = train_network_lm(data, settings=settings, chunk=int(protocol.get("chunk", 8192)), **common)
+        else:
+            res = train_network_adam(data, max_epochs=int(protocol.get("max_epochs", 1000)),
+                                     lr=float(protocol.get("lr", 3e-3)),
+                                     batch_size=int(protocol.get("batch_size", 512)),
+                                     max_time_s=float(protocol.get("max_time_s") or math.inf),
+                                     threads=protocol.get("threads"), **common)
+        res.update(eps_low=lo, eps_high=hi, time_to_target_s=None, val_rel_rmse=res["val_rel_rmse"])
+        if log_network is not None:
+            log_network(r, res)
+        nets.append(res.pop("layers"))
+        scalings.append(res.pop("scaling"))
+        per_net.append(res)
+    spec = meta["spec"]
+    domain = [[s["eps_low"], s["eps_high"], s["v_max"]] for s in spec["velocity_sections"]]
+    model = SurrogateForceModel(bearing, nets, scalings, "tanh", bounds, 0.0, domain,
+                                eps_max=float(frame["eps"].max()), name=name,
+                                info={"protocol": dict(protocol), "split": {"boundaries": bounds},
+                                      "scaling": {"kind": "minmax"}, "seed": seed, "n_samples": len(sub),
+                                      "model": {"width": n_hidden, "depth": 1, "activation": "tanh"}})
+    times = [p["train_time_s"] for p in per_net]
+    # validation error of the whole model (all its networks' validation rows), physical
+    sq = sum(p["history"]["val_sq_N2"][p["best_epoch"] - 1] if p["best_epoch"] else math.nan for p in per_net)
+    report = {
+        "protocol": kind, "networks": per_net, "n_samples": int(len(sub)), "n_samples_dataset": int(len(frame)),
+        "dataset_hash": meta.get("config_hash"), "seed": seed,
+        "train_time_s": float(sum(times)), "train_time_parallel_s": float(max(times)),
+        "time_to_target_s": None, "target_val_rel_rmse": None,
+        "converged": all(p["converged"] for p in per_net),
+        "stop_reasons": [p["stop_reason"] for p in per_net],
+        "val_rel_rmse": _model_rel_rmse(sub, div.val, model),
+        "test_rel_rmse": _model_rel_rmse(sub, div.test, model),
+        "_val_sq_best_N2": sq,
+        "division": {"train": int(len(div.train)), "val": int(len(div.val)), "test": int(len(div.test))},
+    }
+    report["_sub"] = sub
+    report["_division"] = div
+    return model, report
+
+
+def _model_rel_rmse(sub: pd.DataFrame, idx: np.ndarray, model: SurrogateForceModel) -> float | None:
+    if len(idx) == 0:
+        return None
+    X = sub[["X1", "X2"]].to_numpy()[idx]
+    V = sub[["V1", "V2"]].to_numpy()[idx]
+    F = sub[OUTPUTS].to_numpy()[idx]
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        P = model.forces(X, V)
+    return math.sqrt(float(((P - F) ** 2).sum()) / max(float((F ** 2).sum()), 1e-300))
+
+
+def band_sq_errors(sub: pd.DataFrame, idx: np.ndarray, model: SurrogateForceModel, boundaries) -> list[float]:
+    """sum |F_pred - F|^2 [N^2] of a model over the rows ``idx`` in each eccentricity region."""
+    eps = sub["eps"].to_numpy()[idx]
+    X = sub[["X1", "X2"]].to_numpy()[idx]
+    V = sub[["V1", "V2"]].to_numpy()[idx]
+    F = sub[OUTPUTS].to_numpy()[idx]
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        P = model.forces(X, V)
+    sq = ((P - F) ** 2).sum(axis=1)
+    return [float(sq[(eps >= lo) & (eps < hi)].sum()) for lo, hi in regions(boundaries)]
+
+
+def time_to_accuracy(split_report: dict, targets_sq_N2: list[float]) -> float | None:
+    """Training time [s] the split networks need to reach given validation errors, summed over networks.
+
+    Network r counts from its start to the first epoch whose summed squared
+    validation force error on its own rows is at most ``targets_sq_N2[r]``;
+    None if a network never gets there.
+    """
+    total = 0.0
+    for net, target in zip(split_report["networks"], targets_sq_N2):
+        hist = net["history"]
+        hit = [w for w, s in zip(hist["wall_s"], hist["val_sq_N2"]) if s <= target]
+        if not hit:
+            return None
+        total += hit[0]
+    return total
+
+
+def band_test_errors(model, testset: pd.DataFrame, bands=((0.0, 0.5), (0.5, 0.7), (0.7, 1.0)),
+                     floor_N: float = 0.1) -> dict:
+    """Median and 99th percentile of |F_model - F| / max(|F|, floor) per eccentricity band and below 0.7."""
+    import warnings
+
+    X = testset[["X1", "X2"]].to_numpy()
+    V = testset[["V1", "V2"]].to_numpy()
+    F = testset[OUTPUTS].to_numpy()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        P = model.forces(X, V)
+    rel = np.hypot(*(P - F).T) / np.maximum(np.hypot(*F.T), floor_N)
+    eps = testset["eps"].to_numpy()
+    out = {}
+    for lo, hi in bands:
+        m = (eps >= lo) & (eps < hi)
+        if m.any():
+            out[f"test_rel_err_median_band_{lo:g}_{hi:g}"] = float(np.median(rel[m]))
+            out[f"test_rel_err_p99_band_{lo:g}_{hi:g}"] = float(np.quantile(rel[m], 0.99))
+            out[f"test_rows_band_{lo:g}_{hi:g}"] = int(m.sum())
+    m = eps < 0.7
+    if m.any():
+        out["test_rel_err_median_eps_below_0.7"] = float(np.median(rel[m]))
+    return out
