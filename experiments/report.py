@@ -68,6 +68,14 @@ def main(cfg: DictConfig) -> None:
         "active_dataset_generation_s": active_meta["generation_seconds_last_run"],
         "test_rel_err_median_active": active["metrics"]["test_rel_err_median"],
     })
+    # fast surrogates (docs/fast_surrogates.md): per-force cost, batched trajectories, controller training
+    per_eval = dict(zip(speed.model, speed.time_per_eval_us))
+    metrics["force_eval_us_best"] = float(per_eval["best"])
+    batch = _load(rd / "batch_speed.json")
+    metrics["trajectories_per_s_batch_speedup"] = batch["trajectories_per_s_batch_speedup"]
+    metrics["trajectories_per_s_single_speedup"] = batch["trajectories_per_s_single_speedup"]
+    cts = _load(rd / "controller_training_speed.json")
+    metrics["controller_training_speedup"] = cts["controller_training_speedup"]
     io.write_json(rd / "metrics.json", metrics)
 
     thr = cfg.metrics.threshold_pct

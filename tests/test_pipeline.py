@@ -56,6 +56,10 @@ def quick_pipeline(quick_data, tmp_path_factory):
                "controller=quick", f"tracking.uri={uri}"]
     run("train_controller.py", *control, f"training_report={reports / 'dqn_training.json'}")
     run("evaluate_control.py", *control, f"out_json={reports / 'control.json'}", f"figures_dir={reports / 'figures'}")
+    run("batch_speed.py", f"surrogate_dir={models / 'best'}", "batch_sizes=[1,4]", "t_end=0.001",
+        f"out_json={reports / 'batch_speed.json'}")
+    run("controller_training_speed.py", *control, "training_speed.budget_steps=12",
+        "training_speed.learning_starts=6", f"training_speed.out_json={reports / 'controller_training_speed.json'}")
     run("report.py", f"report_dir={reports}", f"models_dir={models}", f"dataset_dir={dataset}", f"tracking.uri={uri}",
         f"active_dataset_dir={active_ds}")
     return tmp, uri
@@ -78,6 +82,9 @@ def test_pipeline_writes_every_headline_number(quick_pipeline):
     for panel in ("a_dqn", "b_none", "c_mpc"):
         assert (tmp / "reports" / "figures" / f"fig5_{panel}.png").stat().st_size > 10_000
     assert "Active conical bearing" in md
+    for key in ("force_eval_us_best", "trajectories_per_s_batch_speedup", "controller_training_speedup",
+                "controller_decision_ms_mpc", "mpc_amplitude_reduction_pct"):
+        assert isinstance(metrics[key], float) and metrics[key] == metrics[key], key
 
 
 def test_review_notebook_runs_on_the_quick_profile(quick_pipeline):
