@@ -68,28 +68,12 @@ def _activate(buf, n, act):
             buf[o] = 1.0 / (1.0 + math.exp(-buf[o]))
 
 
-@njit(cache=True, fastmath={"reassoc", "contract"}, inline="always")
-def _dense_rows(w, b, src, dst, n_in, n_out):
-    """dst = W src + b with W stored row-major (n_out, n_in): one contiguous dot product per output.
-
-    Used for the last layer (2 or 4 outputs): a loop over so few outputs would not vectorise,
-    a dot product over the hidden width does.
-    """
-    for o in range(n_out):
-        acc = 0.0
-        base = o * n_in
-        for i in range(n_in):
-            acc += w[base + i] * src[i]
-        dst[o] = acc + b[o]
-
-
 @njit(cache=True, inline="always")
 def _mlp(weights, table, n_layers, act, z, buf_a, buf_b):
     """Evaluate one network on the first n_in scaled inputs ``z``; returns the buffer holding its outputs.
 
-    Hidden layers' weights are stored transposed (n_in, n_out) so each layer is a sum of
-    axpy updates whose inner loop over outputs is independent and vectorises; the last
-    layer's are stored row-major (``pack_network``) and evaluated as dot products.
+    Weights are stored transposed (n_in, n_out) so each layer is a sum of
+    axpy updates whose inner loop over outputs is independent and vectorises.
     """
     for k in range(table[0, 2]):
         buf_a[k] = z[k]
@@ -98,11 +82,9 @@ def _mlp(weights, table, n_layers, act, z, buf_a, buf_b):
         # even layers read buf_a and write buf_b, odd ones the other way round
         src = buf_a if layer % 2 == 0 else buf_b
         dst = buf_b if layer % 2 == 0 else buf_a
+        _dense(weights[w_off:b_off], weights[b_off:b_off + n_out], src, dst, n_in, n_out)
         if layer < n_layers - 1:
-            _dense(weights[w_off:b_off], weights[b_off:b_off + n_out], src, dst, n_in, n_out)
             _activate(dst, n_out, act)
-        else:
-            _dense_rows(weights[w_off:b_off], weights[b_off:b_off + n_out], src, dst, n_in, n_out)
     return buf_b if n_layers % 2 == 1 else buf_a
 
 
@@ -228,15 +210,14 @@ def _surrogate_batch(params, x, v, out):
 
 
 def pack_network(layers: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
-    """[(W (out, in), b (out,)), ...] -> flat weights and a (n_layers, 4) table of
-    [weight offset, bias offset, n_in, n_out]; hidden layers' W stored transposed, the last
-    layer's row-major (the layouts ``_mlp`` reads)."""
+    """[(W (out, in), b (out,)), ...] -> flat weights (each W stored transposed) and a
+    (n_layers, 4) table of [weight offset, bias offset, n_in, n_out]."""
     flat, table, off = [], [], 0
-    for k, (W, b) in enumerate(layers):
+    for W, b in layers:
         W = np.asarray(W, dtype=np.float64)
         b = np.asarray(b, dtype=np.float64)
         table.append([off, off + W.size, W.shape[1], W.shape[0]])
-        flat += [(W if k == len(layers) - 1 else W.T).ravel(), b.ravel()]
+        flat += [W.T.ravel(), b.ravel()]
         off += W.size + b.size
     return np.concatenate(flat), np.asarray(table, dtype=np.int64)
 
