@@ -14,15 +14,16 @@ cost) and makes it cheap in three ways, each a config value:
   (the surrogate takes the sleeve per trajectory), so the per-candidate
   Python overhead is paid once;
 - a coarser prediction step ``dt`` (the orbit over one revolution is smooth:
-  RK4 at 200 steps per revolution gives the candidates' costs equal to the
-  plant step's to three decimals), with substeps starting at a lower eccentricity
+  RK4 at 100-200 steps per revolution gives the candidates' costs equal to
+  the plant step's to three decimals and, on the Fig. 5 episode, the same
+  decisions), with substeps starting at a lower eccentricity
   ``eps_substep`` so that the film's stiffness stays inside RK4's stability
   region at the larger step;
 - a shorter horizon (one revolution by default, against two: the cost of the
   next interval is what the decision is about, and one revolution shows it).
 
-Together: 5 x 200 x 4 = 4,000 force evaluations per decision instead of
-80,000.
+Together (dt = 2e-4 s): 5 x 100 x 4 = 2,000 force evaluations per decision
+instead of 80,000.
 
 The trade-off measured on the reference model is reported by
 ``experiments/evaluate_control.py`` (docs/fast_surrogates.md).
@@ -41,7 +42,7 @@ class BatchedMPC:
 
     name = "mpc"
 
-    def __init__(self, model, horizon_intervals: float = 1.0, dt: float = 1e-4, eps_substep: float = 0.5,
+    def __init__(self, model, horizon_intervals: float = 1.0, dt: float = 2e-4, eps_substep: float = 0.4,
                  record_every: int = 1):
         if not hasattr(model, "set_sleeve"):
             raise ValueError(f"{type(model).__name__} has no sleeve input; the MPC needs an active bearing model")
