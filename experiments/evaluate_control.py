@@ -12,7 +12,8 @@ from omegaconf import DictConfig, OmegaConf
 
 from fluidfilm import io, load_surrogate, tracking
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
-from fluidfilm.control import ConstantSleeve, DQNController, ModelPredictiveController, run_episode
+from fluidfilm.control import ConstantSleeve, DQNController, run_episode
+from fluidfilm.control.mpc import BatchedMPC
 from fluidfilm.control.build import env_from_cfg
 from fluidfilm.control.dqn import load_agent
 from fluidfilm.figures import fig5_panels
@@ -26,7 +27,7 @@ def main(cfg: DictConfig) -> dict:
     env = env_from_cfg(reference, c["rotor"], c["controller"])
     surrogate = load_surrogate(cfg.surrogate_dir)
     controllers = [ConstantSleeve(env.initial_action, name="none"), DQNController(load_agent(cfg.agent_path)),
-                   ModelPredictiveController(surrogate, cfg.controller.mpc.horizon_intervals)]
+                   BatchedMPC(surrogate, **c["controller"]["mpc"])]
     runs = {}
     for ctrl in controllers:
         t0 = time.perf_counter()

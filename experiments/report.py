@@ -116,6 +116,14 @@ def main(cfg: DictConfig) -> None:
     charac = _load(rd / "characteristics.json") if (rd / "characteristics.json").exists() else None
     if charac is not None:  # the characteristics stage: K/C and whirl-threshold errors of the surrogates
         metrics.update(charac["metrics"])
+    # fast surrogates (docs/fast_surrogates.md): per-force cost, batched trajectories, controller training
+    per_eval = dict(zip(speed.model, speed.time_per_eval_us))
+    metrics["force_eval_us_best"] = float(per_eval["best"])
+    batch = _load(rd / "batch_speed.json")
+    metrics["trajectories_per_s_batch_speedup"] = batch["trajectories_per_s_batch_speedup"]
+    metrics["trajectories_per_s_single_speedup"] = batch["trajectories_per_s_single_speedup"]
+    cts = _load(rd / "controller_training_speed.json")
+    metrics["controller_training_speedup"] = cts["controller_training_speedup"]
     io.write_json(rd / "metrics.json", metrics)
 
     thr = cfg.metrics.threshold_pct

@@ -21,5 +21,5 @@ def test_help_describes_the_study(script):
     assert "Powered by Hydra" not in text
     assert "Main options:" in text and "Example:" in text, text[:500]
     example = next(line for line in text.splitlines() if line.startswith("Example:"))
-    assert f"experiments/{script}" in example or script.startswith(("train_controller", "evaluate_control"))
+    assert f"experiments/{script}" in example or script.startswith(("train_controller", "evaluate_control", "controller_training_speed"))
     assert "== Config groups" in text

@@ -91,6 +91,10 @@ def test_pipeline_writes_every_headline_number(quick_reproduce):
     assert ch["raimondi_boyd"]["S_max_err_pct"] < 2.0
     assert (workdir / "reports" / "figures" / "characteristics_stability_map.png").stat().st_size > 10_000
     assert "Bearing characteristics" in md
+    # fast surrogates: per-force cost, batched trajectories, controller training, MPC
+    for key in ("force_eval_us_best", "trajectories_per_s_batch_speedup", "controller_training_speedup",
+                "controller_decision_ms_mpc", "mpc_amplitude_reduction_pct"):
+        assert isinstance(metrics[key], float) and metrics[key] == metrics[key], key
 
 
 def test_a_second_reproduce_finds_every_stage_up_to_date(quick_reproduce):

@@ -372,6 +372,17 @@ class SurrogateForceModel:
         self._clearance = float(c)
 
     @property
+    def setting_array(self) -> np.ndarray:
+        """The kernel's mutable control setting [1/c_r^2, sleeve] (``simulate_batch`` writes per-trajectory rows)."""
+        return self._setting
+
+    def setting_for(self, sleeve: float) -> np.ndarray:
+        """The setting row of a sleeve position [m], for ``simulate_batch(settings=...)``."""
+        if not self._n_extra:
+            raise ValueError(f"{self.name} takes no sleeve input")
+        return np.array([1.0 / self._bearing.clearance_at(sleeve) ** 2, float(sleeve)])
+
+    @property
     def n_parameters(self) -> int:
         return self._n_parameters
 

@@ -1,0 +1,52 @@
+"""Trajectories per second: force models run one trajectory at a time (``simulate``) and as a batch
+(``simulate_batch``), measured side by side on the same trajectories.
+
+The trajectories are a Monte Carlo over what a sweep varies: imbalance,
+static load and initial state (position and velocity within the orbits of
+the paper's cases), each ``t_end`` of rotor time with the workspace's RK4
+step.  Every model integrates exactly the same set, so ratios compare the
+models and the way they are driven, nothing else.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .rotor import Rotor, simulate
+from .rotor.batch import simulate_batch
+
+
+def monte_carlo_batch(clearance: float, n: int, mass: float = 2.5, seed: int = 0):
+    """(rotors, x0, v0) of n trajectories: imbalance 0-1e-3 kg m, side load +-30 N, eps0 < 0.5, |v0| < 0.01 m/s."""
+    rng = np.random.default_rng(seed)
+    rotors = [Rotor(mass=mass, imbalance=float(u), external_force=(float(f), 0.0))
+              for u, f in zip(1e-3 * rng.random(n), 30.0 * (2 * rng.random(n) - 1))]
+    eps = 0.5 * rng.random(n)
+    ang = 2 * np.pi * rng.random(n)
+    x0 = clearance * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
+    v0 = 0.01 * (2 * rng.random((n, 2)) - 1)
+    return rotors, x0, v0
+
+
+def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batched: bool = True,
+                            repeats: int = 1, seed: int = 0) -> dict:
+    """Median trajectories per second of ``model`` over ``repeats`` runs of n Monte Carlo trajectories."""
+    rotors, x0, v0 = monte_carlo_batch(model.bearing.clearance, n, seed=seed)
+    # compile outside the timing
+    if batched:
+        simulate_batch(model, rotors[:1], 2 * dt, dt, x0[:1], v0[:1], record_every=10)
+    else:
+        simulate(model, rotors[0], 2 * dt, dt, x0[0], v0[0], record_every=10)
+    samples, n_ok = [], 0
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        if batched:
+            out = simulate_batch(model, rotors, t_end, dt, x0, v0, record_every=10)
+            n_ok = int(out.ok.sum())
+        else:
+            n_ok = sum(simulate(model, r, t_end, dt, a, b, record_every=10).ok for r, a, b in zip(rotors, x0, v0))
+        samples.append(time.perf_counter() - t0)
+    wall = float(np.median(samples))
+    return {"n": n, "batched": batched, "t_end_s": t_end, "wall_s": wall, "trajectories_per_s": n / wall,
+            "n_ok": n_ok}
