@@ -10,12 +10,15 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from .models import AdjustableForceModel, ForceModel
     from .reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
+    from .reynolds.feed import GroovedReynoldsSolver
+    from .reynolds.sparse_reference import SparseReferenceModel
     from .rotor.linear import LinearBearing
     from .surrogate.inference import SurrogateForceModel
 
     def _force_models(a: ReynoldsSolver, b: GradedReynoldsModel, c: ConicalReynoldsSolver,
-                      d: SurrogateForceModel, e: LinearBearing) -> list[ForceModel]:
-        return [a, b, c, d, e]
+                      d: SurrogateForceModel, e: LinearBearing, f: SparseReferenceModel,
+                      g: GroovedReynoldsSolver) -> list[ForceModel]:
+        return [a, b, c, d, e, f, g]
 
     def _adjustable_models(b: GradedReynoldsModel, c: ConicalReynoldsSolver,
                            d: SurrogateForceModel) -> list[AdjustableForceModel]:

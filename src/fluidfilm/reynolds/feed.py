@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit
 
 from ..bearing import JournalBearing
+from ..models import ReferenceModel
 from ..states import as_state_pairs
 from . import kernels
 from .solver import CAVITATION_MODELS, ReynoldsSolver
@@ -151,7 +152,7 @@ def grooved_force(gparams, x1, x2, v1, v2):
     return from_groove_frame(gparams[1], gparams[2], g1, g2)
 
 
-class GroovedReynoldsSolver:
+class GroovedReynoldsSolver(ReferenceModel):
     """Finite-length Reynolds solver with an axial feed groove at ``groove_angle`` [rad] held at the supply pressure.
 
     >>> s = GroovedReynoldsSolver(bearing, 90, 61, cavitation="swift-stieber", groove_angle=math.pi)
@@ -195,6 +196,7 @@ class GroovedReynoldsSolver:
         self.n_grooves = ng
         self.gparams = (self._base.params, math.cos(g), math.sin(g), _CAV[cavitation], fixed)
         self._c = bearing.clearance
+        self._bearing = bearing
 
     @property
     def bearing(self) -> JournalBearing:

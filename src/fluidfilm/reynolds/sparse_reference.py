@@ -32,6 +32,7 @@ import scipy.sparse.linalg as spla
 from numba import njit, objmode
 
 from ..bearing import JournalBearing
+from ..models import ReferenceModel
 from ..states import as_state_pairs
 from .mesh import FilmMesh
 
@@ -128,8 +129,11 @@ def sparse_callback_force(params, x1, x2, v1, v2):
     return f1, f2
 
 
-class SparseReferenceModel:
-    """Paper-like reference: 30x30 below ``eps_threshold``, 55x55 above, sparse direct solve per call."""
+class SparseReferenceModel(ReferenceModel):
+    """Paper-like reference: 30x30 below ``eps_threshold``, 55x55 above, sparse direct solve per call.
+
+    A force model like every other (``fluidfilm.models.ForceModel``): valid in the whole film.
+    """
 
     def __init__(self, bearing: JournalBearing, coarse=(30, 30), dense=(55, 55), eps_threshold: float = 0.9,
                  cavitation: str = "gumbel"):
@@ -141,14 +145,13 @@ class SparseReferenceModel:
         self.coarse = SparseGridSolver(bearing, *coarse, cavitation=cavitation)
         self.dense = SparseGridSolver(bearing, *dense, cavitation=cavitation)
         self.eps_threshold = float(eps_threshold)
-        self.name = "sparse_reference"
         key = id(self)
         _REGISTRY[key] = self
         self.params = (np.int64(key),)
 
     @property
-    def bearing(self) -> JournalBearing:
-        return self._bearing
+    def name(self) -> str:
+        return "sparse_reference"
 
     @property
     def force_kernel(self):
