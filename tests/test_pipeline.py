@@ -74,7 +74,7 @@ def test_pipeline_writes_every_headline_number(quick_pipeline):
     assert (tmp / "reports" / "figures" / "fig4_comparison.png").stat().st_size > 10_000
     assert metrics["speedup_trajectory_split"] > 0
     assert isinstance(metrics["controller_amplitude_reduction_pct"], float)
-    assert metrics["active_dataset_samples"] == 20_412
+    assert metrics["active_dataset_samples"] == (7 * 12 - 11) * 81 * 3  # 7 rings x 12 angles, the centre once; 81 pairs; 3 sleeves
     for panel in ("a_dqn", "b_none", "c_mpc"):
         assert (tmp / "reports" / "figures" / f"fig5_{panel}.png").stat().st_size > 10_000
     assert "Active conical bearing" in md
