@@ -42,10 +42,8 @@ def main(cfg: DictConfig) -> None:
         "runs": head["runs"], "studies": studies}
     io.write_json(cfg.out, out)
     with tracking.run(cfg.tracking, "train_time", c):
-        if cfg.tracking.enabled:
-            import mlflow
-            for study, s in studies.items():
-                mlflow.log_metrics({f"{study}.{k}": float(v) for k, v in s.items()
+        for study, s in studies.items():
+            tracking.log_metrics({f"{study}.{k}": float(v) for k, v in s.items()
                                     if isinstance(v, (int, float)) and not isinstance(v, bool)})
     print({k: v for k, v in out.items() if k not in ("runs", "studies")})
 
