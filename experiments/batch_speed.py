@@ -50,4 +50,4 @@ def main(cfg: DictConfig) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the batched-trajectory speed study", "run the same command again")

@@ -131,13 +131,12 @@ def main(cfg: DictConfig) -> None:
     out["metrics"] = metrics
     io.write_json(Path(cfg.out_json), _finite_or_none(out))
     with tracking.run(cfg.tracking, "characteristics", OmegaConf.to_container(cfg, resolve=True)):
-        if cfg.tracking.enabled:
-            import mlflow
-            mlflow.log_metrics({k: v for k, v in metrics.items() if math.isfinite(v)})
-            for name in ("characteristics_static", "characteristics_coefficients", "characteristics_stability_map"):
-                mlflow.log_artifact(str(figs / f"{name}.png"))
+        tracking.log_metrics({k: v for k, v in metrics.items() if math.isfinite(v)})
+        for name in ("characteristics_static", "characteristics_coefficients", "characteristics_stability_map"):
+            tracking.log_artifact(str(figs / f"{name}.png"))
+        tracking.log_artifact(str(cfg.out_json))
     print(pd.Series(metrics).to_string())
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the bearing-characteristics study", "run the same command again")

@@ -75,10 +75,8 @@ def main(cfg: DictConfig) -> None:
         summary["sparse_reference_per_case"] = sparse_speed["sparse_per_case"]
     io.write_json(report / "comparison.json", summary)
     with tracking.run(cfg.tracking, "compare", OmegaConf.to_container(cfg, resolve=True)):
-        if cfg.tracking.enabled:
-            import mlflow
-            mlflow.log_metrics({k: v for k, v in summary.items() if isinstance(v, float)})
-            mlflow.log_artifact(str(Path(cfg.figure_dir) / "fig4_comparison.png"))
+        tracking.log_metrics({k: v for k, v in summary.items() if isinstance(v, float)})
+        tracking.log_artifact(Path(cfg.figure_dir) / "fig4_comparison.png")
     pd.set_option("display.width", 200)
     print(table[["case", "model", "status", "span", "rms_pct", "hausdorff_pct", "satisfactory", "wall_time_s"]])
     print(speed)

@@ -46,15 +46,13 @@ def main(cfg: DictConfig) -> dict:
                    "from the measured time per environment step")
     io.write_json(cfg.training_speed.out_json, out)
     print(f"controller training speed-up (reference / surrogate time per step): {out['controller_training_speedup']:.1f}x")
-    with tracking.run(cfg.tracking, "controller_training_speed", c, tags={"stage": "controller_training_speed"}) as run:
-        if run is not None:
-            import mlflow  # as evaluate_control.py does
-
-            mlflow.log_metrics({"controller_training_speedup": out["controller_training_speedup"],
-                                  "reference_s_per_env_step": out["reference"]["s_per_env_step"],
-                                  "surrogate_s_per_env_step": out["surrogate"]["s_per_env_step"]})
+    with tracking.run(cfg.tracking, "controller_training_speed", c, tags={"stage": "controller_training_speed"}):
+        tracking.log_metrics({"controller_training_speedup": out["controller_training_speedup"],
+                              "reference_s_per_env_step": out["reference"]["s_per_env_step"],
+                              "surrogate_s_per_env_step": out["surrogate"]["s_per_env_step"]})
+        tracking.log_artifact(str(cfg.training_speed.out_json))
     return out
 
 
 if __name__ == "__main__":
-    main()
+    io.run_interruptible(main, "the controller-training speed study", "run the same command again")

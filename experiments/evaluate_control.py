@@ -60,10 +60,8 @@ def main(cfg: DictConfig) -> dict:
     fig5_panels(runs, env.c0, cfg.figures_dir, ramp=(env.scenario.imbalance_start, env.scenario.imbalance_end))
     with tracking.run(cfg.tracking, "control_evaluation", c, tags={"stage": "evaluate_control"}) as run:
         if run is not None:
-            import mlflow
-
             for name, s in summary.items():
-                mlflow.log_metrics({f"{name}_{k}": float(v) for k, v in s.items()
+                tracking.log_metrics({f"{name}_{k}": float(v) for k, v in s.items()
                                     if isinstance(v, (int, float)) and not isinstance(v, bool)})
     return out
 

@@ -27,10 +27,8 @@ def main(cfg: DictConfig) -> None:
     summary = {f"err_{k}_pct_eps_{e:g}": float(np.interp(e, frame["eps"], frame[f"err_{k}_pct"]))
                for k in ("coarse", "dense") for e in (0.5, 0.9, 0.95, 0.98)}
     with tracking.run(cfg.tracking, "fig2_grid", OmegaConf.to_container(cfg, resolve=True)):
-        if cfg.tracking.enabled:
-            import mlflow
-            mlflow.log_metrics(summary)
-            mlflow.log_artifact(str(out / "fig2_grid.png"))
+        tracking.log_metrics(summary)
+        tracking.log_artifact(out / "fig2_grid.png")
     print(frame.iloc[:: max(1, len(frame) // 10)].to_string(index=False))
 
 

@@ -22,9 +22,7 @@ def main(cfg: DictConfig) -> dict:
     tags = {"study": "grid_sweep", "sweep_dir": str(hc.sweep.dir) if hc.mode.name == "MULTIRUN" else ""}
     with tracking.run(cfg.tracking, f"grid_{solver.n_theta}x{solver.n_z}",
                       OmegaConf.to_container(cfg, resolve=True), tags=tags):
-        if cfg.tracking.enabled:
-            import mlflow
-            mlflow.log_metrics(result)
+        tracking.log_metrics(result)
     print(f"{solver}: " + ", ".join(f"{k}={v:.4g}" for k, v in result.items()))
     return result
 

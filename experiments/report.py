@@ -293,10 +293,8 @@ the orbit, the passive bearing's orbit grows.
         md += characteristics_section(charac)
     io.write_text(rd / "paper_comparison.md", md)
     with tracking.run(cfg.tracking, "paper_comparison", OmegaConf.to_container(cfg, resolve=True)):
-        if cfg.tracking.enabled:
-            import mlflow
-            mlflow.log_metrics({k: float(v) for k, v in metrics.items() if isinstance(v, (int, float))})
-            mlflow.log_artifact(str(rd / "paper_comparison.md"))
+        tracking.log_metrics({k: float(v) for k, v in metrics.items() if isinstance(v, (int, float))})
+        tracking.log_artifact(rd / "paper_comparison.md")
     print(json.dumps(metrics, indent=1))
 
 

@@ -97,18 +97,7 @@ def main(cfg: DictConfig) -> dict:
     digest = config_hash(c["model"], c["split"], c["scaling"], c["trainer"], c["seed"], c["dataset_dir"])
     ckpt_root = Path(cfg.checkpoint_dir) / name / digest
     with tracking.run(cfg.tracking, name, c, tags={"model_name": name}) as parent:
-        logger_for = None
-        if parent is not None:
-            import mlflow
-            from lightning.pytorch.loggers import MLFlowLogger
-
-            client = mlflow.tracking.MlflowClient(cfg.tracking.uri)
-
-            def logger_for(r):
-                child = client.create_run(parent.info.experiment_id, run_name=f"{name}/network{r}",
-                                          tags={"mlflow.parentRunId": parent.info.run_id})
-                return MLFlowLogger(experiment_name=cfg.tracking.experiment, tracking_uri=cfg.tracking.uri,
-                                    run_id=child.info.run_id)
+        logger_for = None if parent is None else tracking.child_logger_factory(parent, cfg.tracking, name)
 
         if c.get("protocol"):
             # the paper's protocol (or Adam under its rules): see fluidfilm.surrogate.protocol
@@ -143,14 +132,12 @@ def main(cfg: DictConfig) -> dict:
         tmp.rename(out)
         shutil.rmtree(old, ignore_errors=True)
         if parent is not None:
-            import mlflow
-
-            mlflow.log_metrics({k: float(v) for k, v in metrics.items()})
+            tracking.log_metrics({k: float(v) for k, v in metrics.items()})
             for k, n in enumerate(report["networks"]):
-                mlflow.log_metric(f"train_time_s_network{k}", n["train_time_s"])
+                tracking.log_metric(f"train_time_s_network{k}", n["train_time_s"])
                 if n["time_to_target_s"] is not None:
-                    mlflow.log_metric(f"time_to_target_s_network{k}", n["time_to_target_s"])
-            mlflow.log_artifacts(str(out), artifact_path="model")
+                    tracking.log_metric(f"time_to_target_s_network{k}", n["time_to_target_s"])
+            tracking.log_artifacts(out, artifact_path="model")
     print(f"{name}: test median rel. error {metrics['test_rel_err_median']:.4f}, p99 {metrics['test_rel_err_p99']:.3f}, "
           f"train {report['train_time_s']:.1f} s, to target {report['time_to_target_s']}, "
           f"{metrics['speedup_force_eval_vs_reference']:.1f}x faster than the reference per force")

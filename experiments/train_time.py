@@ -167,22 +167,22 @@ def main(cfg: DictConfig) -> None:
             "ranking": ranking(full), "protocol": proto_fs, "runs": full["runs"]}
     out["runs"] = head["runs"]
     io.write_json(cfg.out, out)
-    with tracking.run(cfg.tracking, "train_time", c):
-        if cfg.tracking.enabled:
-            import mlflow
-
-            mlflow.log_metrics({k: float(v) for k, v in out.items()
-                                if isinstance(v, (int, float)) and not isinstance(v, bool)})
-            mlflow.log_metric("train_time_converged", float(out["train_time_converged"]))
-            for r in head["runs"]:
-                for which in ("single", "split"):
-                    for k, n in enumerate(r[which]["networks"]):
-                        p = f"seed{r['seed']}.{which}.net{k}"
-                        mlflow.log_metrics({f"{p}.epochs": n["epochs"], f"{p}.train_time_s": n["train_time_s"],
-                                            f"{p}.val_rel_rmse": n["val_rel_rmse"],
-                                            f"{p}.test_rel_rmse": n["test_rel_rmse"] or math.nan,
-                                            f"{p}.train_rel_rmse": n["train_rel_rmse"]})
-            mlflow.log_artifact(str(cfg.out))
+    with tracking.run(cfg.tracking, "train_time", c) as parent:
+        tracking.log_metrics({k: float(v) for k, v in out.items()
+                              if isinstance(v, (int, float)) and not isinstance(v, bool)})
+        tracking.log_metric("train_time_converged", float(out["train_time_converged"]))
+        # one child run per seed and structure: its networks' epochs, times and errors
+        for r in head["runs"]:
+            for which in ("single", "split"):
+                metrics = {}
+                for k, n in enumerate(r[which]["networks"]):
+                    metrics.update({f"net{k}.epochs": n["epochs"], f"net{k}.train_time_s": n["train_time_s"],
+                                    f"net{k}.val_rel_rmse": n["val_rel_rmse"],
+                                    f"net{k}.test_rel_rmse": n["test_rel_rmse"] or math.nan,
+                                    f"net{k}.train_rel_rmse": n["train_rel_rmse"]})
+                tracking.log_child_run(parent, f"train_time seed {r['seed']} {which}", metrics,
+                                       params={"seed": r["seed"], "structure": which}, uri=cfg.tracking.uri)
+        tracking.log_artifact(str(cfg.out))
     print({k: v for k, v in out.items() if k not in ("runs", "ranking_check", "full_scale", "protocol")})
 
 

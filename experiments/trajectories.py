@@ -44,12 +44,10 @@ def main(cfg: DictConfig) -> None:
     io.save_figure(plot_equilibrium_locus(locus, bearing.clearance),
                    Path(cfg.figure_dir) / f"equilibrium_locus_{cfg.model_name}.png", dpi=130)
     with tracking.run(cfg.tracking, f"trajectories_{cfg.model_name}", OmegaConf.to_container(cfg, resolve=True)):
-        if cfg.tracking.enabled:
-            import mlflow
-            for r in rows:
-                mlflow.log_metrics({f"span_{r['case']}": r["span"], f"eps_max_{r['case']}": r["eps_max"],
-                                    f"wall_time_s_{r['case']}": r["wall_time_s"],
-                                    f"outside_domain_evals_{r['case']}": r["n_outside_domain"]})
+        for r in rows:
+            tracking.log_metrics({f"span_{r['case']}": r["span"], f"eps_max_{r['case']}": r["eps_max"],
+                                  f"wall_time_s_{r['case']}": r["wall_time_s"],
+                                  f"outside_domain_evals_{r['case']}": r["n_outside_domain"]})
 
 
 if __name__ == "__main__":

@@ -70,3 +70,18 @@ def test_the_layering_check_sees_a_real_dependency():
     """It can fail: the generator does import the solver, the scaling module's user does import scaling."""
     assert "fluidfilm.reynolds.policy" in closure("fluidfilm.data.generate")
     assert "fluidfilm.surrogate.scaling" in closure("fluidfilm.surrogate.fit")
+
+
+def test_only_the_tracking_module_imports_mlflow():
+    """MLflow is reached through fluidfilm.tracking alone (library and entry points)."""
+    root = SRC.parent
+    offenders = []
+    for path in sorted(list((SRC / "fluidfilm").rglob("*.py")) + list((root / "experiments").glob("*.py"))):
+        if path == SRC / "fluidfilm" / "tracking.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            if any(n.split(".")[0] == "mlflow" for n in names):
+                offenders.append(str(path.relative_to(root)))
+    assert not offenders, f"import mlflow through fluidfilm.tracking instead: {sorted(set(offenders))}"

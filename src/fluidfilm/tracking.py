@@ -143,6 +143,83 @@ def run(tracking: Mapping | None, run_name: str, params: Mapping | None = None,
         mlflow.end_run(status="FINISHED")
 
 
+def _active():
+    import mlflow
+
+    return mlflow if mlflow.active_run() is not None else None
+
+
+def log_metrics(metrics: Mapping, step: int | None = None) -> None:
+    """Log ``metrics`` to the active run (nothing when no run is active, e.g. tracking disabled)."""
+    mlflow = _active()
+    if mlflow is not None and metrics:
+        mlflow.log_metrics(dict(metrics), step=step)
+
+
+def log_metric(key: str, value: float, step: int | None = None) -> None:
+    mlflow = _active()
+    if mlflow is not None:
+        mlflow.log_metric(key, value, step=step)
+
+
+def log_artifact(path) -> None:
+    mlflow = _active()
+    if mlflow is not None:
+        mlflow.log_artifact(str(path))
+
+
+def log_artifacts(directory, artifact_path: str | None = None) -> None:
+    mlflow = _active()
+    if mlflow is not None:
+        mlflow.log_artifacts(str(directory), artifact_path=artifact_path)
+
+
+def child_logger_factory(parent, tracking: Mapping, name: str):
+    """``r -> MLFlowLogger`` of a child run "<name>/network<r>" under the run ``parent`` (Lightning's logger)."""
+    import mlflow
+    from lightning.pytorch.loggers import MLFlowLogger
+
+    client = mlflow.tracking.MlflowClient(tracking["uri"])
+
+    def logger_for(r):
+        child = client.create_run(parent.info.experiment_id, run_name=f"{name}/network{r}",
+                                  tags={"mlflow.parentRunId": parent.info.run_id})
+        return MLFlowLogger(experiment_name=tracking["experiment"], tracking_uri=tracking["uri"],
+                            run_id=child.info.run_id)
+
+    return logger_for
+
+
+def sb3_learning_curves():
+    """A stable-baselines3 callback: episode returns (from the Monitor wrapper, kept in ``.returns``)
+    and SB3's training scalars, logged to the active MLflow run."""
+    import numpy as np
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class MlflowCurves(BaseCallback):
+        def __init__(self):
+            super().__init__()
+            self.returns: list[tuple[int, float]] = []
+
+        def _on_step(self) -> bool:
+            for info in self.locals.get("infos", []):
+                ep = info.get("episode")
+                if ep is not None:
+                    self.returns.append((self.num_timesteps, float(ep["r"])))
+                    log_metric("episode_return", float(ep["r"]), step=self.num_timesteps)
+            return True
+
+        def _on_rollout_end(self) -> None:
+            if _active() is None:
+                return
+            vals = {k.replace("/", "_"): float(v) for k, v in self.model.logger.name_to_value.items()
+                    if isinstance(v, (int, float, np.floating))}
+            if vals:
+                log_metrics(vals, step=self.num_timesteps)
+
+    return MlflowCurves()
+
+
 class MlflowSweepCallback:
     """Hydra callback (duck-typed, no Hydra import): one MLflow parent run per multirun.
 

@@ -4,41 +4,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
-import numpy as np
+from .. import tracking
 
 
 def _mlflow_callback(log_every: int = 1):
-    from stable_baselines3.common.callbacks import BaseCallback
-
-    class MlflowCurves(BaseCallback):
-        """Episode returns (from the Monitor wrapper) and SB3's training scalars, logged to the active MLflow run."""
-
-        def __init__(self):
-            super().__init__()
-            self.returns: list[tuple[int, float]] = []
-
-        def _on_step(self) -> bool:
-            import mlflow
-
-            for info in self.locals.get("infos", []):
-                ep = info.get("episode")
-                if ep is not None:
-                    self.returns.append((self.num_timesteps, float(ep["r"])))
-                    if mlflow.active_run() is not None:
-                        mlflow.log_metric("episode_return", float(ep["r"]), step=self.num_timesteps)
-            return True
-
-        def _on_rollout_end(self) -> None:
-            import mlflow
-
-            if mlflow.active_run() is None:
-                return
-            vals = {k.replace("/", "_"): float(v) for k, v in self.model.logger.name_to_value.items()
-                    if isinstance(v, (int, float, np.floating))}
-            if vals:
-                mlflow.log_metrics(vals, step=self.num_timesteps)
-
-    return MlflowCurves()
+    # the learning-curve callback lives with the other MLflow code
+    return tracking.sb3_learning_curves()
 
 
 def train_dqn(env, cfg: Mapping, seed: int = 0, progress: bool = False):
