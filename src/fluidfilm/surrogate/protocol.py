@@ -335,8 +335,6 @@ def _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, na
                                       "scaling": {"kind": "minmax"}, "seed": seed, "n_samples": len(sub),
                                       "model": {"width": n_hidden, "depth": 1, "activation": "tanh"}})
     times = [p["train_time_s"] for p in per_net]
-    # validation error of the whole model (all its networks' validation rows), physical
-    sq = sum(p["history"]["val_sq_N2"][p["best_epoch"] - 1] if p["best_epoch"] else math.nan for p in per_net)
     report = {
         "protocol": kind, "networks": per_net, "n_samples": int(len(sub)), "n_samples_dataset": int(len(frame)),
         "dataset_hash": meta.get("config_hash"), "seed": seed,
@@ -346,9 +344,9 @@ def _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, na
         "stop_reasons": [p["stop_reason"] for p in per_net],
         "val_rel_rmse": _model_rel_rmse(sub, div.val, model),
         "test_rel_rmse": _model_rel_rmse(sub, div.test, model),
-        "_val_sq_best_N2": sq,
         "division": {"train": int(len(div.train)), "val": int(len(div.val)), "test": int(len(div.test))},
     }
+    # the rows and division, for callers that compare models on the same rows (not saved)
     report["_sub"] = sub
     report["_division"] = div
     return model, report
