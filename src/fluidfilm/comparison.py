@@ -115,7 +115,7 @@ def sparse_reference_speed(sparse, table: pd.DataFrame, rotor_cfg: Mapping, case
     # the dense grid's cost relative to the coarse one, per force at the same states
     xd = x / np.maximum(np.hypot(*x.T), 1e-30)[:, None] * 0.93 * c
     t_dense = time_per_force_eval(sparse, xd[: max(20, n_states // 4)], v[: max(20, n_states // 4)], repeats)
-    out = {"sparse_time_per_force_us": 1e6 * t_sparse, "sparse_time_per_force_dense_us": 1e6 * t_dense}
+    out: dict = {"sparse_time_per_force_us": 1e6 * t_sparse, "sparse_time_per_force_dense_us": 1e6 * t_dense}
     for name, model in surrogates.items():
         out[f"speedup_force_{name}_vs_sparse_reference"] = t_sparse / time_per_force_eval(model, x, v, repeats)
     est_total = 0.0

@@ -117,6 +117,21 @@ class AdjustableForceModel(ForceModel, Protocol):
     def set_sleeve(self, sleeve: float) -> None: ...
 
 
+@runtime_checkable
+class BatchSettable(Protocol):
+    """A force model whose kernel reads a mutable control setting that ``simulate_batch`` can vary per
+    trajectory (a surrogate of the active bearing: [1/c_r^2, sleeve]).
+
+    ``setting_array`` is the kernel's own setting (written in place during a batch and restored after);
+    ``setting_for(sleeve)`` the row for one sleeve position.
+    """
+
+    @property
+    def setting_array(self) -> np.ndarray: ...
+
+    def setting_for(self, sleeve: float) -> np.ndarray: ...
+
+
 class ReferenceModel:
     """Defaults for a physics-based model: valid in the whole film, nothing to count.
 

@@ -142,8 +142,8 @@ class SparseReferenceModel(ReferenceModel):
         if not 0.0 < float(eps_threshold) <= 1.0:
             raise ValueError(f"eps_threshold must lie in (0, 1], got {eps_threshold!r}")
         self._bearing = bearing
-        self.coarse = SparseGridSolver(bearing, *coarse, cavitation=cavitation)
-        self.dense = SparseGridSolver(bearing, *dense, cavitation=cavitation)
+        self.coarse = SparseGridSolver(bearing, int(coarse[0]), int(coarse[1]), cavitation=cavitation)
+        self.dense = SparseGridSolver(bearing, int(dense[0]), int(dense[1]), cavitation=cavitation)
         self.eps_threshold = float(eps_threshold)
         key = id(self)
         _REGISTRY[key] = self

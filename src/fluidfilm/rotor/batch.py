@@ -30,12 +30,12 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 
+from ..models import BatchSettable, ForceModel
 from .integrate import CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration
 from .model import Rotor
 
@@ -176,10 +176,10 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     rows); the model's own setting is restored afterwards.  Arguments
     otherwise as ``simulate``.
     """
-    kernel_spec = getattr(model, "force_kernel", None)
-    if kernel_spec is None:
-        raise ValueError(f"{type(model).__name__} offers no compiled force_kernel; the integrator needs one")
-    kernel, params = kernel_spec
+    if not isinstance(model, ForceModel):
+        raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.models.ForceModel); "
+                         "the integrator needs one")
+    kernel, params = model.force_kernel
     bearing = model.bearing
     rotor_list = [rotors] if isinstance(rotors, Rotor) else list(rotors)
     if not rotor_list or not all(isinstance(r, Rotor) for r in rotor_list):
@@ -203,15 +203,15 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
     x0 = _rows(x0, n, "x0")
     v0 = _rows(v0, n, "v0")
-    setting = getattr(model, "setting_array", None)
+    setting = model.setting_array if isinstance(model, BatchSettable) else None
     if settings is None:
         if setting is None:
             setting = np.zeros(0)
         settings_arr = np.tile(setting, (n, 1))
-        c = np.full(n, float(getattr(model, "clearance", bearing.clearance)))
+        c = np.full(n, float(model.clearance))
     else:
         if setting is None:
-            raise ValueError(f"{type(model).__name__} takes no per-trajectory settings (no setting_array)")
+            raise ValueError(f"{type(model).__name__} takes no per-trajectory settings (not BatchSettable)")
         settings_arr = np.ascontiguousarray(np.asarray(settings, dtype=float).reshape(n, -1))
         if settings_arr.shape[1] != setting.shape[0]:
             raise ValueError(f"settings rows must have {setting.shape[0]} values, got {settings_arr.shape[1]}")
@@ -236,9 +236,7 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     status = np.zeros(n, dtype=np.int64)
     t_stop = np.zeros(n)
     n_evals = np.zeros(n, dtype=np.int64)
-    reset = getattr(model, "reset_domain_counter", None)
-    if reset is not None:
-        reset()
+    model.reset_domain_counter()
     saved = setting.copy()
     t_start = time.perf_counter()
     try:
@@ -264,11 +262,10 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         else:
             texts.append(f"diverged: non-finite state after t={t_stop[p]:.6g} s")
             t_stop_out[p] = t_stop[p]
-    report = getattr(model, "domain_report", None)
-    note = report() if report is not None else None
+    note = model.domain_report()
     if note:
         texts = [f"{s}; {note} (whole batch)" for s in texts]
-        warnings.warn(f"{getattr(model, 'name', type(model).__name__)}: {note} during the batch",
+        warnings.warn(f"{model.name}: {note} during the batch",
                       RuntimeWarning, stacklevel=2)
     return BatchTrajectory(t=t_grid, x=out_x, v=out_v, n_recorded=n_rec, status=texts, t_stop=t_stop_out,
                            n_force_evals=n_evals, wall_time_s=wall,

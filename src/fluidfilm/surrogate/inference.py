@@ -26,7 +26,7 @@ import math
 import warnings
 from enum import IntEnum
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -380,7 +380,8 @@ class SurrogateForceModel:
         """The setting row of a sleeve position [m], for ``simulate_batch(settings=...)``."""
         if not self._n_extra:
             raise ValueError(f"{self.name} takes no sleeve input")
-        return np.array([1.0 / self._bearing.clearance_at(sleeve) ** 2, float(sleeve)])
+        bearing: Any = self._bearing  # a ConicalBearing: only it has a sleeve input (checked above)
+        return np.array([1.0 / bearing.clearance_at(sleeve) ** 2, float(sleeve)])
 
     @property
     def n_parameters(self) -> int:

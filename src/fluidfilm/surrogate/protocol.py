@@ -94,7 +94,7 @@ class ValidationStop:
         self.max_fail = int(max_fail)
         self.best = math.inf
         self.best_epoch = 0
-        self.best_weights = None
+        self.best_weights: np.ndarray | None = None
         self.fails = 0
 
     def update(self, epoch: int, error: float, weights=None) -> str | None:
@@ -157,7 +157,7 @@ def train_network_lm(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_f
     n_in, n_out = z_tr.shape[1], y_tr.shape[1]
     theta0 = init_nguyen_widrow(n_in, n_hidden, n_out, np.random.default_rng(seed))
     stop = ValidationStop(max_fail)
-    hist = {"wall_s": [], "val_mse": [], "val_sq_N2": [], "train_mse": []}
+    hist: dict[str, list[float]] = {"wall_s": [], "val_mse": [], "val_sq_N2": [], "train_mse": []}
 
     def on_epoch(epoch, theta, wall):
         pred, _ = mlp_forward(theta, z_va, n_hidden, n_out)
@@ -200,7 +200,7 @@ def train_network_adam(data: NetworkData, n_hidden: int = 50, seed: int = 0, max
     sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=2)
     stop = ValidationStop(max_fail)
     gen = torch.Generator().manual_seed(seed)
-    hist = {"wall_s": [], "val_mse": [], "val_sq_N2": [], "train_mse": []}
+    hist: dict[str, list[float]] = {"wall_s": [], "val_mse": [], "val_sq_N2": [], "train_mse": []}
 
     def weights():
         return np.concatenate([p.detach().double().numpy().ravel() for p in params])
@@ -244,7 +244,7 @@ def train_network_adam(data: NetworkData, n_hidden: int = 50, seed: int = 0, max
 
 def _finish(data: NetworkData, layers, epochs, best_epoch, reason, wall, hist) -> dict:
     theta = np.concatenate([a.ravel() for W, b in layers for a in (W, b)])
-    n_in, n_hidden = layers[0][0].shape[1], layers[0][0].shape[0]
+    n_hidden = layers[0][0].shape[0]
     out = {"layers": layers, "scaling": data.scaling, "epochs": int(epochs), "best_epoch": int(best_epoch),
            "stop_reason": reason, "converged": reason == "validation", "train_time_s": float(wall),
            "history": hist}
