@@ -86,9 +86,9 @@ def render_headline(reports: Path) -> str:
          "12x", ".0f", "x"),
         ("kc_max_rel_err_direct_best", "stiffness/damping, best model, max error direct terms", "-", ".1%", ""),
         ("whirl_threshold_rel_err_best", "whirl threshold, best model vs reference", "-", ".1%", ""),
-        ("trajectories_per_s_batch_speedup", "batched trajectories, best vs reference", "-", ".0f", "x"),
+        ("trajectories_per_s_batch_speedup", "batched trajectories (N = 1024), best vs reference", "-", ".1f", "x"),
         ("controller_decision_ms_mpc", "MPC time per decision (control period 20 ms)", "-", ".1f", " ms"),
-        ("controller_training_speedup", "DQN training, surrogate vs reference model", ">= 10x", ".0f", "x"),
+        ("controller_training_speedup", "DQN training, surrogate vs reference model", ">= 10x", ".1f", "x"),
     ):
         if g(key) is not None:
             rows.append([label, paper, _num(g(key), spec, unit)])
