@@ -53,7 +53,7 @@ def test_every_stage_of_the_pipeline_ran_with_the_workspace_interpreter(quick_re
         assert entry["cmd"].startswith(".venv/bin/python "), (name, entry["cmd"])
     timing = json.loads((workdir / "reports" / "reproduce_timing.json").read_text())["quick"]
     assert set(timing["stages"]) == set(stages)
-    assert "Results:" in out and "make mlflow" in out
+    assert "Results:" in out and "MLflow runs" in out and "fluidfilm.pipeline serve" in out
 
 
 def test_pipeline_writes_every_headline_number(quick_reproduce):
