@@ -163,3 +163,23 @@ def test_readme_points_nowhere_outside_the_repository():
     for link in re.findall(r"\]\(([^)#]+)\)", text):
         if not link.startswith(("http://", "https://")):
             assert (ROOT / link).exists(), f"README links to missing {link}"
+
+
+def test_reproduction_is_one_mlflow_run_and_the_surrogates_are_registered(quick_reproduce):
+    import mlflow
+
+    workdir, out = quick_reproduce
+    client = mlflow.tracking.MlflowClient(f"sqlite:///{workdir / 'mlflow.db'}")
+    exp = client.get_experiment_by_name("fluidfilm")
+    assert exp.tags["mlflow.experimentKind"] == "custom_model_development"
+    runs = client.search_runs([exp.experiment_id], filter_string="tags.mlflow.runName = 'reproduce'")
+    assert len(runs) == 1
+    artifacts = {a.path for a in client.list_artifacts(runs[0].info.run_id)}
+    assert {"paper_comparison.md", "metrics.json", "figures", "controller", "models"} <= artifacts
+    figures = {a.path for a in client.list_artifacts(runs[0].info.run_id, "figures")}
+    for fig in ("fig2_grid.png", "fig3_velocity.png", "fig4_comparison.png", "fig5_a_dqn.png"):
+        assert f"figures/{fig}" in figures
+    registered = {m.name for m in client.search_registered_models()}
+    assert {"fluidfilm-paper_single", "fluidfilm-paper_split", "fluidfilm-best", "fluidfilm-active"} <= registered
+    # every run of the reproduction ended (none left RUNNING)
+    assert not client.search_runs([exp.experiment_id], filter_string="attributes.status = 'RUNNING'")

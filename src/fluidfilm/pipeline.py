@@ -156,12 +156,38 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     readme.main(["--readme", str(workdir / "README.md"), "--reports", str(workdir / "reports")])
     if stage_times:
+        publish(workdir)
+    if stage_times:
         print(f"\n{len(stage_times)} stage(s) ran in {total / 60:.1f} min:")
         for name, sec in stage_times.items():
             print(f"  {name:<24} {sec:8.1f} s")
     else:
         print("\nevery stage is up to date")
     print(where_things_are(workdir))
+    return 0
+
+
+def publish(workdir: Path) -> str | None:
+    """The reproduction as one MLflow run (report, figures, timings, agent) and the surrogates registered."""
+    import yaml
+
+    from .tracking import publish_workspace
+
+    tracking = yaml.safe_load((workdir / "conf" / "tracking" / "default.yaml").read_text())
+    cwd = Path.cwd()
+    os.chdir(workdir)  # the store and its artifact folder are relative to the workspace
+    try:
+        run_id = publish_workspace(tracking)
+    finally:
+        os.chdir(cwd)
+    if run_id:
+        print(f"MLflow: run 'reproduce' {run_id} holds the report, figures and timings; surrogates registered "
+              "as fluidfilm-<name>", flush=True)
+    return run_id
+
+
+def cmd_publish(args: argparse.Namespace) -> int:
+    publish(Path.cwd())
     return 0
 
 
@@ -206,6 +232,8 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--workdir", default="build/quick", help="scratch copy for a profile other than full")
     run.add_argument("dvc_args", nargs="*", help="passed to dvc repro (e.g. a stage name)")
     run.set_defaults(func=cmd_run)
+    pub = sub.add_parser("publish", help="log the reproduction to MLflow and register the surrogates")
+    pub.set_defaults(func=cmd_publish)
     serve = sub.add_parser("serve", help="serve the workspace's MLflow runs")
     serve.add_argument("--port", type=int, default=5000)
     serve.add_argument("--host", default="127.0.0.1")

@@ -317,3 +317,66 @@ def log_child_run(parent, run_name: str, metrics: Mapping, history: Mapping | No
         for step, v in enumerate(values, start=1):
             client.log_metric(rid, k, float(v), step=step)
     client.set_terminated(rid)
+
+
+def publish_workspace(tracking: Mapping, reports_dir: Path | str = "reports", models_dir: Path | str = "models",
+                      models: tuple[str, ...] = ("paper_single", "paper_split", "best", "active")) -> str | None:
+    """One MLflow run ``reproduce`` that holds what ``make reproduce`` produced, and the trained surrogates
+    registered in the model registry (``fluidfilm-<name>``, a new version per reproduction).
+
+    The run carries the headline metrics (``reports/metrics.json``), the report, the stage timings, the
+    training-time study, every figure and the DQN agent as artifacts, so that the MLflow UI shows the
+    whole reproduction in one place.  Returns the run id (None with tracking disabled).
+    """
+    import json
+
+    if not tracking or not tracking.get("enabled", True):
+        return None
+    import mlflow
+
+    reports, model_root = Path(reports_dir), Path(models_dir)
+    metrics_file = reports / "metrics.json"
+    metrics = json.loads(metrics_file.read_text()) if metrics_file.exists() else {}
+    description = ("The paper reproduction as `make reproduce` left it: headline metrics (see the experiment's "
+                   "description for units), the report, stage timings, figures, the DQN agent; the surrogates "
+                   "are registered as fluidfilm-<name>.")
+    with run(tracking, "reproduce", tags={"mlflow.note.content": description, "stage": "reproduce"}) as active:
+        log_metrics({k: float(v) for k, v in metrics.items()
+                     if isinstance(v, (int, float)) and not isinstance(v, bool) and v == v})
+        for name in ("paper_comparison.md", "metrics.json", "reproduce_timing.json", "train_time.json",
+                     "characteristics.json", "control.json", "batch_speed.json", "controller_training_speed.json"):
+            if (reports / name).exists():
+                log_artifact(reports / name)
+        if (reports / "figures").is_dir():
+            for fig in sorted((reports / "figures").glob("*.png")):
+                mlflow.log_artifact(str(fig), artifact_path="figures")
+        agent = model_root / "dqn_active.zip"
+        if agent.exists():
+            mlflow.log_artifact(str(agent), artifact_path="controller")
+        client = mlflow.tracking.MlflowClient(tracking["uri"])
+        for name in models:
+            folder = model_root / name
+            if not (folder / "model.json").exists():
+                continue
+            mlflow.log_artifacts(str(folder), artifact_path=f"models/{name}")
+            registered = f"fluidfilm-{name}"
+            if not _registered(client, registered):
+                client.create_registered_model(registered, description=(
+                    f"fluidfilm surrogate '{name}' of the bearing forces; load the artifact folder with "
+                    "fluidfilm.load_surrogate(path)"))
+            report_file = folder / "report.json"
+            tags = {}
+            if report_file.exists():
+                rep = json.loads(report_file.read_text()).get("metrics", {})
+                tags = {k: str(v) for k, v in rep.items() if k.startswith("test_rel_err")}
+            client.create_model_version(registered, source=f"{active.info.artifact_uri}/models/{name}",
+                                        run_id=active.info.run_id, tags=tags)
+        return active.info.run_id
+
+
+def _registered(client, name: str) -> bool:
+    try:
+        client.get_registered_model(name)
+        return True
+    except Exception:  # MlflowException(RESOURCE_DOES_NOT_EXIST)
+        return False
