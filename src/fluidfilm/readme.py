@@ -177,7 +177,79 @@ def render_characteristics_timing(reports: Path) -> str:
     return _table(["model", "time per coefficient set", "vs reference 30x30"], rows)
 
 
+def render_train_time(reports: Path) -> str:
+    tt = _load(reports, "train_time.json")
+    lines = [
+        f"Protocol `{tt['train_time_protocol']}`, {tt['train_time_samples_per_seed']:,} samples per seed drawn from the "
+        f"{tt['dataset_samples']:,}-sample paper dataset, {tt['train_time_seeds']} seeds; every network stopped by the "
+        f"validation rule: **{'yes' if tt['train_time_converged'] else 'no'}**. Mean reduction of the training time, "
+        f"split vs single: **{tt['train_time_reduction_pct']:.1f} %**, bootstrap 95 % interval "
+        f"{tt['train_time_reduction_ci95_low']:.1f} to {tt['train_time_reduction_ci95_high']:.1f} % (half-width "
+        f"{tt['train_time_reduction_ci95']:.1f} points; paper: 26 %). Median validation relative RMS force error: "
+        f"single {tt['val_rel_rmse_single_median']:.3f}, split {tt['val_rel_rmse_split_median']:.3f}. Faster: "
+        f"{tt['ranking']['faster']}, more accurate: {tt['ranking']['more_accurate']}.", ""]
+    rc = tt.get("ranking_check")
+    if rc:
+        lines += [f"Ranking check at {rc['train_time_samples_per_seed']:,} samples per seed ({rc['train_time_seeds']} "
+                  f"seeds): reduction {rc['train_time_reduction_pct']:.1f} %, faster {rc['ranking']['faster']}, more "
+                  f"accurate {rc['ranking']['more_accurate']}: the ranking is "
+                  f"{'the same' if rc['same_ranking'] else '**not** the same'}.", ""]
+    rows = []
+    for r in tt["runs"]:
+        eq = r.get("time_to_equal_accuracy_split_s")
+        rows.append([str(r["seed"]), f"{r['single']['train_time_s']:.1f} s", f"{r['split']['train_time_s']:.1f} s",
+                     f"{r['reduction_pct']:+.1f} %", "not reached" if eq is None else f"{eq:.1f} s",
+                     f"{r['single']['val_rel_rmse']:.3f} / "
+                     + (f"{r['split']['val_rel_rmse']:.3f}" if isinstance(r['split']['val_rel_rmse'], (int, float))
+                        else "/".join(f"{v:.3f}" for v in r['split']['val_rel_rmse'])),
+                     ", ".join(sorted(set(r["single"]["stop_reasons"]) | set(r["split"]["stop_reasons"])))])
+    lines.append(_table(["seed", "single", "split (sum of 3)", "reduction", "split to the single's accuracy",
+                         "val. rel. RMSE single / split", "stop reasons"], rows))
+    return "\n".join(lines)
+
+
+def render_paper_bands(reports: Path) -> str:
+    m = _load(reports, "metrics.json")
+    rows = []
+    for model in ("paper_single", "paper_split"):
+        rows.append([model] + [_num(m.get(f"test_rel_err_median_{model}_band_{b}"), ".1%")
+                               for b in ("0_0.5", "0.5_0.7", "0.7_1")] + [_num(m.get(f"test_rel_err_median_{model}"), ".1%")])
+    return _table(["model", "eps 0-0.5", "eps 0.5-0.7", "eps > 0.7", "whole domain"], rows)
+
+
+def render_batch_speed(reports: Path) -> str:
+    b = _load(reports, "batch_speed.json")
+    by = {}
+    for r in b["rows"]:
+        by.setdefault(r["n"], {})[r["model"]] = r
+    rows = []
+    for n, d in sorted(by.items()):
+        ref, sur = d.get("reference", {}), d.get("surrogate", {})
+
+        def rate(x):
+            return "-" if x is None else f"{x:,.1f}/s"
+        ratio = (sur.get("batched_per_s") or 0) / ref["batched_per_s"] if ref.get("batched_per_s") else None
+        rows.append([str(n), rate(ref.get("one_by_one_per_s")), rate(ref.get("batched_per_s")),
+                     rate(sur.get("one_by_one_per_s")), rate(sur.get("batched_per_s")), _num(ratio, ".1f", "x")])
+    return _table(["N", "reference one by one", "reference batched", "surrogate one by one", "surrogate batched",
+                   "surrogate / reference, batched"], rows)
+
+
+def render_controller_training(reports: Path) -> str:
+    c = _load(reports, "controller_training_speed.json")
+    rows = [[name, f"{c[name]['wall_s']:.1f} s", f"{1e3 * c[name]['s_per_env_step']:.1f} ms",
+             f"{c[name]['full_training_s_extrapolated'] / 60:.1f} min"] for name in ("surrogate", "reference")]
+    return (_table(["model driving the environment", f"{c['budget_steps']} DQN steps", "per environment step",
+                    f"{c['full_training_steps']:,} steps (extrapolated)"], rows)
+            + f"\nSpeed-up of controller training, surrogate vs reference: **{c['controller_training_speedup']:.1f}x**"
+              f" ({c['note']}).\n")
+
+
 RENDERERS: dict[str, Callable[[Path], str]] = {
+    "train_time": render_train_time,
+    "paper_bands": render_paper_bands,
+    "batch_speed": render_batch_speed,
+    "controller_training": render_controller_training,
     "characteristics_timing": render_characteristics_timing,
     "characteristics": render_characteristics,
     "raimondi_boyd": render_raimondi_boyd,
