@@ -12,10 +12,12 @@ from omegaconf import DictConfig, OmegaConf
 from fluidfilm import io, load_surrogate
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.throughput import trajectories_per_second
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="batch_speed", version_base="1.3")
 def main(cfg: DictConfig) -> dict:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     models = {"reference": reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference),
               "surrogate": load_surrogate(cfg.surrogate_dir)}
     rows = []

@@ -12,6 +12,7 @@ from fluidfilm import io
 from fluidfilm.rotor.cases import case_summary, run_case
 from fluidfilm.rotor.integrate import Trajectory
 from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors
+from fluidfilm.config_check import check_config
 
 
 def boundary_jump(model, boundary: float, n: int = 400, delta: float = 1e-6, seed: int = 0) -> tuple[float, float]:
@@ -30,6 +31,7 @@ def boundary_jump(model, boundary: float, n: int = 400, delta: float = 1e-6, see
 
 @hydra.main(config_path="../conf", config_name="boundary_study", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     c = OmegaConf.to_container(cfg, resolve=True)
     out = {}
     for name, split in c["splits"].items():

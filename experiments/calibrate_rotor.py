@@ -12,10 +12,12 @@ from omegaconf import DictConfig
 from fluidfilm import io
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.rotor.cases import case_summary, run_case
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="calibrate_rotor", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     bearing = bearing_from_cfg(cfg.bearing)
     model = reference_from_cfg(bearing, cfg.reference)
     rows = []

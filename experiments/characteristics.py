@@ -15,6 +15,7 @@ from fluidfilm import ReynoldsSolver, io, load_surrogate, tracking
 from fluidfilm.characteristics import stability as stab
 from fluidfilm.characteristics import study
 from fluidfilm.config import bearing_from_cfg
+from fluidfilm.config_check import check_config
 
 
 def _finite_or_none(obj):
@@ -30,6 +31,7 @@ def _finite_or_none(obj):
 
 @hydra.main(config_path="../conf", config_name="characteristics", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     ch = cfg.characteristics
     bearing = bearing_from_cfg(cfg.bearing)
     tables = Path(cfg.table_dir)

@@ -12,6 +12,7 @@ from fluidfilm import ReynoldsSolver, io, load_surrogate, tracking
 from fluidfilm.comparison import machine, sparse_reference_speed, speed_comparison, trajectory_comparison
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.figures import plot_orbits
+from fluidfilm.config_check import check_config
 
 
 def _with_dense_share(table, trajs, clearance, eps_threshold):
@@ -24,6 +25,7 @@ def _with_dense_share(table, trajs, clearance, eps_threshold):
 
 @hydra.main(config_path="../conf", config_name="compare", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     bearing = bearing_from_cfg(cfg.bearing)
     reference = reference_from_cfg(bearing, cfg.reference)
     surrogates = {name: load_surrogate(path) for name, path in cfg.models.items()}

@@ -18,10 +18,12 @@ from fluidfilm import io, load_surrogate, tracking
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.control.build import env_from_cfg
 from fluidfilm.control.dqn import train_dqn
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="control", version_base="1.3")
 def main(cfg: DictConfig) -> dict:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     c = OmegaConf.to_container(cfg, resolve=True)
     ts = c["training_speed"]
     dqn = dict(c["controller"]["dqn"], total_timesteps=int(ts["budget_steps"]),

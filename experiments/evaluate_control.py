@@ -18,10 +18,12 @@ from fluidfilm.control.build import env_from_cfg
 from fluidfilm.control.dqn import load_agent
 from fluidfilm.figures import fig5_panels
 from fluidfilm.reynolds import ConicalReynoldsSolver
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="control", version_base="1.3")
 def main(cfg: DictConfig) -> dict:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     c = OmegaConf.to_container(cfg, resolve=True)
     reference = reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference)
     env = env_from_cfg(reference, c["rotor"], c["controller"])

@@ -11,10 +11,12 @@ from omegaconf import DictConfig, OmegaConf
 from fluidfilm import io, tracking
 from fluidfilm.config import bearing_from_cfg, solver_from_cfg
 from fluidfilm.figures import grid_comparison, plot_grid_comparison
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="fig2", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     bearing = bearing_from_cfg(cfg.bearing)
     solvers = {name: solver_from_cfg(bearing, cfg[name]) for name in ("coarse", "dense", "converged")}
     eps = np.linspace(cfg.eps_min, cfg.eps_max, cfg.n_eps)

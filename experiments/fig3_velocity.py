@@ -10,10 +10,12 @@ from omegaconf import DictConfig
 from fluidfilm import io
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.figures import plot_velocity_response, velocity_response, velocity_response_wide
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="fig3", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     bearing = bearing_from_cfg(cfg.bearing)
     model = reference_from_cfg(bearing, cfg.reference)
     frame = velocity_response(model, list(cfg.eccentricities), cfg.v_max, cfg.n_v, cfg.angle_deg)

@@ -9,10 +9,12 @@ from omegaconf import DictConfig, OmegaConf
 from fluidfilm import io, tracking
 from fluidfilm.config import bearing_from_cfg, solver_from_cfg
 from fluidfilm.figures import grid_error_study
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="grid_sweep", version_base="1.3")
 def main(cfg: DictConfig) -> dict:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     bearing = bearing_from_cfg(cfg.bearing)
     solver = solver_from_cfg(bearing, cfg.solver)
     converged = solver_from_cfg(bearing, cfg.converged)

@@ -12,10 +12,12 @@ from fluidfilm import io
 from fluidfilm.config import bearing_from_cfg
 from fluidfilm.data import DatasetSpec, generate_dataset, random_test_set
 from fluidfilm.data.spec import check_reference
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="make_dataset", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     # the whole config is checked, naming a bad key, before any output is touched
     spec = DatasetSpec.from_cfg(cfg.dataset)
     bearing = bearing_from_cfg(cfg.bearing)

@@ -10,6 +10,7 @@ import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
 from fluidfilm import io, tracking
+from fluidfilm.config_check import check_config
 
 
 def _load(path):
@@ -51,6 +52,7 @@ Onset of oil whirl of the paper's rotor ({ch['rotor_mass_per_bearing_kg']:.2f} k
 
 @hydra.main(config_path="../conf", config_name="report", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     rd = Path(cfg.report_dir)
     comp = _load(rd / "comparison.json")
     tt = _load(rd / "train_time.json")

@@ -12,10 +12,12 @@ from omegaconf import DictConfig, OmegaConf
 from fluidfilm import io, load_surrogate, tracking
 from fluidfilm.control.build import env_from_cfg
 from fluidfilm.control.dqn import save_agent, train_dqn
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="control", version_base="1.3")
 def main(cfg: DictConfig) -> dict:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     c = OmegaConf.to_container(cfg, resolve=True)
     surrogate = load_surrogate(cfg.surrogate_dir)
     env = env_from_cfg(surrogate, c["rotor"], c["controller"])

@@ -22,6 +22,7 @@ from fluidfilm.data import config_hash
 from fluidfilm.speed import sample_states, time_per_force_eval
 from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors
 from fluidfilm.surrogate.training import read_dataset
+from fluidfilm.config_check import check_config
 
 
 def _fmt(value, spec=".1f"):
@@ -85,6 +86,7 @@ def _train_by_protocol(cfg, c, name, parent):
 
 @hydra.main(config_path="../conf", config_name="train", version_base="1.3")
 def main(cfg: DictConfig) -> dict:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     hc = HydraConfig.get()
     choices = hc.runtime.choices
     multirun = hc.mode == RunMode.MULTIRUN

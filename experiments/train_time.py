@@ -31,6 +31,7 @@ from fluidfilm import io, tracking
 from fluidfilm.comparison import machine
 from fluidfilm.surrogate.protocol import band_sq_errors, subsample, time_to_accuracy, train_protocol_model
 from fluidfilm.surrogate.training import read_dataset
+from fluidfilm.config_check import check_config
 
 
 def _net_summary(n: dict) -> dict:
@@ -136,6 +137,7 @@ def ranking(s: dict) -> dict:
 
 @hydra.main(config_path="../conf", config_name="train_time", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     c = OmegaConf.to_container(cfg, resolve=True)
     protocol = c["protocol"]
     boundaries = list(cfg.boundaries)

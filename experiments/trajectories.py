@@ -15,10 +15,12 @@ import numpy as np
 from fluidfilm.figures import plot_equilibrium_locus, plot_orbits
 from fluidfilm.rotor import equilibrium_locus
 from fluidfilm.rotor.cases import case_summary, run_case
+from fluidfilm.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="trajectories", version_base="1.3")
 def main(cfg: DictConfig) -> None:
+    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     bearing = bearing_from_cfg(cfg.bearing)
     model = reference_from_cfg(bearing, cfg.reference)
     out = Path(cfg.out_dir) / cfg.model_name

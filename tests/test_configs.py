@@ -134,3 +134,19 @@ def _assert_holds(composed, own, where):
             _assert_holds(composed[k], _plain_values(v), f"{where}.{k}")
         else:
             assert composed[k] == v, f"{where}.{k} is {composed[k]!r}, the file says {v!r}"
+
+
+def test_config_check_names_unknown_keys_and_wrong_types():
+    from fluidfilm.config_check import compare
+
+    ref = {"trainer": {"max_epochs": 12, "lr": 1e-3, "max_time": None, "deterministic": True},
+           "seeds": [0, 1], "name": "x"}
+    assert compare({"trainer": {"max_epochs": 30, "lr": 1, "max_time": "00:01:00", "deterministic": False},
+                    "seeds": [3], "name": "y"}, ref) == []          # int for a float, anything for null
+    problems = compare({"trainer": {"max_epochs": "ten", "widht": 3, "deterministic": 1}, "seeds": 5}, ref)
+    text = " ".join(problems)
+    assert "trainer.max_epochs" in text and "expected int" in text
+    assert "unknown key 'trainer.widht'" in text
+    assert "trainer.deterministic" in text and "expected bool" in text     # 1 is not a bool
+    assert "seeds=5" in text and "expected list" in text
+    assert compare({"name": "${other}"}, {"name": 3}) == []                # interpolations resolve later

@@ -219,7 +219,7 @@ def render_paper_bands(reports: Path) -> str:
 
 def render_batch_speed(reports: Path) -> str:
     b = _load(reports, "batch_speed.json")
-    by = {}
+    by: dict[int, dict[str, dict]] = {}
     for r in b["rows"]:
         by.setdefault(r["n"], {})[r["model"]] = r
     rows = []

@@ -1,4 +1,4 @@
-"""Item 10 (structured configs, issue 14): wrong types and unknown keys refused before any work, naming the key."""
+"""Wrong types and unknown keys are refused before any work, naming the key (fluidfilm.config_check)."""
 from __future__ import annotations
 
 import pytest
@@ -6,10 +6,11 @@ import pytest
 from .conftest import run_entry
 
 
-@pytest.mark.xfail(strict=False, reason="structured configs: issue 14")
 @pytest.mark.parametrize("override, key", [
     ("trainer.max_epochs=ten", "trainer.max_epochs"),
     ("+model.widht=10", "widht"),
+    ("trainer.batch_size=1.5", "trainer.batch_size"),
+    ("+lr_typo=0.1", "lr_typo"),
 ])
 def test_wrong_type_or_unknown_key_is_refused_before_any_work(tmp_path, override, key):
     proc = run_entry("train_surrogate", override, f"dataset_dir={tmp_path / 'absent'}", "tracking.enabled=false",

@@ -1,0 +1,111 @@
+"""Refuse a mistyped or misspelt configuration before any work starts, naming the key.
+
+Hydra already refuses an override of a key that does not exist (``model.widht=10``) and a config
+group option that does not exist. Two mistakes get through it: a value of the wrong type
+(``trainer.max_epochs=ten`` composes and fails deep inside training, or never) and a new key added
+with ``+`` (``+model.widht=10`` is accepted and silently ignored). ``check_config`` catches both by
+comparing the job's configuration with the *reference* one: the same primary config and the same
+config-group choices, composed without the value overrides. Every key must exist in the reference,
+and every value must have the reference's type (ints where ints were, numbers where numbers were,
+mappings where mappings were; a reference value of ``null`` accepts anything).
+
+``compare`` is plain Python on nested mappings; ``check_config`` is the one function of the library
+that asks Hydra for something (the reference composition), and imports it only when called, from an
+entry point's ``main`` (where Hydra is running).
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+
+class ConfigError(ValueError):
+    """A configuration value of the wrong type or an unknown key; the message names them."""
+
+
+def _type_name(v: Any) -> str:
+    if isinstance(v, bool):
+        return "bool"
+    if isinstance(v, int):
+        return "int"
+    if isinstance(v, float):
+        return "float"
+    if isinstance(v, str):
+        return "string"
+    if isinstance(v, Mapping):
+        return "mapping"
+    if isinstance(v, (list, tuple)):
+        return "list"
+    return type(v).__name__
+
+
+def _compatible(value: Any, ref: Any) -> bool:
+    if ref is None or value is None:
+        return True
+    if isinstance(ref, bool):
+        return isinstance(value, bool)
+    if isinstance(ref, int):
+        return isinstance(value, int) and not isinstance(value, bool)
+    if isinstance(ref, float):  # an int is a valid float (e.g. t_end=1)
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+    if isinstance(ref, str):
+        return isinstance(value, str)
+    if isinstance(ref, Mapping):
+        return isinstance(value, Mapping)
+    if isinstance(ref, (list, tuple)):
+        return isinstance(value, (list, tuple))
+    return True
+
+
+def compare(actual: Mapping, reference: Mapping, prefix: str = "") -> list[str]:
+    """Problems of ``actual`` against ``reference``: unknown keys and values of another type."""
+    problems = []
+    for key, value in actual.items():
+        path = f"{prefix}{key}"
+        if key not in reference:
+            known = ", ".join(sorted(map(str, reference))[:12])
+            problems.append(f"unknown key '{path}' (not in the configuration; keys here: {known})")
+            continue
+        ref = reference[key]
+        if isinstance(value, str) and "${" in value:  # an interpolation: checked when it resolves
+            continue
+        if not _compatible(value, ref):
+            problems.append(f"'{path}={value!r}': expected {_type_name(ref)} (like the default {ref!r}), "
+                            f"got {_type_name(value)}")
+        elif isinstance(value, Mapping) and isinstance(ref, Mapping) and ref:
+            problems.extend(compare(value, ref, path + "."))
+    return problems
+
+
+def check_config(cfg, exit_on_error: bool = True) -> None:
+    """Check the running Hydra job's config; every unknown key and mistyped value is named.
+
+    From an entry point (``exit_on_error``): one line on stderr and exit status 2, as for a bad
+    command-line option (a traceback would bury the one line that matters). Otherwise ``ConfigError``.
+    """
+    from hydra import compose
+    from hydra.core.hydra_config import HydraConfig
+    from omegaconf import OmegaConf
+
+    hc = HydraConfig.get()
+    choices = set(hc.runtime.choices)
+    group_overrides = []
+    for ov in hc.overrides.task:
+        key = ov.split("=", 1)[0].lstrip("+~")
+        if key in choices:
+            group_overrides.append(ov)
+    reference = compose(config_name=hc.job.config_name, overrides=group_overrides)
+    actual = OmegaConf.to_container(cfg, resolve=False)
+    ref = OmegaConf.to_container(reference, resolve=False)
+    assert isinstance(actual, dict) and isinstance(ref, dict)
+    actual.pop("hydra", None)
+    ref.pop("hydra", None)
+    problems = compare(actual, ref)
+    if problems:
+        message = "configuration refused before any work: " + "; ".join(problems)
+        if exit_on_error:
+            import sys
+
+            print(f"error: {message}", file=sys.stderr, flush=True)
+            raise SystemExit(2)
+        raise ConfigError(message)
