@@ -1,0 +1,179 @@
+"""The paper's training-time comparison as a library: seeds, the reduction and its confidence interval.
+
+The paper reports one training time per structure (5 h 42 min for the single network, 4.5 h for the
+three split networks: 26 % less).  Here each seed draws its own subsample and division, trains both
+structures on the same rows to the validation stopping rule, and the study reports
+
+- the **reduction of the mean training time**, 100 (1 - mean T_split / mean T_single) over seeds, the
+  estimator that corresponds to the paper's one-number comparison, with a paired percentile-bootstrap
+  95 % interval (seeds resampled with both of their times);
+- the mean of the per-seed reductions 100 (1 - T_split / T_single) and its interval, as a second view:
+  a ratio of two noisy times is skewed (one fast single run gives -200 %), so this mean is the noisier
+  of the two and is not the headline;
+- how many seeds the interval's target half-width would need, from the 1/sqrt(n) law.
+
+Seeds are added (in batches of ``n_jobs`` parallel processes) until the headline half-width reaches
+the target, ``seeds_max`` or the time budget.
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from joblib import Parallel, delayed
+from scipy.stats import bootstrap
+
+from .protocol import band_sq_errors, subsample, time_to_accuracy, train_protocol_model
+
+
+def _net_summary(n: Mapping) -> dict:
+    keys = ("eps_low", "eps_high", "n_train", "n_val", "n_test", "epochs", "best_epoch", "stop_reason",
+            "train_mse", "val_mse", "test_mse", "train_rel_rmse", "val_rel_rmse", "test_rel_rmse", "train_time_s")
+    out = {k: n[k] for k in keys}
+    out["eps_high"] = None if math.isinf(out["eps_high"]) else out["eps_high"]
+    return out
+
+
+def run_seed(sub, meta, protocol: dict, boundaries: Sequence[float], seed: int) -> dict:
+    """Single and split model on one subsample; the order alternates with the seed's parity."""
+    order = ("single", "split") if seed % 2 == 0 else ("split", "single")
+    models, reps = {}, {}
+    for which in order:
+        models[which], reps[which] = train_protocol_model(sub, meta, protocol, [] if which == "single" else boundaries,
+                                                          seed=seed, n_samples=None, name=which)
+    # the single network's final error on the validation rows of each split network
+    targets = band_sq_errors(reps["single"]["_sub"], reps["single"]["_division"].val, models["single"], boundaries)
+    tte = time_to_accuracy(reps["split"], targets)
+    row: dict = {"seed": seed, "order": list(order), "time_to_equal_accuracy_split_s": tte}
+    for which, rep in reps.items():
+        row[which] = {"train_time_s": rep["train_time_s"], "train_time_parallel_s": rep["train_time_parallel_s"],
+                      "converged": rep["converged"], "stop_reasons": rep["stop_reasons"],
+                      "val_rel_rmse": rep["val_rel_rmse"], "test_rel_rmse": rep["test_rel_rmse"],
+                      "networks": [_net_summary(n) for n in rep["networks"]]}
+    row["reduction_pct"] = 100.0 * (1.0 - row["split"]["train_time_s"] / row["single"]["train_time_s"])
+    row["reduction_at_equal_accuracy_pct"] = (None if tte is None else
+                                              100.0 * (1.0 - tte / row["single"]["train_time_s"]))
+    return row
+
+
+def _reduction_of_means(single, split, axis=-1):
+    return 100.0 * (1.0 - np.mean(split, axis=axis) / np.mean(single, axis=axis))
+
+
+def reduction_ci(single_s: Sequence[float], split_s: Sequence[float], n_resamples: int = 10000,
+                 seed: int = 0) -> tuple[float, float, float, float]:
+    """Reduction of the mean time in % and its paired percentile-bootstrap 95 % interval.
+
+    Returns (reduction, low, high, half-width); with fewer than two seeds the interval is unknown
+    (nan, nan, inf).
+    """
+    s, p = np.asarray(single_s, dtype=float), np.asarray(split_s, dtype=float)
+    if s.shape != p.shape or s.ndim != 1:
+        raise ValueError(f"need one single and one split time per seed, got {s.shape} and {p.shape}")
+    if not (np.all(np.isfinite(s)) and np.all(s > 0) and np.all(np.isfinite(p)) and np.all(p > 0)):
+        raise ValueError(f"training times must be positive and finite, got single {s} and split {p}")
+    red = float(_reduction_of_means(s, p))
+    if len(s) < 2:
+        return red, math.nan, math.nan, math.inf
+    if np.ptp(s) == 0 and np.ptp(p) == 0:  # no spread: the bootstrap has nothing to resample
+        return red, red, red, 0.0
+    res = bootstrap((s, p), _reduction_of_means, paired=True, vectorized=True, confidence_level=0.95,
+                    n_resamples=n_resamples, method="percentile", random_state=np.random.default_rng(seed))
+    lo, hi = float(res.confidence_interval.low), float(res.confidence_interval.high)
+    return red, lo, hi, 0.5 * (hi - lo)
+
+
+def mean_ci(values: Sequence[float], n_resamples: int = 10000, seed: int = 0) -> tuple[float, float, float]:
+    """Percentile-bootstrap 95 % interval of a mean: (low, high, half-width)."""
+    v = np.asarray(values, dtype=float)
+    if len(v) < 2:
+        return math.nan, math.nan, math.inf
+    if np.ptp(v) == 0:
+        return float(v[0]), float(v[0]), 0.0
+    res = bootstrap((v,), np.mean, confidence_level=0.95, n_resamples=n_resamples, method="percentile",
+                    random_state=np.random.default_rng(seed))
+    lo, hi = float(res.confidence_interval.low), float(res.confidence_interval.high)
+    return lo, hi, 0.5 * (hi - lo)
+
+
+def seeds_needed(n_seeds: int, half_width: float, target: float) -> int | None:
+    """Seeds for the target half-width by the 1/sqrt(n) law (None when the width is unknown)."""
+    if not (math.isfinite(half_width) and target > 0 and n_seeds >= 2):
+        return None
+    return max(n_seeds, int(math.ceil(n_seeds * (half_width / target) ** 2)))
+
+
+def study(frame, meta, protocol: dict, boundaries: Sequence[float], n_samples: int, seeds_min: int, seeds_max: int,
+          target_hw: float, n_jobs: int, n_resamples: int, budget_s: float, seed_offset: int = 0) -> dict:
+    """Train both structures on per-seed subsamples until the headline interval is narrow enough."""
+    if not (1 <= seeds_min <= seeds_max):
+        raise ValueError(f"need 1 <= seeds_min <= seeds_max, got seeds_min={seeds_min}, seeds_max={seeds_max}")
+    t0 = time.perf_counter()
+    rows: list[dict] = []
+    next_seed = seed_offset
+    batch = seeds_min
+    while True:
+        seeds = list(range(next_seed, next_seed + batch))
+        next_seed += batch
+        subs = [frame.iloc[subsample(len(frame), n_samples, s)].reset_index(drop=True) for s in seeds]
+        for r in Parallel(n_jobs=n_jobs, return_as="generator")(delayed(run_seed)(sub, meta, protocol, boundaries, s)
+                                                                for sub, s in zip(subs, seeds)):
+            rows.append(r)
+            print(f"  seed {r['seed']}: single {r['single']['train_time_s']:.1f} s "
+                  f"{r['single']['stop_reasons']}, split {r['split']['train_time_s']:.1f} s "
+                  f"{r['split']['stop_reasons']}, reduction {r['reduction_pct']:.1f} %, to equal accuracy "
+                  f"{r['time_to_equal_accuracy_split_s']}", flush=True)
+        single_t = [r["single"]["train_time_s"] for r in rows]
+        split_t = [r["split"]["train_time_s"] for r in rows]
+        red, lo, hi, hw = reduction_ci(single_t, split_t, n_resamples)
+        elapsed = time.perf_counter() - t0
+        print(f"  {len(rows)} seeds, {elapsed:.0f} s: reduction of the mean time {red:.1f} % +- {hw:.1f}", flush=True)
+        if hw <= target_hw or len(rows) >= seeds_max or elapsed > budget_s:
+            break
+        batch = max(1, min(n_jobs, seeds_max - len(rows)))
+    per_seed = [r["reduction_pct"] for r in rows]
+    m_lo, m_hi, m_hw = mean_ci(per_seed, n_resamples)
+    tte_ok = [r["reduction_at_equal_accuracy_pct"] for r in rows if r["reduction_at_equal_accuracy_pct"] is not None]
+    wall = time.perf_counter() - t0
+    needed = seeds_needed(len(rows), hw, target_hw)
+    return {
+        "train_time_reduction_pct": red,
+        "train_time_reduction_ci95": hw,
+        "train_time_reduction_ci95_low": lo,
+        "train_time_reduction_ci95_high": hi,
+        "train_time_reduction_estimator": "reduction of the mean time over seeds, paired bootstrap",
+        "train_time_reduction_ci95_target": float(target_hw),
+        "train_time_seeds_needed_for_target": needed,
+        "train_time_study_s_needed_for_target": (None if needed is None else wall * needed / len(rows)),
+        "train_time_reduction_pct_mean_of_seeds": float(np.mean(per_seed)),
+        "train_time_reduction_pct_mean_of_seeds_ci95": m_hw,
+        "train_time_reduction_pct_per_seed": per_seed,
+        "train_time_reduction_pct_per_seed_min": float(np.min(per_seed)),
+        "train_time_reduction_pct_per_seed_max": float(np.max(per_seed)),
+        "train_time_seeds": len(rows),
+        "train_time_converged": all(r[m]["converged"] for r in rows for m in ("single", "split")),
+        "train_time_samples_per_seed": int(n_samples),
+        "train_time_single_s": float(np.median(single_t)),
+        "train_time_split_s": float(np.median(split_t)),
+        "train_time_single_s_mean": float(np.mean(single_t)),
+        "train_time_split_s_mean": float(np.mean(split_t)),
+        "train_time_single_s_min": float(np.min(single_t)), "train_time_single_s_max": float(np.max(single_t)),
+        "train_time_split_s_min": float(np.min(split_t)), "train_time_split_s_max": float(np.max(split_t)),
+        "train_time_split_parallel_s": float(np.median([r["split"]["train_time_parallel_s"] for r in rows])),
+        "val_rel_rmse_single_median": float(np.median([r["single"]["val_rel_rmse"] for r in rows])),
+        "val_rel_rmse_split_median": float(np.median([r["split"]["val_rel_rmse"] for r in rows])),
+        "test_rel_rmse_single_median": float(np.median([r["single"]["test_rel_rmse"] for r in rows])),
+        "test_rel_rmse_split_median": float(np.median([r["split"]["test_rel_rmse"] for r in rows])),
+        "reduction_at_equal_accuracy_pct_mean": float(np.mean(tte_ok)) if tte_ok else None,
+        "equal_accuracy_reached_seeds": len(tte_ok),
+        "study_wall_s": wall,
+        "runs": rows,
+    }
+
+
+def ranking(s: Mapping) -> dict:
+    """Which structure trains faster (mean time) and which is more accurate (median validation error)."""
+    return {"faster": "split" if s["train_time_reduction_pct"] > 0 else "single",
+            "more_accurate": "split" if s["val_rel_rmse_split_median"] < s["val_rel_rmse_single_median"] else "single"}
