@@ -11,7 +11,8 @@ module does:
 - a random 70/15/15 division into training, validation and test rows
   (``dividerand``);
 - stopping when the validation error has not improved for 6 consecutive
-  epochs (``max_fail``), or at 1000 epochs, or at a minimum gradient, and
+  epochs (``max_fail``), or at ``max_epochs`` (the tool's 1000; the config raises it so that the
+  validation rule decides), or at a minimum gradient, and
   keeping the weights of the best validation epoch;
 - Levenberg-Marquardt, full batch (``trainlm``; ``levenberg_marquardt``).
 
