@@ -220,12 +220,13 @@ def _random_surrogate(kind, frame, activation, structure, boundaries, blend, see
     b = paper_bearing()
     n_in = 3 if frame == "polar" else 4
 
-    def net(n_out):
-        return [(rng.normal(size=(16, n_in)), rng.normal(size=16)), (rng.normal(size=(n_out, 16)) / 4, rng.normal(size=n_out))]
+    def net(n_out, inputs=n_in):
+        return [(rng.normal(size=(16, inputs)), rng.normal(size=16)), (rng.normal(size=(n_out, 16)) / 4, rng.normal(size=n_out))]
 
     nets, scal = [], []
     for _ in range(len(boundaries) + 1):
-        nets.append(net(2) if structure == "plain" else (net(2), net(4)))
+        # as training builds it: the damping structure's static network sees the position inputs only
+        nets.append(net(2) if structure == "plain" else (net(2, n_in - 2), net(4)))
         # "standard" scales raw SI inputs: give it input spreads of the size of the states
         unit = np.array([b.clearance, b.clearance, b.clearance * b.omega, b.clearance * b.omega]) \
             if kind == "standard" else np.ones(n_in)

@@ -106,7 +106,8 @@ def _region(model, r, x1, x2, v1, v2):
         static, damping = model.networks[r], None
     else:
         static, damping = model.networks[r]
-    out = _mlp(static, zs.copy(), model.activation)
+    # the damping structure's static network sees the position inputs only (the first layer says how many)
+    out = _mlp(static, zs[:static[0][0].shape[1]].copy(), model.activation)
     y1, y2 = out[0], out[1]
     if damping is not None:
         d = _mlp(damping, zs.copy(), model.activation)
