@@ -27,12 +27,15 @@ Adding a model: see docs/adding_a_model.md.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Callable, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .bearing import ConicalBearing, JournalBearing
+
+if TYPE_CHECKING:  # the mesh module sits in a subpackage that imports this one
+    from .reynolds.mesh import FilmMesh
 
 #: ``fn(params, x1, x2, v1, v2) -> (F1, F2)``, compiled with numba
 ForceKernel = Callable[..., tuple[float, float]]
@@ -130,6 +133,32 @@ class BatchSettable(Protocol):
     def setting_array(self) -> np.ndarray: ...
 
     def setting_for(self, sleeve: float) -> np.ndarray: ...
+
+
+@runtime_checkable
+class LinearPressureModel(Protocol):
+    """A grid model whose pressure field before cavitation can be asked for (``ReynoldsSolver``,
+    ``ConicalReynoldsSolver``): what the film-region derivative of the stiffness and damping
+    coefficients needs (``characteristics.coefficients_gumbel_field``, used when ``cavitation`` is
+    ``"gumbel"``).
+
+    ``linear_pressure(x, v)`` for one state ((2,), (2,)) -> (n_theta, n_z) Pa on ``mesh``; ``theta``
+    the grid's angles; ``cavitation`` the label of the cavitation rule ("gumbel", "none", ...).
+    """
+
+    @property
+    def bearing(self) -> Bearing: ...
+
+    @property
+    def cavitation(self) -> str: ...
+
+    @property
+    def mesh(self) -> FilmMesh: ...
+
+    @property
+    def theta(self) -> np.ndarray: ...
+
+    def linear_pressure(self, x: ArrayLike, v: ArrayLike) -> np.ndarray: ...
 
 
 class ReferenceModel:
