@@ -28,7 +28,7 @@ from omegaconf import DictConfig, OmegaConf
 from scipy.stats import bootstrap
 
 from fluidfilm import io, tracking
-from fluidfilm.comparison import machine
+from fluidfilm.benchmarking import machine
 from fluidfilm.surrogate.protocol import band_sq_errors, subsample, time_to_accuracy, train_protocol_model
 from fluidfilm.surrogate.training import read_dataset
 from fluidfilm.config_check import check_config
