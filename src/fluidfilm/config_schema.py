@@ -386,7 +386,7 @@ def validate_group(group: str, node: Any, where: str | None = None) -> Any:
     try:
         merged = OmegaConf.merge(OmegaConf.structured(schema), node)
     except OmegaConfBaseException as err:
-        key = getattr(err, "full_key", None)  # set by OmegaConf on its own errors
+        key = err.full_key  # the dotted key inside the group, set by OmegaConf
         detail = str(err).splitlines()[0]
         raise SchemaError(f"'{where}.{key}': {detail}" if key else f"'{where}': {detail}") from None
     missing = _required_missing(schema, merged, where + ".")
