@@ -27,15 +27,12 @@ Adding a model: see docs/adding_a_model.md.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Protocol, runtime_checkable
+from typing import Any, Callable, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .bearing import ConicalBearing, JournalBearing
-
-if TYPE_CHECKING:  # the mesh module sits in a subpackage that imports this one
-    from .reynolds.mesh import FilmMesh
 
 #: ``fn(params, x1, x2, v1, v2) -> (F1, F2)``, compiled with numba
 ForceKernel = Callable[..., tuple[float, float]]
@@ -135,6 +132,14 @@ class BatchSettable(Protocol):
     def setting_for(self, sleeve: float) -> np.ndarray: ...
 
 
+class FilmGrid(Protocol):
+    """What the film-region integrals need of a solver's grid (``reynolds.mesh.FilmMesh`` has it; named
+    here as a protocol so that this module, which the surrogates import, does not import the solver)."""
+
+    @property
+    def w_z(self) -> np.ndarray: ...   # Simpson weights over the axial nodes [m]
+
+
 @runtime_checkable
 class LinearPressureModel(Protocol):
     """A grid model whose pressure field before cavitation can be asked for (``ReynoldsSolver``,
@@ -153,7 +158,7 @@ class LinearPressureModel(Protocol):
     def cavitation(self) -> str: ...
 
     @property
-    def mesh(self) -> FilmMesh: ...
+    def mesh(self) -> FilmGrid: ...
 
     @property
     def theta(self) -> np.ndarray: ...
