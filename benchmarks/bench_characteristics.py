@@ -13,13 +13,13 @@ force), the grooved bearing (60x31) and every saved surrogate given
 from __future__ import annotations
 
 import argparse
+import functools
 import math
-import time
 from pathlib import Path
 
-import numpy as np
 
 from fluidfilm import ReynoldsSolver, load_surrogate, paper_bearing
+from fluidfilm.benchmarking import median_seconds
 from fluidfilm.characteristics import coefficients as coef
 from fluidfilm.characteristics.stability import operating_point
 from fluidfilm.reynolds.feed import GroovedReynoldsSolver
@@ -45,13 +45,8 @@ def main() -> None:
     print(f"{'model':>32} {'median ms':>10} {'x vs 30x30':>11}")
     base = None
     for name, (model, h) in models.items():
-        coef.reference_coefficients(model, x0, h)  # compile / warm up
-        ts = []
-        for _ in range(repeats):
-            t = time.perf_counter()
-            coef.reference_coefficients(model, x0, h)
-            ts.append(time.perf_counter() - t)
-        med = 1e3 * float(np.median(ts))
+        # the first (untimed) call compiles
+        med = 1e3 * median_seconds(functools.partial(coef.reference_coefficients, model, x0, h), repeats)
         base = med if base is None else base
         print(f"{name:>32} {med:10.3f} {base / med:11.2f}")
 

@@ -13,29 +13,20 @@ import os
 import platform
 from pathlib import Path
 
-import numpy as np
 import yaml
 
 from fluidfilm import ReynoldsSolver, paper_bearing
 from fluidfilm.bearing import bearing_from_dict
+from fluidfilm.benchmarking import median_seconds
 from fluidfilm.reynolds.conical import ConicalReynoldsSolver
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def kernel_time(model, repeats=7, calls=200) -> float:
-    import time
-
     fn, params = model.force_kernel
     x1, x2, v1, v2 = 20e-6, 45e-6, 0.01, -0.005
-    fn(params, x1, x2, v1, v2)
-    samples = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(calls):
-            fn(params, x1, x2, v1, v2)
-        samples.append((time.perf_counter() - t0) / calls)
-    return float(np.median(samples))
+    return median_seconds(lambda: fn(params, x1, x2, v1, v2), repeats, calls)
 
 
 def main() -> None:

@@ -9,7 +9,8 @@ import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
 from fluidfilm import ReynoldsSolver, io, load_surrogate, tracking
-from fluidfilm.comparison import machine, sparse_reference_speed, speed_comparison, trajectory_comparison
+from fluidfilm.benchmarking import machine
+from fluidfilm.comparison import sparse_reference_speed, speed_comparison, trajectory_comparison
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.figures import plot_orbits
 from fluidfilm.config_check import check_config

@@ -26,7 +26,7 @@ import hydra
 from omegaconf import DictConfig, OmegaConf
 
 from fluidfilm import io, tracking
-from fluidfilm.comparison import machine
+from fluidfilm.benchmarking import machine
 from fluidfilm.config_check import check_config
 from fluidfilm.surrogate.timing_study import ranking, study
 from fluidfilm.surrogate.training import read_dataset

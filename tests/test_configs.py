@@ -150,3 +150,90 @@ def test_config_check_names_unknown_keys_and_wrong_types():
     assert "trainer.deterministic" in text and "expected bool" in text     # 1 is not a bool
     assert "seeds=5" in text and "expected list" in text
     assert compare({"name": "${other}"}, {"name": 3}) == []                # interpolations resolve later
+
+
+def _schema_fields(schema, prefix=""):
+    from dataclasses import fields, is_dataclass
+
+    from fluidfilm.config_schema import _BY_NAME
+
+    for f in fields(schema):
+        sub = _BY_NAME.get(f.type) if isinstance(f.type, str) else (f.type if is_dataclass(f.type) else None)
+        if sub is not None and f.type not in ("PositionSection", "VelocitySection"):
+            yield from _schema_fields(sub, f"{prefix}{f.name}.")
+        else:
+            yield f"{prefix}{f.name}"
+
+
+@pytest.mark.parametrize("group, option", list(_options()))
+def test_every_option_validates_against_its_group_schema(group, option):
+    """Composed as the entry points compose it, each option fits its schema (types, no unknown key,
+    no required key left out); ``experiment`` has none (its values land in the other groups)."""
+    from fluidfilm.config_schema import validate_group
+
+    primary, key = GROUPS[group]
+    package = "" if key in (None, group) else f"@{key}"
+    cfg = _compose(primary, [f"{group}{package}={option}"])
+    if key is None:
+        assert validate_group(group, {}) is None
+        return
+    typed = validate_group(group, OmegaConf.to_container(OmegaConf.select(cfg, key), resolve=False), key)
+    assert typed is not None
+    # the typed config holds the YAML's values (the schema adds none: it has no defaults)
+    plain = OmegaConf.to_container(OmegaConf.select(cfg, key), resolve=True)
+    assert _given(OmegaConf.to_container(typed)) == plain
+
+
+def _given(node):
+    """``node`` without the fields an option leaves out (``???``)."""
+    if isinstance(node, dict):
+        return {k: _given(v) for k, v in node.items() if v != "???"}
+    if isinstance(node, list):
+        return [_given(v) for v in node]
+    return node
+
+
+def test_every_schema_field_is_used_by_some_option():
+    """No field in a schema that no YAML file has: the schema describes conf/, nothing else."""
+    from fluidfilm.config_schema import GROUPS as SCHEMAS
+
+    for group, entry in SCHEMAS.items():
+        schemas = [entry] if isinstance(entry, type) else list(entry[1].values())
+        seen = set()
+        for option in sorted(p.stem for p in (CONF / group).glob("*.yaml")):
+            primary, key = GROUPS[group]
+            package = "" if key == group else f"@{key}"
+            node = OmegaConf.to_container(OmegaConf.select(_compose(primary, [f"{group}{package}={option}"]), key))
+
+            def walk(d, prefix=""):
+                for k, v in d.items():
+                    if isinstance(v, dict):
+                        yield from walk(v, f"{prefix}{k}.")
+                    else:
+                        yield f"{prefix}{k}"
+            seen |= set(walk(node))
+        for schema in schemas:
+            unused = set(_schema_fields(schema)) - seen
+            assert not unused, f"{group}: {schema.__name__} declares {sorted(unused)}, which no option has"
+
+
+@pytest.mark.parametrize("override, named", [
+    ("trainer.max_epochs=ten", "'trainer.max_epochs'"),
+    ("+model.widht=10", "'model.widht'"),
+    ("trainer.batch_size=1.5", "'trainer.batch_size'"),
+    ("+trainer.lr=0.1", "'trainer.lr'"),
+    ("protocol=adam", None),
+    ("+protocol.min_grad=1e-7", "'protocol.min_grad'"),   # a key of the other protocol's schema
+    ("split.boundaries=[0.5,x]", "'split.boundaries"),
+])
+def test_schema_refuses_a_mistyped_value_or_unknown_key_naming_it(override, named):
+    from fluidfilm.config_check import schema_problems
+
+    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
+        cfg = compose(config_name="train", overrides=["protocol=adam", override], return_hydra_config=True)
+        choices = dict(cfg.hydra.runtime.choices)  # what HydraConfig.get() gives a running job
+    problems = schema_problems(cfg, choices)
+    if named is None:
+        assert problems == []
+    else:
+        assert len(problems) == 1 and named in problems[0], problems

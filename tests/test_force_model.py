@@ -61,3 +61,37 @@ def test_simulate_rejects_an_object_that_is_not_a_force_model():
 
     with pytest.raises(ValueError, match="NoKernel is not a force model"):
         simulate(NoKernel(), Rotor(mass=1.0), t_end=1e-3)
+
+
+def test_the_linear_pressure_fast_path_is_offered_by_the_grid_solvers_only():
+    """``LinearPressureModel`` (the film-region K/C path) holds for the Reynolds solvers and no other model;
+    ``reference_coefficients`` takes that path only with Gumbel cavitation, otherwise central differences."""
+    from fluidfilm.characteristics.coefficients import (coefficients, coefficients_gumbel_field,
+                                                        reference_coefficients)
+    from fluidfilm.models import LinearPressureModel
+    from fluidfilm.reynolds import ConicalReynoldsSolver, ReynoldsSolver
+
+    for name, (model, _) in gm.models().items():
+        grid = isinstance(model, (ReynoldsSolver, ConicalReynoldsSolver))
+        assert isinstance(model, LinearPressureModel) == grid, name
+        if not grid:
+            with pytest.raises(ValueError, match="cavitation='gumbel'"):
+                coefficients_gumbel_field(model, np.zeros(2))
+    models = gm.models()
+    x0 = np.array([0.2, 0.5]) * models["gumbel_30"][0].clearance
+    gumbel = models["gumbel_30"][0]
+    np.testing.assert_array_equal(reference_coefficients(gumbel, x0)["K"], coefficients_gumbel_field(gumbel, x0)["K"])
+    ss = models["swift_stieber_12"][0]
+    np.testing.assert_array_equal(reference_coefficients(ss, x0)["K"], coefficients(ss, x0)["K"])
+
+
+def test_the_batched_mpc_needs_an_active_model_and_batches_only_a_settable_one():
+    from fluidfilm.control.mpc import BatchedMPC
+    from fluidfilm.models import BatchSettable
+
+    models = gm.models()
+    with pytest.raises(ValueError, match="no sleeve input"):
+        BatchedMPC(models["surrogate_std"][0])
+    assert isinstance(models["surrogate_sleeve"][0], BatchSettable)
+    assert BatchedMPC(models["surrogate_sleeve"][0]).batched
+    assert not BatchedMPC(models["conical_fast"][0]).batched

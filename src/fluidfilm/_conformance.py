@@ -1,14 +1,15 @@
 """Static proof that every model of the library implements the force-model contract.
 
 Never imported at run time; ``mypy`` (``make lint``) checks these assignments: a model that
-misses a member of ``ForceModel`` / ``AdjustableForceModel`` or gets a signature wrong fails it.
+misses a member of ``ForceModel`` / ``AdjustableForceModel`` / ``BatchSettable`` /
+``LinearPressureModel`` or gets a signature wrong fails it.
 """
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from .models import AdjustableForceModel, ForceModel
+    from .models import AdjustableForceModel, BatchSettable, ForceModel, LinearPressureModel
     from .reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
     from .reynolds.feed import GroovedReynoldsSolver
     from .reynolds.sparse_reference import SparseReferenceModel
@@ -23,3 +24,9 @@ if TYPE_CHECKING:
     def _adjustable_models(b: GradedReynoldsModel, c: ConicalReynoldsSolver,
                            d: SurrogateForceModel) -> list[AdjustableForceModel]:
         return [b, c, d]
+
+    def _batch_settable_models(d: SurrogateForceModel) -> list[BatchSettable]:
+        return [d]
+
+    def _linear_pressure_models(a: ReynoldsSolver, c: ConicalReynoldsSolver) -> list[LinearPressureModel]:
+        return [a, c]

@@ -8,8 +8,11 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import platform
+import statistics
 import sys
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from . import io
@@ -17,11 +20,45 @@ from . import io
 OUT_DIR = Path("reports/benchmarks")
 
 
+def median_seconds(fn: Callable[[], object], repeats: int = 7, calls: int = 1, warmup: bool = True) -> float:
+    """Median wall time [s] of one call of ``fn()``: ``repeats`` samples of ``calls`` back-to-back calls each.
+
+    The one timer of the workspace's speed figures. One untimed call first when ``warmup`` (numba
+    compiles on the first call; a caller that warms up with other arguments passes ``warmup=False``).
+    A median of repeats, because a busy machine adds time to some samples and never takes it away.
+    """
+    if int(repeats) < 1 or int(calls) < 1:
+        raise ValueError(f"repeats and calls must be positive integers, got repeats={repeats!r}, calls={calls!r}")
+    if warmup:
+        fn()
+    samples = []
+    for _ in range(int(repeats)):
+        t0 = time.perf_counter()
+        for _ in range(int(calls)):
+            fn()
+        samples.append((time.perf_counter() - t0) / int(calls))
+    return float(statistics.median(samples))
+
+
+def machine() -> str:
+    """The CPU model, core count and OS of this machine (recorded next to every timing)."""
+    import os
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
+
+
 def write_benchmark(name: str, title: str, header: Sequence[str], rows: Sequence[Sequence[object]],
                     notes: str = "", out_dir: Path | str = OUT_DIR) -> Path:
     """Write one benchmark table (cells already formatted as text) with machine and date."""
-    from .comparison import machine
-
     for row in rows:
         if len(row) != len(header):
             raise ValueError(f"benchmark {name!r}: row {list(row)} has {len(row)} cells, header has {len(header)}")

@@ -5,7 +5,6 @@ timings of two models are taken in the same run, on the same machine.
 """
 from __future__ import annotations
 
-import platform
 from collections.abc import Mapping
 
 import numpy as np
@@ -14,21 +13,6 @@ import pandas as pd
 from .models import ForceModel
 from .rotor.cases import case_summary, run_case
 from .speed import sample_states, time_per_force_eval
-
-
-def machine() -> str:
-    import os
-
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
 
 
 def trajectory_comparison(models: Mapping[str, ForceModel], reference_name: str, rotor_cfg: Mapping,

@@ -9,6 +9,11 @@ config-group choices, composed without the value overrides. Every key must exist
 and every value must have the reference's type (ints where ints were, numbers where numbers were,
 mappings where mappings were; a reference value of ``null`` accepts anything).
 
+Before that comparison every config group the job composed is checked against its schema
+(``fluidfilm.config_schema``: one dataclass per group, registered in Hydra's ConfigStore here), so a
+key or type is judged by a declared type, not only by the reference's value; the comparison still
+covers the primary configs' own keys, which have no schema.
+
 ``compare`` is plain Python on nested mappings; ``check_config`` is the one function of the library
 that asks Hydra for something (the reference composition), and imports it only when called, from an
 entry point's ``main`` (where Hydra is running).
@@ -77,6 +82,42 @@ def compare(actual: Mapping, reference: Mapping, prefix: str = "") -> list[str]:
     return problems
 
 
+def register_schemas() -> None:
+    """Put every group's schema in Hydra's ConfigStore, as ``fluidfilm_schema/<group>: <Schema>``
+    (what a structured-config user composes or extends; the YAML in conf/ keeps the values)."""
+    from hydra.core.config_store import ConfigStore
+
+    from .config_schema import GROUPS
+
+    cs = ConfigStore.instance()
+    for group, entry in GROUPS.items():
+        schemas = [entry] if isinstance(entry, type) else list(entry[1].values())
+        for schema in schemas:
+            cs.store(group=f"fluidfilm_schema/{group}", name=schema.__name__, node=schema)
+
+
+def schema_problems(cfg, choices: Mapping[str, Any]) -> list[str]:
+    """Each composed group of ``cfg`` (``choices``: Hydra's ``group[@package] -> option``) against its schema."""
+    from omegaconf import OmegaConf
+
+    from .config_schema import SchemaError, validate_group
+
+    problems = []
+    for choice, option in choices.items():
+        group, _, package = choice.partition("@")
+        if option is None or group.startswith("hydra"):
+            continue
+        where = package or group.replace("/", ".")
+        node = OmegaConf.select(cfg, where, throw_on_missing=False)
+        if node is None:
+            continue
+        try:
+            validate_group(group, OmegaConf.to_container(node, resolve=False), where)
+        except SchemaError as err:
+            problems.append(f"{err} ({choice}={option})")
+    return problems
+
+
 def check_config(cfg, exit_on_error: bool = True) -> None:
     """Check the running Hydra job's config; every unknown key and mistyped value is named.
 
@@ -87,7 +128,9 @@ def check_config(cfg, exit_on_error: bool = True) -> None:
     from hydra.core.hydra_config import HydraConfig
     from omegaconf import OmegaConf
 
+    register_schemas()
     hc = HydraConfig.get()
+    problems = schema_problems(cfg, hc.runtime.choices)
     choices = set(hc.runtime.choices)
     group_overrides = []
     for ov in hc.overrides.task:
@@ -100,7 +143,8 @@ def check_config(cfg, exit_on_error: bool = True) -> None:
     assert isinstance(actual, dict) and isinstance(ref, dict)
     actual.pop("hydra", None)
     ref.pop("hydra", None)
-    problems = compare(actual, ref)
+    if not problems:  # the schema's message is the more precise one where both see a mistake
+        problems = compare(actual, ref)
     if problems:
         message = "configuration refused before any work: " + "; ".join(problems)
         if exit_on_error:

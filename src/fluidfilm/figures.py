@@ -7,11 +7,11 @@ them.
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pandas as pd
 
+from .benchmarking import median_seconds
 from .reynolds import ReynoldsSolver
 
 
@@ -84,14 +84,7 @@ def velocity_response_wide(frame: pd.DataFrame, direction: str) -> pd.DataFrame:
 
 def time_per_evaluation(model, x, v, repeats: int = 7, calls: int = 200) -> float:
     """Median wall time [s] of one ``forces(x, v)`` call (Python call included)."""
-    model.forces(x, v)  # compile / warm up
-    samples = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(calls):
-            model.forces(x, v)
-        samples.append((time.perf_counter() - t0) / calls)
-    return float(np.median(samples))
+    return median_seconds(lambda: model.forces(x, v), repeats, calls)  # the warm-up call compiles
 
 
 def grid_error_study(solver: ReynoldsSolver, converged: ReynoldsSolver, eccentricities,

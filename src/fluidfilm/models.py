@@ -132,6 +132,40 @@ class BatchSettable(Protocol):
     def setting_for(self, sleeve: float) -> np.ndarray: ...
 
 
+class FilmGrid(Protocol):
+    """What the film-region integrals need of a solver's grid (``reynolds.mesh.FilmMesh`` has it; named
+    here as a protocol so that this module, which the surrogates import, does not import the solver)."""
+
+    @property
+    def w_z(self) -> np.ndarray: ...   # Simpson weights over the axial nodes [m]
+
+
+@runtime_checkable
+class LinearPressureModel(Protocol):
+    """A grid model whose pressure field before cavitation can be asked for (``ReynoldsSolver``,
+    ``ConicalReynoldsSolver``): what the film-region derivative of the stiffness and damping
+    coefficients needs (``characteristics.coefficients_gumbel_field``, used when ``cavitation`` is
+    ``"gumbel"``).
+
+    ``linear_pressure(x, v)`` for one state ((2,), (2,)) -> (n_theta, n_z) Pa on ``mesh``; ``theta``
+    the grid's angles; ``cavitation`` the label of the cavitation rule ("gumbel", "none", ...).
+    """
+
+    @property
+    def bearing(self) -> Bearing: ...
+
+    @property
+    def cavitation(self) -> str: ...
+
+    @property
+    def mesh(self) -> FilmGrid: ...
+
+    @property
+    def theta(self) -> np.ndarray: ...
+
+    def linear_pressure(self, x: ArrayLike, v: ArrayLike) -> np.ndarray: ...
+
+
 class ReferenceModel:
     """Defaults for a physics-based model: valid in the whole film, nothing to count.
 

@@ -112,7 +112,7 @@ def record_timing(workdir: Path, profile: str, stage_times: dict[str, float], to
     runs = data.setdefault(profile, {"stages": {}})
     runs["stages"].update({k: round(v, 1) for k, v in stage_times.items()})
     runs["date"] = _dt.date.today().isoformat()
-    from .comparison import machine
+    from .benchmarking import machine
 
     runs["machine"] = machine()
     runs["last_run_total_s"] = round(total, 1)

@@ -5,10 +5,10 @@ the ratio of two timings is the ratio of the models' costs and nothing else.
 """
 from __future__ import annotations
 
-import time
-
 import numpy as np
 from numba import njit
+
+from .benchmarking import median_seconds
 
 
 @njit  # not cached: numba's on-disk cache cannot always pickle a specialisation on a function argument
@@ -34,9 +34,4 @@ def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
     """Median seconds per force evaluation of ``model.force_kernel`` over the states (x, v)."""
     kernel, params = model.force_kernel
     _kernel_loop(kernel, params, x[:2], v[:2])  # compile
-    samples = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        _kernel_loop(kernel, params, x, v)
-        samples.append((time.perf_counter() - t0) / len(x))
-    return float(np.median(samples))
+    return median_seconds(lambda: _kernel_loop(kernel, params, x, v), repeats, warmup=False) / len(x)

@@ -9,10 +9,9 @@ models and the way they are driven, nothing else.
 """
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
+from .benchmarking import median_seconds
 from .rotor import Rotor, simulate
 from .rotor.batch import simulate_batch
 
@@ -38,15 +37,14 @@ def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batch
         simulate_batch(model, rotors[:1], 2 * dt, dt, x0[:1], v0[:1], record_every=10)
     else:
         simulate(model, rotors[0], 2 * dt, dt, x0[0], v0[0], record_every=10)
-    samples, n_ok = [], 0
-    for _ in range(repeats):
-        t0 = time.perf_counter()
+    n_ok = [0]
+
+    def run() -> None:
         if batched:
-            out = simulate_batch(model, rotors, t_end, dt, x0, v0, record_every=10)
-            n_ok = int(out.ok.sum())
+            n_ok[0] = int(simulate_batch(model, rotors, t_end, dt, x0, v0, record_every=10).ok.sum())
         else:
-            n_ok = sum(simulate(model, r, t_end, dt, a, b, record_every=10).ok for r, a, b in zip(rotors, x0, v0))
-        samples.append(time.perf_counter() - t0)
-    wall = float(np.median(samples))
+            n_ok[0] = sum(simulate(model, r, t_end, dt, a, b, record_every=10).ok for r, a, b in zip(rotors, x0, v0))
+
+    wall = median_seconds(run, repeats, warmup=False)
     return {"n": n, "batched": batched, "t_end_s": t_end, "wall_s": wall, "trajectories_per_s": n / wall,
-            "n_ok": n_ok}
+            "n_ok": n_ok[0]}

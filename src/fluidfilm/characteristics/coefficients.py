@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..models import LinearPressureModel
+
 NAMES = ("Kxx", "Kxy", "Kyx", "Kyy", "Cxx", "Cxy", "Cyx", "Cyy")
 
 
@@ -94,7 +96,7 @@ def coefficients_gumbel_field(solver, x0, h_rel: float = 1e-4) -> dict:
     linear in V), dp_lin/dX_j by a central difference of the smooth linear
     field, both integrated over the nodes where p_lin(x0) > 0.
     """
-    if getattr(solver, "cavitation", None) != "gumbel" or not hasattr(solver, "linear_pressure"):
+    if not (isinstance(solver, LinearPressureModel) and solver.cavitation == "gumbel"):
         raise ValueError("coefficients_gumbel_field needs a ReynoldsSolver with cavitation='gumbel'")
     b = solver.bearing
     c, om = b.clearance, b.omega
@@ -166,6 +168,6 @@ def reference_coefficients(model, x0, h_rel: float = 1e-4) -> dict:
     if isinstance(model, SurrogateForceModel) and not model.scalings[0].extras:
         from .jacobian import surrogate_coefficients
         return surrogate_coefficients(model, x0)
-    if getattr(model, "cavitation", None) == "gumbel" and hasattr(model, "linear_pressure"):
+    if isinstance(model, LinearPressureModel) and model.cavitation == "gumbel":
         return coefficients_gumbel_field(model, x0, h_rel)
     return coefficients(model, x0, h_rel)

@@ -6,13 +6,14 @@ the entry point only composes them.
 """
 from __future__ import annotations
 
+import functools
 import math
-import time
 
 import numpy as np
 import pandas as pd
 
 from ..bearing import JournalBearing
+from ..benchmarking import median_seconds
 from ..reynolds import ReynoldsSolver
 from . import coefficients as coef
 from . import shortbearing as sb
@@ -145,13 +146,9 @@ def timing(models: dict, x0, repeats: int = 5, h_rel: dict | None = None) -> pd.
     rows = []
     for name, model in models.items():
         h = (h_rel or {}).get(name, 1e-4)
-        coef.reference_coefficients(model, x0, h)  # warm up (JIT)
-        ts = []
-        for _ in range(repeats):
-            t = time.perf_counter()
-            coef.reference_coefficients(model, x0, h)
-            ts.append(time.perf_counter() - t)
-        rows.append({"model": name, "time_per_set_ms": 1e3 * float(np.median(ts))})
+        # the first (untimed) call compiles
+        med = median_seconds(functools.partial(coef.reference_coefficients, model, x0, h), repeats)
+        rows.append({"model": name, "time_per_set_ms": 1e3 * med})
     return pd.DataFrame(rows)
 
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..models import BatchSettable, as_adjustable
 from ..rotor import simulate
 from ..rotor.batch import simulate_batch
 from .env import ActiveBearingEnv
@@ -44,8 +45,7 @@ class BatchedMPC:
 
     def __init__(self, model, horizon_intervals: float = 1.0, dt: float = 4e-4, eps_substep: float = 0.4,
                  record_every: int = 1):
-        if not hasattr(model, "set_sleeve"):
-            raise ValueError(f"{type(model).__name__} has no sleeve input; the MPC needs an active bearing model")
+        model = as_adjustable(model)  # the MPC needs an active bearing model
         if not float(horizon_intervals) > 0:
             raise ValueError(f"horizon_intervals must be > 0, got {horizon_intervals!r}")
         if not float(dt) > 0:
@@ -58,7 +58,7 @@ class BatchedMPC:
         self.eps_substep = float(eps_substep)
         self.record_every = int(record_every)
         # surrogates take the sleeve per trajectory; the reference rebuilds its kernel per sleeve position
-        self.batched = hasattr(model, "setting_for") and hasattr(model, "setting_array")
+        self.batched = isinstance(model, BatchSettable)
 
     def predicted_costs(self, env: ActiveBearingEnv) -> np.ndarray:
         sc = env.scenario

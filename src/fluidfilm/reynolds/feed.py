@@ -19,6 +19,7 @@ positions, velocities and forces are rotated in and out.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -27,9 +28,20 @@ from ..bearing import JournalBearing
 from ..models import ReferenceModel
 from ..states import as_state_pairs
 from . import kernels
+from .params import FilmParams
 from .solver import CAVITATION_MODELS, ReynoldsSolver
 
 _CAV = {"none": kernels.CAV_NONE, "gumbel": kernels.CAV_GUMBEL, "swift-stieber": kernels.CAV_SWIFT_STIEBER}
+
+
+class GroovedParams(NamedTuple):
+    """Parameters of the grooved-bearing kernel (``grooved_force``)."""
+
+    film: FilmParams            # the groove-free solver's kernel parameters (grid, film, SOR settings)
+    cos_groove: float           # cos/sin of the groove angle: the turn into the groove frame
+    sin_groove: float
+    cavitation: int             # a ``Cavitation`` value
+    fixed: np.ndarray           # (n_theta,) bool: node columns held at the supply pressure (the grooves)
 
 
 @njit(cache=True)
@@ -54,15 +66,15 @@ def sor_grooved(params, x1, x2, v1, v2, p, fixed, cavitation, omega_sor, tol, ma
     the other models solve the linear system (Gumbel clips afterwards).
     Returns the sweep count or -1 if ``max_iter`` sweeps did not reach ``tol``.
     """
-    n = params[0]
-    sin_n = params[2]
-    cos_n = params[3]
-    inv_c = params[6]
-    inv_dth2 = params[7]
-    inv_dth = params[8]
-    inv_dz2 = params[12]
-    k_omega = params[14]
-    k_v = params[15]
+    n = params.n_theta
+    sin_n = params.sin_node
+    cos_n = params.cos_node
+    inv_c = params.inv_c
+    inv_dth2 = params.inv_dtheta2
+    inv_dth = params.inv_dtheta
+    inv_dz2 = params.inv_dzeta2
+    k_omega = params.k_omega
+    k_v = params.k_v
     nz = p.shape[1]
     h = np.empty(n)
     h3 = np.empty(n)
@@ -109,18 +121,18 @@ def sor_grooved(params, x1, x2, v1, v2, p, fixed, cavitation, omega_sor, tol, ma
 @njit(cache=True)
 def grooved_field(gparams, x1, x2, v1, v2, p):
     """Pressure field in the groove frame (boundaries, groove and cavitation applied); returns sweeps or -1."""
-    params = gparams[0]
-    cos_g = gparams[1]
-    sin_g = gparams[2]
-    cav = gparams[3]
-    fixed = gparams[4]
+    params = gparams.film
+    cos_g = gparams.cos_groove
+    sin_g = gparams.sin_groove
+    cav = gparams.cavitation
+    fixed = gparams.fixed
     y1, y2 = to_groove_frame(cos_g, sin_g, x1, x2)
     w1, w2 = to_groove_frame(cos_g, sin_g, v1, v2)
-    n = params[0]
+    n = params.n_theta
     nz = p.shape[1]
-    p_s = params[27]
+    p_s = params.p_supply
     # start from the groove-free linear field (clipped where cavitation applies): close to the answer
-    kernels.linear_field(params, y1, y2, w1, w2, params[26], p_s, p)
+    kernels.linear_field(params, y1, y2, w1, w2, params.full_basis, p_s, p)
     for i in range(n):
         for j in range(1, nz - 1):
             if cav != kernels.CAV_NONE and p[i, j] < 0.0:
@@ -129,7 +141,7 @@ def grooved_field(gparams, x1, x2, v1, v2, p):
         if fixed[i]:
             for j in range(nz):
                 p[i, j] = p_s
-    it = sor_grooved(params, y1, y2, w1, w2, p, fixed, cav, params[23], params[24], params[25])
+    it = sor_grooved(params, y1, y2, w1, w2, p, fixed, cav, params.sor_omega, params.sor_tol, params.sor_max_iter)
     if cav == kernels.CAV_GUMBEL:
         for i in range(n):
             for j in range(nz):
@@ -141,15 +153,15 @@ def grooved_field(gparams, x1, x2, v1, v2, p):
 @njit(cache=True)
 def grooved_force(gparams, x1, x2, v1, v2):
     """Force kernel of the grooved bearing (the compiled signature every force model shares)."""
-    params = gparams[0]
-    n = params[0]
-    nz = params[26].shape[0] + 2
+    params = gparams.film
+    n = params.n_theta
+    nz = params.full_basis.shape[0] + 2
     p = np.empty((n, nz))
     it = grooved_field(gparams, x1, x2, v1, v2, p)
     if it < 0:
         raise RuntimeError("SOR of the grooved bearing did not converge; raise sor_max_iter")
     g1, g2 = kernels.integrate_field(params, p)
-    return from_groove_frame(gparams[1], gparams[2], g1, g2)
+    return from_groove_frame(gparams.cos_groove, gparams.sin_groove, g1, g2)
 
 
 class GroovedReynoldsSolver(ReferenceModel):
@@ -194,7 +206,7 @@ class GroovedReynoldsSolver(ReferenceModel):
             for k in range(-half, half + 1):
                 fixed[(centre + k) % n_theta] = True
         self.n_grooves = ng
-        self.gparams = (self._base.params, math.cos(g), math.sin(g), _CAV[cavitation], fixed)
+        self.gparams = GroovedParams(self._base.params, math.cos(g), math.sin(g), _CAV[cavitation], fixed)
         self._c = bearing.clearance
         self._bearing = bearing
 
@@ -241,7 +253,7 @@ class GroovedReynoldsSolver(ReferenceModel):
     def to_groove_frame(self, a) -> np.ndarray:
         """A bearing-frame vector (position, velocity) in the groove frame."""
         a = np.asarray(a, dtype=float).reshape(2)
-        return np.array(to_groove_frame(self.gparams[1], self.gparams[2], a[0], a[1]))
+        return np.array(to_groove_frame(self.gparams.cos_groove, self.gparams.sin_groove, a[0], a[1]))
 
     def pressure(self, x, v) -> np.ndarray:
         """Pressure field [Pa], shape (n_theta, n_z), on the groove-frame grid (theta = 0 at the groove)."""

@@ -1,0 +1,408 @@
+"""The paper-comparison report: reports/metrics.json and reports/paper_comparison.md from the stages' outputs.
+
+``load_inputs`` reads what the other stages wrote (comparison, training time, trajectory and speed
+tables, the model reports, the datasets' metadata, the controller study, the characteristics);
+``headline_metrics`` picks the headline numbers (reports/metrics.json); ``paper_comparison_markdown``
+puts every number beside the paper's, from the pieces below (each one table's rows);
+``write_report`` writes both files atomically. ``experiments/report.py`` composes the config and
+calls these.
+"""
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from . import io
+
+#: the paper's verdicts on its Fig. 4 cases: which cases each network was satisfactory in, and its words
+PAPER_SATISFACTORY = {"single": set("e"), "split": set("abcde")}
+PAPER_WORDS = {"single": "satisfactory only in the largest-imbalance case (e)", "split": "satisfactory in a-e, not f, g"}
+#: the eccentricity bands of the held-out error table (keys of a model report's metrics)
+BAND_KEYS = ("test_rel_err_median_band_0_0.5", "test_rel_err_median_band_0.5_0.7", "test_rel_err_median_band_0.7_1",
+             "test_rel_err_median_eps_below_0.7")
+PAPER_NETWORKS = ("paper_single", "paper_split")
+COMPARED = ("single", "split", "best")
+
+
+@dataclass(frozen=True)
+class ReportInputs:
+    """Everything the report reads, as loaded from the stages' output files."""
+
+    comparison: dict                  # reports/comparison.json
+    train_time: dict                  # reports/train_time.json
+    trajectories: pd.DataFrame        # reports/trajectory_metrics.csv
+    speed: pd.DataFrame               # reports/speed.csv
+    models: dict[str, dict]           # models/<name>/report.json, in the config's order
+    dataset_meta: dict                # <dataset_dir>/_metadata.json
+    control: dict                     # reports/control.json
+    active_dataset_meta: dict
+    active_model: dict                # models/<active_model>/report.json
+    batch_speed: dict                 # reports/batch_speed.json
+    controller_training_speed: dict   # reports/controller_training_speed.json
+    characteristics: dict | None      # reports/characteristics.json, where that stage ran
+
+
+def _load(path: Path) -> Any:
+    return json.loads(Path(path).read_text())
+
+
+def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Path | str, models: Sequence[str],
+                active_model: str, active_dataset_dir: Path | str) -> ReportInputs:
+    """Read the report's inputs; a missing file raises ``FileNotFoundError`` naming it."""
+    rd, md = Path(report_dir), Path(models_dir)
+    charac = rd / "characteristics.json"
+    return ReportInputs(
+        comparison=_load(rd / "comparison.json"), train_time=_load(rd / "train_time.json"),
+        trajectories=pd.read_csv(rd / "trajectory_metrics.csv"), speed=pd.read_csv(rd / "speed.csv"),
+        models={m: _load(md / m / "report.json") for m in models},
+        dataset_meta=_load(Path(dataset_dir) / "_metadata.json"), control=_load(rd / "control.json"),
+        active_dataset_meta=_load(Path(active_dataset_dir) / "_metadata.json"),
+        active_model=_load(md / active_model / "report.json"), batch_speed=_load(rd / "batch_speed.json"),
+        controller_training_speed=_load(rd / "controller_training_speed.json"),
+        characteristics=_load(charac) if charac.exists() else None)
+
+
+def _f(x, spec=".1f"):
+    return "n/a" if x is None else format(x, spec)
+
+
+def generation_seconds(meta: Mapping) -> float:
+    """A dataset's generation time: the total over resumed runs where recorded, else the last run's."""
+    return meta.get("generation_seconds_total", meta["generation_seconds_last_run"])
+
+
+def headline_metrics(inp: ReportInputs) -> dict:
+    """reports/metrics.json: the headline numbers of every stage, flat (what MLflow logs too)."""
+    tt, comp, traj = inp.train_time, inp.comparison, inp.trajectories
+    metrics = {
+        "train_time_single_s": tt["train_time_single_s"],
+        "train_time_split_s": tt["train_time_split_s"],
+        "train_time_reduction_pct": tt["train_time_reduction_pct"],
+        "train_time_reduction_pct_per_seed_min": tt["train_time_reduction_pct_per_seed_min"],
+        "train_time_reduction_pct_per_seed_max": tt["train_time_reduction_pct_per_seed_max"],
+        "train_time_all_reached_target": tt["all_reached_target"],
+        "train_time_reduction_ci95": tt["train_time_reduction_ci95"],
+        "train_time_seeds": tt["train_time_seeds"],
+        "train_time_converged": tt["train_time_converged"],
+        "train_time_protocol": tt["train_time_protocol"],
+        "train_time_samples_per_seed": tt["train_time_samples_per_seed"],
+        "train_time_split_parallel_s": tt["train_time_split_parallel_s"],
+        "train_time_reduction_at_equal_accuracy_pct": tt["reduction_at_equal_accuracy_pct_mean"],
+        "train_time_ranking_same_at_2x": tt.get("ranking_check", {}).get("same_ranking"),
+        "speedup_trajectory_single": comp["speedup_trajectory_single"],
+        "speedup_trajectory_split": comp["speedup_trajectory_split"],
+        "speedup_trajectory_best": comp["speedup_trajectory_best"],
+        "speedup_force_eval": comp["speedup_force_eval_split"],
+        "speedup_force_eval_single": comp["speedup_force_eval_single"],
+        "speedup_force_eval_split": comp["speedup_force_eval_split"],
+        "speedup_force_eval_best": comp["speedup_force_eval_best"],
+        "dataset_samples": inp.dataset_meta["n_samples"],
+        "dataset_generation_s": generation_seconds(inp.dataset_meta),
+    }
+    for m in COMPARED:
+        rows = traj[traj.model == m]
+        for _, r in rows.iterrows():
+            metrics[f"orbit_rms_pct_{m}_{r.case}"] = float(r.rms_pct)
+        metrics[f"satisfactory_cases_{m}"] = int(rows.satisfactory.astype(bool).sum())
+    for name, rep in inp.models.items():
+        metrics[f"test_rel_err_median_{name}"] = rep["metrics"]["test_rel_err_median"]
+        metrics[f"test_rel_err_p99_{name}"] = rep["metrics"]["test_rel_err_p99"]
+        for k, v in rep["metrics"].items():  # per eccentricity band (the paper's networks)
+            if k.startswith("test_rel_err_median_band_") or k == "test_rel_err_median_eps_below_0.7":
+                metrics[k.replace("test_rel_err_median_", f"test_rel_err_median_{name}_")] = v
+    for k in [k for k in comp if k.startswith(("speedup_force_", "speedup_trajectory_")) and "sparse" in k]:
+        metrics[k] = comp[k]
+    for k in ("sparse_time_per_force_us", "sparse_trajectory_time_estimated_s"):
+        if k in comp:
+            metrics[k] = comp[k]
+    control = inp.control
+    ctl = control["controllers"]
+    metrics.update({
+        "controller_amplitude_reduction_pct": control["controller_amplitude_reduction_pct"],
+        "mpc_amplitude_reduction_pct": control["mpc_amplitude_reduction_pct"],
+        "controller_decision_ms_dqn": ctl["dqn"]["decision_ms_median"],
+        "controller_decision_ms_mpc": ctl["mpc"]["decision_ms_median"],
+        "active_dataset_samples": inp.active_dataset_meta["n_samples"],
+        "active_dataset_generation_s": generation_seconds(inp.active_dataset_meta),
+        "test_rel_err_median_active": inp.active_model["metrics"]["test_rel_err_median"],
+    })
+    if inp.characteristics is not None:  # the characteristics stage: K/C and whirl-threshold errors of the surrogates
+        metrics.update(inp.characteristics["metrics"])
+    # fast surrogates (docs/fast_surrogates.md): per-force cost, batched trajectories, controller training
+    per_eval = dict(zip(inp.speed.model, inp.speed.time_per_eval_us))
+    metrics["force_eval_us_best"] = float(per_eval["best"])
+    metrics["trajectories_per_s_batch_speedup"] = inp.batch_speed["trajectories_per_s_batch_speedup"]
+    metrics["trajectories_per_s_single_speedup"] = inp.batch_speed["trajectories_per_s_single_speedup"]
+    metrics["controller_training_speedup"] = inp.controller_training_speed["controller_training_speedup"]
+    return metrics
+
+
+# --- the tables' rows ---------------------------------------------------------------------------------
+def _one(traj: pd.DataFrame, case: str, model: str):
+    return traj[(traj.case == case) & (traj.model == model)].iloc[0]
+
+
+def case_rows(traj: pd.DataFrame) -> list[str]:
+    """Fig. 4 accuracy per case: reference span, then RMS / Hausdorff % of c (satisfactory) per model."""
+    out = []
+    for case in sorted(traj.case.unique()):
+        ref = _one(traj, case, "reference")
+        cells = []
+        for m in COMPARED:
+            r = _one(traj, case, m)
+            ok = "yes" if bool(r.satisfactory) else "no"
+            cells.append(f"{_f(r.rms_pct, '.2f')} / {_f(r.hausdorff_pct, '.2f')} ({ok})")
+        out.append(f"| {case} | {ref.span:.3f} | " + " | ".join(cells) + " |")
+    return out
+
+
+def verdict_rows(traj: pd.DataFrame) -> list[str]:
+    """Per case: the paper's verdict and ours, for the single and the split network."""
+    out = []
+    for case in sorted(traj.case.unique()):
+        cells = []
+        for m in ("single", "split"):
+            ours = "yes" if bool(_one(traj, case, m).satisfactory) else "no"
+            cells.append(f"{'yes' if case in PAPER_SATISFACTORY[m] else 'no'} | {ours}")
+        out.append(f"| {case} | " + " | ".join(cells) + " |")
+    return out
+
+
+def band_rows(models: Mapping[str, dict]) -> list[str]:
+    """Held-out median error per eccentricity band of the paper's networks, % ("n/a" where not measured)."""
+    out = []
+    for n in PAPER_NETWORKS:
+        mt = models[n]["metrics"] if n in models else {}
+        out.append(f"| {n} | " + " | ".join(_f(100 * mt[k], ".1f") if k in mt else "n/a" for k in BAND_KEYS) + " |")
+    return out
+
+
+def network_rows(models: Mapping[str, dict]) -> list[str]:
+    """One row per network of the paper's models: band, rows, epochs, stop reason, errors, time."""
+    out = []
+    for n in PAPER_NETWORKS:
+        if n in models:
+            for k, net in enumerate(models[n]["report"]["networks"]):
+                out.append(f"| {n} | {k} | {net['eps_low']:g}-{net['eps_high']:g} | {net['n_train']:,} | "
+                           f"{net['epochs']} | {net.get('stop_reason', 'n/a')} | {_f(net.get('val_rel_rmse'), '.4f')} | "
+                           f"{_f(net.get('test_rel_rmse'), '.4f')} | {net['train_time_s']:.1f} |")
+    return out
+
+
+def seed_rows(tt: Mapping) -> str:
+    """The training-time study per seed."""
+    return "\n".join(
+        f"| {r['seed']} | {r['single']['train_time_s']:.1f} | {r['split']['train_time_s']:.1f} | "
+        f"{r['reduction_pct']:.1f} | {_f(r['time_to_equal_accuracy_split_s'])} | "
+        f"{', '.join(str(n['epochs']) for n in r['single']['networks'])} / "
+        f"{', '.join(str(n['epochs']) for n in r['split']['networks'])} | "
+        f"{', '.join(r['single']['stop_reasons'] + r['split']['stop_reasons'])} | "
+        f"{r['single']['val_rel_rmse']:.4f} / {r['split']['val_rel_rmse']:.4f} |" for r in tt["runs"])
+
+
+def ranking_line(tt: Mapping) -> str:
+    """The ranking check at twice the study's size, or "not run"."""
+    rc = tt.get("ranking_check")
+    return ("not run" if not rc else
+            f"{rc['train_time_samples_per_seed']:,} samples per seed, {rc['train_time_seeds']} seeds: reduction "
+            f"{rc['train_time_reduction_pct']:.0f} % (95 % CI +-{rc['train_time_reduction_ci95']:.0f}), faster: "
+            f"{rc['ranking']['faster']}, more accurate: {rc['ranking']['more_accurate']}; same ranking as the "
+            f"study: {rc['same_ranking']}")
+
+
+def sparse_line(comp: Mapping) -> str:
+    """The paper-like sparse reference's cost and the surrogates' speed-ups over it, or "not measured"."""
+    return ("not measured" if "sparse_time_per_force_us" not in comp else
+            f"{comp['sparse_time_per_force_us']:.0f} us per force (55x55: {comp['sparse_time_per_force_dense_us']:.0f} us); "
+            f"split {comp['speedup_force_split_vs_sparse_reference']:.0f}x per force, "
+            f"{comp['speedup_trajectory_split_vs_sparse_reference']:.0f}x per trajectory; single "
+            f"{comp['speedup_force_single_vs_sparse_reference']:.0f}x / "
+            f"{comp['speedup_trajectory_single_vs_sparse_reference']:.0f}x")
+
+
+def model_rows(models: Mapping[str, dict]) -> str:
+    """Each compared model's network, split, scaling, test errors and training time."""
+    return "\n".join(
+        f"| {n} | {json.dumps(r['config']['model'])} | {r['config']['split']['boundaries']} | "
+        f"{r['config']['scaling']['kind']} | {r['metrics']['test_rel_err_median']:.4f} | "
+        f"{r['metrics']['test_rel_err_p99']:.3f} | {r['report']['train_time_s']:.0f} |" for n, r in models.items())
+
+
+def speed_rows(speed: pd.DataFrame) -> str:
+    return "\n".join(f"| {r.model} | {r.kind} | {r.time_per_eval_us:.2f} |" for r in speed.itertuples())
+
+
+def controller_rows(ctl: Mapping[str, dict]) -> list[str]:
+    """Fig. 5 study: amplitude, friction, sleeve travel, decision time and axial force per controller."""
+    return [f"| {n} | {1e6 * r['max_amplitude_m']:.1f} | {r['amplitude_reduction_pct']:.1f} | "
+            f"{1e6 * r['final_amplitude_m']:.1f} | {r['mean_friction_power_W']:.2f} | {1e3 * r['sleeve_travel_m']:.1f} | "
+            f"{r['decision_ms_median']:.3f} | {r['axial_force_N_mean_last_rev']:.1f} |" for n, r in ctl.items()]
+
+
+def characteristics_section(ch: dict) -> str:
+    """Markdown summary of reports/characteristics.json."""
+    def pct(x):  # None: not finite (e.g. a surrogate stable over the whole speed bracket)
+        return None if x is None else 100.0 * x
+
+    rows = "\n".join(f"| {n} | {_f(pct(e['direct']), '.2f')} | {_f(pct(e['cross']), '.2f')} | "
+                     f"{_f(pct(ch['whirl_threshold_rel_err'].get(n)), '.2f')} |" for n, e in ch["kc_max_rel_err"].items())
+    checks = "\n".join(f"| {c['factor']:.2f} | {c['speed_rpm']:.0f} | {c['ratio']:.3g} | {c['status']} |"
+                        for c in ch["nonlinear_checks"])
+    return f"""
+## Bearing characteristics (stiffness, damping, whirl threshold)
+
+Onset of oil whirl of the paper's rotor ({ch['rotor_mass_per_bearing_kg']:.2f} kg per bearing), reference model:
+{ch['threshold']['reference']['speed_rpm']:.0f} rpm (whirl ratio {ch['threshold']['reference']['whirl_ratio']:.3f}).
+
+| model | K/C max error, direct % | K/C max error, cross % | threshold speed error % |
+|---|---|---|---|
+{rows}
+
+| nonlinear check, x threshold | speed rpm | amplitude last/first | status |
+|---|---|---|---|
+{checks}
+
+![stability map](figures/characteristics_stability_map.png)
+
+![coefficients](figures/characteristics_coefficients.png)
+"""
+
+
+def paper_comparison_markdown(inp: ReportInputs, paper: Mapping, threshold_pct: float, active_model: str) -> str:
+    """reports/paper_comparison.md: every number beside the paper's (``paper``: the config's paper values)."""
+    md = _body(inp, paper, threshold_pct, active_model)
+    if inp.characteristics is not None:
+        md += characteristics_section(inp.characteristics)
+    return md
+
+
+def _body(inp: ReportInputs, paper: Mapping, thr: float, active_model: str) -> str:
+    comp, tt, data_meta, control = inp.comparison, inp.train_time, inp.dataset_meta, inp.control
+    active_meta, active = inp.active_dataset_meta, inp.active_model
+    ctl = control["controllers"]
+    paper_words = PAPER_WORDS
+    case_rows_, verdict_rows_ = case_rows(inp.trajectories), verdict_rows(inp.trajectories)
+    band_rows_, net_rows = band_rows(inp.models), network_rows(inp.models)
+    seeds, model_rows_, speed_rows_ = seed_rows(tt), model_rows(inp.models), speed_rows(inp.speed)
+    ranking, sparse = ranking_line(tt), sparse_line(comp)
+    return f"""# The paper's comparisons, reproduced
+
+Machine: **{comp['machine']}** (no GPU). Paper: {paper['machine']}.
+All numbers below are regenerated by `dvc repro`; headline values are in `reports/metrics.json`.
+
+## Headline numbers
+
+| quantity | paper | ours |
+|---|---|---|
+| dataset samples | {paper['samples']:,} | {data_meta['n_samples']:,} |
+| dataset generation | hours (not given) | {data_meta.get('generation_seconds_total', data_meta['generation_seconds_last_run']):.0f} s |
+| training time, single network | {paper['train_time_single_s'] / 3600:.2f} h | {tt['train_time_single_s']:.0f} s (median of {tt['n_seeds']} seeds, {tt['train_time_single_s_min']:.0f}-{tt['train_time_single_s_max']:.0f} s) |
+| training time, split (3 networks) | {paper['train_time_split_s'] / 3600:.2f} h | {tt['train_time_split_s']:.0f} s ({tt['train_time_split_s_min']:.0f}-{tt['train_time_split_s_max']:.0f} s) |
+| training time reduction, split vs single | {paper['train_time_reduction_pct']} % | {tt['train_time_reduction_pct']:.0f} % (per seed {tt['train_time_reduction_pct_per_seed_min']:.0f} to {tt['train_time_reduction_pct_per_seed_max']:.0f} %) |
+| speed-up per force evaluation, split vs reference | {paper['speedup_force_model']}x | {comp['speedup_force_eval_split']:.1f}x (vs 30x30: {comp['speedup_force_eval_split_vs_30x30']:.1f}x, vs 55x55: {comp['speedup_force_eval_split_vs_55x55']:.1f}x) |
+| speed-up per trajectory, single / split / best | {paper['speedup_force_model']}x | {comp['speedup_trajectory_single']:.1f}x / {comp['speedup_trajectory_split']:.1f}x / {comp['speedup_trajectory_best']:.1f}x |
+| cases satisfactory, single | e only | {comp['satisfactory_cases_single'] or 'none'} |
+| cases satisfactory, split | a-e | {comp['satisfactory_cases_split'] or 'none'} |
+| cases satisfactory, best (ours) | - | {comp['satisfactory_cases_best'] or 'none'} |
+
+Training-time rule: protocol `{tt['train_time_protocol']}` (min-max map, random 70/15/15 division, stop after
+{tt['protocol']['max_fail']} epochs without a better validation error, at most {tt['max_epochs']} epochs), on
+{tt['train_time_samples_per_seed']:,} random samples of the {tt['dataset_samples']:,} per seed, the same rows for both
+structures. Mean reduction over {tt['train_time_seeds']} seeds: {tt['train_time_reduction_pct']:.1f} %, bootstrap 95 % CI
++-{tt['train_time_reduction_ci95']:.1f} points ({_f(tt['train_time_reduction_ci95_low'])} to
+{_f(tt['train_time_reduction_ci95_high'])} %). Every run stopped by the validation rule: {tt['train_time_converged']}.
+Time for the split networks to reach the single network's final validation error (same rows): mean reduction
+{_f(tt['reduction_at_equal_accuracy_pct_mean'])} % ({tt['equal_accuracy_reached_seeds']} of {tt['train_time_seeds']} seeds got
+there). The three split networks in parallel: {tt['train_time_split_parallel_s']:.1f} s (median, longest network).
+Ranking check at twice the size: {ranking}.
+
+Paper-like reference (the same finite-difference system assembled as a sparse matrix and solved by SuperLU on
+every call, 30x30 / 55x55, Gumbel): {sparse}.
+
+## Fig. 4 verdicts with the converged paper networks (satisfactory: RMS and Hausdorff distance both within {thr} % of c)
+
+| case | single: paper | single: ours | split: paper | split: ours |
+|---|---|---|---|---|
+{chr(10).join(verdict_rows_)}
+
+Paper's words: single {paper_words['single']}; split {paper_words['split']}.
+
+## Held-out median relative force error per eccentricity band, % (random test states)
+
+| model | eps 0-0.5 | eps 0.5-0.7 | eps > 0.7 | eps < 0.7 |
+|---|---|---|---|---|
+{chr(10).join(band_rows_)}
+
+## The paper networks, per network
+
+| model | network | eps | training rows | epochs | stopped by | val rel. RMSE | test rel. RMSE | train s |
+|---|---|---|---|---|---|---|---|---|
+{chr(10).join(net_rows)}
+
+## Fig. 4: trajectory accuracy per case
+
+RMS distance / Hausdorff distance from the reference orbit over the settled cycles, in % of the clearance;
+"satisfactory" means both are within {thr} %.
+
+| case | reference span / c | single | split | best |
+|---|---|---|---|---|
+{chr(10).join(case_rows_)}
+
+![Fig. 4](figures/fig4_comparison.png)
+
+## Models
+
+| model | network | split | scaling | test median rel. error | test p99 | train s |
+|---|---|---|---|---|---|---|
+{model_rows_}
+
+## Speed per force evaluation (same compiled loop, same states)
+
+| model | kind | us per evaluation |
+|---|---|---|
+{speed_rows_}
+
+## Training time per seed
+
+| seed | single s | split s | reduction % | split s to single's accuracy | epochs single / split | stopped by | val rel. RMSE single / split |
+|---|---|---|---|---|---|---|---|
+{seeds}
+
+## Active conical bearing (Section 3.2, Fig. 5), evaluated on the reference model
+
+Imbalance ramp {control['scenario']['imbalance_start']:g} -> {control['scenario']['imbalance_end']:g} kg m over
+{control['scenario']['ramp_time']:g} s; sleeve positions {[round(1e3 * v, 2) for v in control['sleeve_positions_m']]} mm;
+the DQN was trained on the surrogate `models/{active_model}` (dataset: {active_meta['n_samples']:,} samples with the
+sleeve as an input, {active_meta.get('generation_seconds_total', active_meta['generation_seconds_last_run']):.0f} s; held-out median error
+{active['metrics']['test_rel_err_median']:.4f}). Paper (qualitative): the DQN agent "tends to restrain the growth" of
+the orbit, the passive bearing's orbit grows.
+
+| controller | max amplitude um | reduction vs none % | final amplitude um | mean friction W | sleeve travel mm | ms per decision | axial force N (last rev.) |
+|---|---|---|---|---|---|---|---|
+{chr(10).join(controller_rows(ctl))}
+
+![Fig. 5 a](figures/fig5_a_dqn.png) ![Fig. 5 b](figures/fig5_b_none.png) ![MPC](figures/fig5_c_mpc.png)
+
+![Fig. 5 amplitude](figures/fig5_amplitude.png)
+
+## Reference model
+
+![Fig. 2](figures/fig2_grid.png)
+
+![Fig. 3](figures/fig3_velocity.png)
+"""
+
+
+def write_report(inp: ReportInputs, report_dir: Path | str, paper: Mapping, threshold_pct: float,
+                 active_model: str) -> dict:
+    """Write reports/metrics.json and reports/paper_comparison.md (atomically); returns the metrics."""
+    rd = Path(report_dir)
+    metrics = headline_metrics(inp)
+    io.write_json(rd / "metrics.json", metrics)
+    io.write_text(rd / "paper_comparison.md", paper_comparison_markdown(inp, paper, threshold_pct, active_model))
+    return metrics

@@ -1,0 +1,131 @@
+"""The paper-comparison report's pieces (fluidfilm.report), on small hand-made inputs.
+
+The whole report was checked byte for byte against the entry point it replaced (the same inputs, old
+and new code); here each piece against what its input says.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from fluidfilm import report
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _traj(verdicts: dict) -> pd.DataFrame:
+    """Trajectory rows: per case a reference and the three surrogates, ``verdicts[model]`` the satisfactory cases."""
+    rows = []
+    for case in "abcdefg":
+        rows.append({"case": case, "model": "reference", "span": 0.25, "rms_pct": None, "hausdorff_pct": None,
+                     "satisfactory": None})
+        for m in ("single", "split", "best"):
+            ok = case in verdicts[m]
+            rows.append({"case": case, "model": m, "span": 0.25, "rms_pct": 1.0 if ok else 7.5,
+                         "hausdorff_pct": 1.5 if ok else 9.0, "satisfactory": ok})
+    return pd.DataFrame(rows)
+
+
+def test_verdicts_put_the_papers_beside_ours():
+    traj = _traj({"single": "e", "split": "abc", "best": "abcdefg"})
+    rows = report.verdict_rows(traj)
+    assert len(rows) == 7
+    # the paper: single satisfactory only in e, split in a-e
+    assert rows[0] == "| a | no | no | yes | yes |"
+    assert rows[3] == "| d | no | no | yes | no |"
+    assert rows[4] == "| e | yes | yes | yes | no |"
+    assert rows[6] == "| g | no | no | no | no |"
+
+
+def test_case_rows_show_each_models_distances_and_verdict():
+    rows = report.case_rows(_traj({"single": "", "split": "a", "best": "a"}))
+    assert rows[0] == "| a | 0.250 | 7.50 / 9.00 (no) | 1.00 / 1.50 (yes) | 1.00 / 1.50 (yes) |"
+
+
+def _model(median=0.01, bands=True, networks=()):
+    mt = {"test_rel_err_median": median, "test_rel_err_p99": 0.2}
+    if bands:
+        mt.update({k: 0.5 * (i + 1) / 100 for i, k in enumerate(report.BAND_KEYS)})
+    return {"metrics": mt, "report": {"networks": list(networks), "train_time_s": 12.0},
+            "config": {"model": {"width": 8}, "split": {"boundaries": [0.5]}, "scaling": {"kind": "standard"}}}
+
+
+def test_bands_in_percent_and_missing_ones_said():
+    rows = report.band_rows({"paper_single": _model(), "paper_split": _model(bands=False)})
+    assert rows[0] == "| paper_single | 0.5 | 1.0 | 1.5 | 2.0 |"
+    assert rows[1] == "| paper_split | n/a | n/a | n/a | n/a |"
+    assert report.band_rows({})[0] == "| paper_single | n/a | n/a | n/a | n/a |"   # model not trained
+
+
+def test_network_rows_say_n_a_for_what_a_network_did_not_record():
+    net = {"eps_low": 0.0, "eps_high": 0.5, "n_train": 12345, "epochs": 7, "train_time_s": 3.25}
+    rows = report.network_rows({"paper_split": _model(networks=[net, {**net, "stop_reason": "max_fail",
+                                                                           "val_rel_rmse": 0.01234}])})
+    assert rows[0] == "| paper_split | 0 | 0-0.5 | 12,345 | 7 | n/a | n/a | n/a | 3.2 |"
+    assert rows[1].startswith("| paper_split | 1 | 0-0.5 | 12,345 | 7 | max_fail | 0.0123 | n/a |")
+
+
+def test_generation_time_prefers_the_total_over_resumed_runs():
+    assert report.generation_seconds({"generation_seconds_total": 90.0, "generation_seconds_last_run": 10.0}) == 90.0
+    assert report.generation_seconds({"generation_seconds_last_run": 10.0}) == 10.0
+
+
+def test_sparse_and_ranking_lines_when_not_measured():
+    assert report.sparse_line({}) == "not measured"
+    assert report.ranking_line({}) == "not run"
+
+
+def test_characteristics_section_reads_the_study():
+    ch = json.loads((ROOT / "reports" / "characteristics.json").read_text())
+    md = report.characteristics_section(ch)
+    ref = ch["threshold"]["reference"]
+    assert f"{ref['speed_rpm']:.0f} rpm" in md
+    for name, e in ch["kc_max_rel_err"].items():
+        thr = ch["whirl_threshold_rel_err"].get(name)
+        cell = "n/a" if thr is None else f"{100 * thr:.2f}"
+        assert f"| {name} | {100 * e['direct']:.2f} | {100 * e['cross']:.2f} | {cell} |" in md
+    assert len([ln for ln in md.splitlines() if ln.startswith("| 0.") or ln.startswith("| 1.")]) == \
+        len(ch["nonlinear_checks"])
+
+
+@pytest.fixture
+def inputs(tmp_path):
+    """The committed reports/ beside minimal model reports and dataset metadata (not in git: DVC outputs)."""
+    rd = ROOT / "reports"
+    for m in ("paper_single", "paper_split", "best", "active"):
+        (tmp_path / "models" / m).mkdir(parents=True)
+        (tmp_path / "models" / m / "report.json").write_text(json.dumps(_model(median=0.02)))
+    for d, n in (("dataset", 4704000), ("active_dataset", 1234)):
+        (tmp_path / "data" / d).mkdir(parents=True)
+        (tmp_path / "data" / d / "_metadata.json").write_text(json.dumps({"n_samples": n,
+                                                                          "generation_seconds_last_run": 5.0}))
+    return report.load_inputs(rd, tmp_path / "models", tmp_path / "data" / "dataset",
+                              ["paper_single", "paper_split", "best"], "active", tmp_path / "data" / "active_dataset")
+
+
+def test_headline_metrics_carry_the_stages_numbers(inputs):
+    m = report.headline_metrics(inputs)
+    comp, tt, traj = inputs.comparison, inputs.train_time, inputs.trajectories
+    assert m["speedup_force_eval"] == comp["speedup_force_eval_split"]
+    assert m["train_time_reduction_pct"] == tt["train_time_reduction_pct"]
+    for model in ("single", "split", "best"):
+        assert m[f"satisfactory_cases_{model}"] == int(traj[traj.model == model].satisfactory.astype(bool).sum())
+    assert m["dataset_samples"] == 4704000 and m["dataset_generation_s"] == 5.0
+    assert m["test_rel_err_median_paper_split_band_0.5_0.7"] == pytest.approx(0.01)
+    assert set(inputs.characteristics["metrics"]) <= set(m)
+    assert m["force_eval_us_best"] == float(inputs.speed.set_index("model").time_per_eval_us["best"])
+
+
+def test_write_report_writes_both_files(inputs, tmp_path):
+    paper = {"machine": "M", "samples": 4700000, "train_time_single_s": 20520, "train_time_split_s": 16200,
+             "train_time_reduction_pct": 26, "speedup_force_model": 12}
+    metrics = report.write_report(inputs, tmp_path / "out", paper, 2.0, "active")
+    assert json.loads((tmp_path / "out" / "metrics.json").read_text()) == json.loads(json.dumps(metrics))
+    md = (tmp_path / "out" / "paper_comparison.md").read_text()
+    assert "| dataset samples | 4,700,000 | 4,704,000 |" in md
+    assert "| training time, single network | 5.70 h |" in md
+    assert "within 2.0 % of c" in md
+    assert "## Bearing characteristics" in md     # the characteristics section is appended
