@@ -24,8 +24,10 @@ setup: $(STAMP)
 
 # torch first and pinned: 2.13.0 is the CPU build that lies on disk here;
 # any other spec would pull gigabytes of CUDA wheels.
+# The environment is created once; a changed pyproject.toml reinstalls into it. (Re-running `venv`
+# over an existing one with another `python3` on PATH would mix two interpreters' standard libraries.)
 $(STAMP): pyproject.toml
-	$(PYTHON) -m venv $(VENV)
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check --upgrade pip
 	$(PY) -m pip install --quiet --disable-pip-version-check torch==2.13.0
 	$(PY) -m pip install --quiet --disable-pip-version-check -e ".[test]"
