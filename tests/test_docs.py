@@ -20,7 +20,7 @@ def _run_doc(tmp_path) -> dict:
     assert len(blocks) == 1
     model = blocks[0][:blocks[0].index("# use it like any other model")]
     assert 20 <= len(model.strip().splitlines()) <= 60  # the model itself: a short example
-    # a real file, so numba can cache the example's kernel as it would in a user's module
+    # a real file, as a user would save it
     script = tmp_path / "adding_a_model.py"
     script.write_text(blocks[0])
     return runpy.run_path(str(script))
