@@ -55,8 +55,11 @@ def render_reproduce_timing(reports: Path) -> str:
     rows = [[f"`{name}`", f"{sec / 60:.1f} min" if sec >= 60 else f"{sec:.0f} s"]
             for name, sec in full["stages"].items()]
     rows.append(["**total**", f"**{full['stages_total_s'] / 60:.0f} min**"])
-    return (f"Measured on {full['date']}, {full['machine']}, every stage run from scratch "
-            f"(`reports/reproduce_timing.json`, written by `make reproduce`):\n\n" + _table(["stage", "wall time"], rows))
+    return (f"Measured on {full['date']}, {full['machine']}: the wall time of each stage's last run "
+            f"(`reports/reproduce_timing.json`, written by `make reproduce`; a stage that was not rerun keeps "
+            f"its time). A rerun reuses finished dataset parts and a finished training checkpoint of the "
+            f"same configuration, so such a stage shows the time of the resumed run, not of a run from "
+            f"scratch:\n\n" + _table(["stage", "wall time"], rows))
 
 
 def render_headline(reports: Path) -> str:
