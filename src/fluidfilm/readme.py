@@ -200,7 +200,10 @@ def render_train_time(reports: Path) -> str:
            > tt["train_time_reduction_ci95_target"] else "")
         + f"Median validation relative RMS force error: "
         f"single {tt['val_rel_rmse_single_median']:.3f}, split {tt['val_rel_rmse_split_median']:.3f}. Faster: "
-        f"{tt['ranking']['faster']}, more accurate: {tt['ranking']['more_accurate']}.", ""]
+        f"{tt['ranking']['faster']}"
+        + (" (by the point estimate only: the interval contains 0, so neither structure is measurably faster)"
+           if tt["train_time_reduction_ci95_low"] < 0 < tt["train_time_reduction_ci95_high"] else "")
+        + f", more accurate: {tt['ranking']['more_accurate']}.", ""]
     rc = tt.get("ranking_check")
     if rc:
         lines += [f"Ranking check at {rc['train_time_samples_per_seed']:,} samples per seed ({rc['train_time_seeds']} "
