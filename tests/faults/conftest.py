@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -37,3 +38,13 @@ def quick_spec():
     from fluidfilm.data import DatasetSpec
 
     return DatasetSpec.from_cfg(quick_cfg())
+
+
+def interruptible() -> None:
+    """``preexec_fn`` for a child that the test will Ctrl-C: SIGINT back to its default action.
+
+    A test suite started in the background (``make test &``, nohup, some CI runners) inherits SIGINT
+    ignored, and Python then never turns SIGINT into KeyboardInterrupt, so the child would not see the
+    test's Ctrl-C at all. A user's terminal has it at the default.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

@@ -13,7 +13,7 @@ import pytest
 from fluidfilm import paper_bearing
 from fluidfilm.data import DatasetSpec, generate_dataset, random_test_set
 
-from .conftest import REFERENCE, ROOT, quick_cfg, run_entry
+from .conftest import REFERENCE, ROOT, interruptible, quick_cfg, run_entry
 
 
 @pytest.fixture(scope="module")
@@ -81,7 +81,8 @@ def test_ctrl_c_in_a_sweep_is_one_line_and_the_runs_end_killed(data, tmp_path):
     args = _args(data, tmp_path, "trainer.max_epochs=500")
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     proc = subprocess.Popen([sys.executable, "experiments/train_surrogate.py", "-m", "seed=0,1", *args], cwd=ROOT,
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=interruptible)
     deadline = time.time() + 300
     while time.time() < deadline and not list((tmp_path / "ckpt").rglob("last.ckpt")):
         time.sleep(0.05)
