@@ -173,3 +173,21 @@ def test_the_trace_finds_a_module_missing_from_a_stage():
     script, _ = _entry_point(stage)
     uncovered = {m for m in static_closure(script) if not _covered(_module_file(m), _deps(stage))}
     assert {"fluidfilm.figures", "fluidfilm.bearing", "fluidfilm.config"} <= uncovered
+
+
+def test_committed_reports_are_the_outputs_dvc_lock_records():
+    """Every report file committed to git is the one dvc.lock records for its stage: copying reports and
+    the lock from two different states (a checkout in between) would make `dvc status` lie."""
+    import hashlib
+
+    root = Path(__file__).resolve().parents[1]
+    lock = yaml.safe_load((root / "dvc.lock").read_text())
+    checked = 0
+    for stage, entry in lock["stages"].items():
+        for out in entry.get("outs", []):
+            path = root / out["path"]
+            if not out["path"].startswith("reports/") or not path.is_file() or "md5" not in out:
+                continue
+            assert hashlib.md5(path.read_bytes()).hexdigest() == out["md5"], (stage, out["path"])
+            checked += 1
+    assert checked >= 10
