@@ -152,27 +152,27 @@ class TrainerSchema:
 
 
 @dataclass
-class PaperProtocolSchema:
+class _ProtocolSchema:
+    """What both training protocols share: the division, the stopping rule, the threads."""
+
     name: str = MISSING
     fractions: list[float] = MISSING
     max_fail: int = MISSING
     max_epochs: int = MISSING
-    min_grad: float = MISSING
     max_time_s: Optional[float] = MISSING
-    chunk: int = MISSING
     threads: int = MISSING
 
 
 @dataclass
-class AdamProtocolSchema:
-    name: str = MISSING
-    fractions: list[float] = MISSING
-    max_fail: int = MISSING
-    max_epochs: int = MISSING
-    max_time_s: Optional[float] = MISSING
+class PaperProtocolSchema(_ProtocolSchema):
+    min_grad: float = MISSING
+    chunk: int = MISSING
+
+
+@dataclass
+class AdamProtocolSchema(_ProtocolSchema):
     lr: float = MISSING
     batch_size: int = MISSING
-    threads: int = MISSING
 
 
 # --- rotor and its runs ---------------------------------------------------------------------------

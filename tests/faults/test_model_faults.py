@@ -59,7 +59,7 @@ def test_damaged_surrogate_is_refused_naming_the_file(saved, fault, match):
             else:
                 a["r0_W1"] = a["r0_W1"][:, :49]
         _rewrite_npz(npz, change)
-        from fluidfilm.surrogate.inference import _sha256
+        from fluidfilm.io import file_sha256 as _sha256
         meta["weights_sha256"] = _sha256(npz)
         meta.pop("array_shapes")
         meta_file.write_text(json.dumps(meta))

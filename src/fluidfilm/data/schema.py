@@ -24,7 +24,6 @@ the solver that wrote the data.
 """
 from __future__ import annotations
 
-import hashlib
 
 import json
 from pathlib import Path
@@ -35,6 +34,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .. import io
+from ..io import file_sha256
 from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
 
 #: columns of every row, in file order (``S`` comes first where present)
@@ -60,14 +60,6 @@ def write_part(path: Path, cols: dict) -> str:
         pq.write_table(table(cols), tmp, compression="zstd")
         digest = file_sha256(tmp)
     return digest
-
-
-def file_sha256(path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 class DatasetIntegrityError(ValueError):

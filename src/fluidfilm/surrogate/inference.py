@@ -31,6 +31,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from .. import io
 from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
 from ..models import ValidityDomain
 from ..states import as_state_pairs
@@ -443,8 +444,6 @@ class SurrogateForceModel:
 
     # ------------------------------------------------------------------ io
     def save(self, directory) -> None:
-        from .. import io
-
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
         arrays = {}
@@ -458,7 +457,7 @@ class SurrogateForceModel:
                 arrays[f"r{r}_db{k}"] = b
         with io.atomic_path(d / "surrogate.npz", suffix=".npz") as tmp:
             np.savez(tmp, **arrays)
-            weights_sha256 = _sha256(tmp)
+            weights_sha256 = io.file_sha256(tmp)
         meta = {"name": self.name, "activation": self.activation, "boundaries": self.boundaries.tolist(),
                 "blend_width": self.blend_width, "domain": self.domain.tolist(), "eps_max": self.eps_max,
                 "structure": self.structure,
@@ -474,16 +473,6 @@ class SurrogateForceModel:
 
 class SurrogateFileError(ValueError):
     """A saved surrogate is missing, damaged or inconsistent; the message names the file and the fault."""
-
-
-def _sha256(path) -> str:
-    import hashlib
-
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def _check_network(npz: Path, meta: dict, arrays) -> None:
@@ -535,7 +524,7 @@ def load_surrogate(path) -> SurrogateForceModel:
     except (json.JSONDecodeError, UnicodeDecodeError) as err:
         raise SurrogateFileError(f"{meta_file} is not valid JSON ({err}); the file is damaged") from None
     recorded = meta.get("weights_sha256")
-    if recorded is not None and _sha256(npz) != recorded:
+    if recorded is not None and io.file_sha256(npz) != recorded:
         raise SurrogateFileError(f"{npz} is damaged or was replaced: its SHA-256 differs from the one recorded "
                                  f"in {meta_file} at save time")
     try:
