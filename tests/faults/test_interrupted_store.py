@@ -1,0 +1,68 @@
+"""Ctrl-C inside an MLflow read must not leave the SQLite store locked for the rest of the process.
+
+CI saw it once: the interrupt landed while SQLAlchemy was reading rows, SQLAlchemy closed that
+connection, but SQLite keeps a connection with a half-read statement open (a "zombie") holding the
+shared lock; the half-read cursor was kept alive by the interrupt's traceback, so ending the run as
+KILLED waited 20 s and failed with "database is locked".  Here the same state is made with sqlite3
+directly, and the tracking layer's release is checked to free it (and the run to end KILLED).
+"""
+from __future__ import annotations
+
+import sqlite3
+
+import mlflow
+import pytest
+
+from fluidfilm import tracking
+
+
+def _table(db):
+    con = sqlite3.connect(db)
+    con.execute("create table t(a)")
+    con.executemany("insert into t values (?)", [(i,) for i in range(1000)])
+    con.commit()
+    con.close()
+
+
+def _interrupted_read(db, table="t"):
+    con = sqlite3.connect(db)
+    cursor = con.execute(f"select * from {table}")
+    cursor.fetchone()
+    con.close()  # as SQLAlchemy invalidates an interrupted connection: a zombie while the cursor lives
+    raise KeyboardInterrupt
+
+
+def _can_write(db) -> bool:
+    con = sqlite3.connect(db, timeout=0.2)
+    try:
+        con.execute("insert into t values (1)")
+        con.commit()
+        return True
+    except sqlite3.OperationalError as e:
+        assert "locked" in str(e)
+        return False
+    finally:
+        con.close()
+
+
+def test_a_half_read_cursor_held_by_the_traceback_locks_the_store_until_released(tmp_path):
+    db = tmp_path / "store.db"
+    _table(db)
+    try:
+        _interrupted_read(db)
+    except KeyboardInterrupt as exc:
+        assert not _can_write(db)  # the failure CI saw: the store stays locked
+        tracking._release_interrupted_transactions(exc)
+        assert _can_write(db)
+
+
+def test_ctrl_c_during_an_mlflow_read_still_ends_the_run_killed(tmp_path):
+    uri = f"sqlite:///{tmp_path / 'mlflow.db'}"
+    cfg = {"uri": uri, "experiment": "interrupts"}
+    with pytest.raises(KeyboardInterrupt):
+        with tracking.run(cfg, "job") as active:
+            run_id = active.info.run_id
+            # the interrupt lands in a (finished) call holding the MLflow store's own shared lock the same
+            # way: a zombie connection on mlflow.db with a half-read cursor (two rows: Default and this one)
+            _interrupted_read(tmp_path / "mlflow.db", "experiments")
+    assert mlflow.tracking.MlflowClient(uri).get_run(run_id).info.status == "KILLED"
