@@ -24,7 +24,21 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
-STAGES = yaml.safe_load((ROOT / "dvc.yaml").read_text())["stages"]
+
+
+def _stages() -> dict:
+    """dvc.yaml's stages, a ``foreach`` stage expanded as DVC does (``name@item``, ``${item}`` filled in)."""
+    out = {}
+    for name, stage in yaml.safe_load((ROOT / "dvc.yaml").read_text())["stages"].items():
+        if "foreach" not in stage:
+            out[name] = stage
+            continue
+        for item in stage["foreach"]:
+            out[f"{name}@{item}"] = yaml.safe_load(yaml.safe_dump(stage["do"]).replace("${item}", str(item)))
+    return out
+
+
+STAGES = _stages()
 PROFILE = yaml.safe_load((ROOT / "conf" / "pipeline" / "full.yaml").read_text())
 
 

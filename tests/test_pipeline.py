@@ -91,6 +91,15 @@ def test_pipeline_writes_every_headline_number(quick_reproduce):
     assert ch["raimondi_boyd"]["S_max_err_pct"] < 2.0
     assert (workdir / "reports" / "figures" / "characteristics_stability_map.png").stat().st_size > 10_000
     assert "Bearing characteristics" in md
+    # the ensemble stage: three seeds of best, their ensemble and the hybrids, through the seven cases
+    ens = json.loads((workdir / "reports" / "ensemble.json").read_text())
+    assert ens["members"] == ["best", "best_s1", "best_s2"] and metrics["best_seeds"] == 3
+    assert set(ens["models"]) == {"best", "best_s1", "best_s2", "ensemble", "hybrid_0.005", "hybrid_0.01",
+                                  "hybrid_0.02"}
+    for name in ("ensemble", "hybrid_0.01"):
+        assert 0.0 <= metrics[f"flagged_share_mean_{name}"] <= 1.0
+    assert (workdir / "reports" / "figures" / "ensemble.png").stat().st_size > 10_000
+    assert "their ensemble, and the hybrid" in md
     # fast surrogates: per-force cost, batched trajectories, controller training, MPC
     for key in ("force_eval_us_best", "trajectories_per_s_batch_speedup", "controller_training_speedup",
                 "controller_decision_ms_mpc", "mpc_amplitude_reduction_pct"):

@@ -5,7 +5,7 @@ timings of two models are taken in the same run, on the same machine.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -17,12 +17,15 @@ from .speed import sample_states, time_per_force_eval
 
 def trajectory_comparison(models: Mapping[str, ForceModel], reference_name: str, rotor_cfg: Mapping,
                           cases: Mapping[str, Mapping], integrator_cfg: Mapping, threshold_pct: float,
-                          repeats: int = 3) -> tuple[pd.DataFrame, dict]:
+                          repeats: int = 3, after_run: Callable[[str, ForceModel], dict] | None = None
+                          ) -> tuple[pd.DataFrame, dict]:
     """Run every case with every model; score each against the reference.
 
     Returns a table (one row per case and model: orbit statistics, distances
     from the reference, satisfactory or not, median wall time of ``repeats``
-    runs) and the trajectories {case: {model: Trajectory}}.
+    runs) and the trajectories {case: {model: Trajectory}}.  ``after_run(name, model)``, where
+    given, is called after each case's last run of a model and its dict joins that row (e.g. the
+    counters a model keeps per trajectory).
     """
     clearance = models[reference_name].bearing.clearance
     t_settle = integrator_cfg["t_settle"]
@@ -30,16 +33,18 @@ def trajectory_comparison(models: Mapping[str, ForceModel], reference_name: str,
     trajs: dict[str, dict] = {}
     for name, case in cases.items():
         trajs[name] = {}
+        extra: dict[str, dict] = {}
         for model_name, model in models.items():
             runs = [run_case(model, rotor_cfg, case, integrator_cfg) for _ in range(repeats)]
             traj = runs[-1]
             traj.wall_time_s = float(np.median([r.wall_time_s for r in runs]))
             trajs[name][model_name] = traj
+            extra[model_name] = after_run(model_name, model) if after_run is not None else {}
         ref = trajs[name][reference_name]
         for model_name, traj in trajs[name].items():
             is_ref = model_name == reference_name
             s = case_summary(traj, clearance, t_settle, None if is_ref else ref, None if is_ref else threshold_pct)
-            rows.append({"case": name, "model": model_name, **s})
+            rows.append({"case": name, "model": model_name, **s, **extra[model_name]})
     return pd.DataFrame(rows), trajs
 
 
@@ -124,3 +129,52 @@ def sparse_reference_speed(sparse, table: pd.DataFrame, rotor_cfg: Mapping, case
         rows = table[table.model == name]
         out[f"speedup_trajectory_{name}_vs_sparse_reference"] = est_total / float(rows.wall_time_s.sum())
     return out
+
+
+def ensemble_study(reference: ForceModel, members: Mapping[str, ForceModel], rotor_cfg: Mapping,
+                   cases: Mapping[str, Mapping], integrator_cfg: Mapping, threshold_pct: float, rel_tol: float,
+                   hybrid_rel_tols: Sequence[float], floor_N: float, repeats: int = 3) -> tuple[pd.DataFrame, dict]:
+    """The members (seeds of one surrogate) one by one, their ensemble and hybrids, through the seven cases.
+
+    Every model runs every case through the same integrator (``trajectory_comparison``); the ensemble
+    (mean of the members) records the share of its force evaluations whose members disagree beyond
+    ``rel_tol`` (``fluidfilm.ensemble``), each hybrid (one per tolerance in ``hybrid_rel_tols``) the
+    share it answered with the reference.  Returns the per-case table and a summary (per model: the
+    satisfactory cases, orbit errors, flagged/fallback shares, trajectory time and its speed-up on the
+    reference).
+    """
+    from .ensemble import EnsembleForceModel, HybridForceModel
+
+    ensemble = EnsembleForceModel(list(members.values()), rel_tol=rel_tol, floor_N=floor_N, name="ensemble")
+    hybrids = {f"hybrid_{tol:g}": HybridForceModel(list(members.values()), reference, rel_tol=tol, floor_N=floor_N,
+                                                   name=f"hybrid_{tol:g}") for tol in hybrid_rel_tols}
+    counted: dict[str, EnsembleForceModel] = {"ensemble": ensemble, **hybrids}
+    models: dict[str, ForceModel] = {"reference": reference, **members, **counted}
+
+    def counters(name: str, model: ForceModel) -> dict:
+        if name not in counted:
+            return {}
+        m = counted[name]
+        return {"n_flagged": m.n_flagged, "flagged_share": m.n_flagged / max(m.n_evaluations, 1)}
+
+    table, _ = trajectory_comparison(models, "reference", rotor_cfg, cases, integrator_cfg, threshold_pct,
+                                     repeats, after_run=counters)
+    t_ref = float(table[table.model == "reference"].wall_time_s.sum())
+    summary: dict = {"members": list(members), "rel_tol": rel_tol, "hybrid_rel_tols": list(hybrid_rel_tols),
+                     "floor_N": floor_N, "threshold_pct": threshold_pct, "n_cases": len(cases),
+                     "trajectory_wall_time_reference_s": t_ref, "models": {}}
+    for name in models:
+        if name == "reference":
+            continue
+        rows = table[table.model == name]
+        good = "".join(rows[rows.satisfactory == True].case)  # noqa: E712
+        entry = {"satisfactory_cases": good, "n_satisfactory": len(good),
+                 "orbit_rms_pct_max": float(rows.rms_pct.max()), "orbit_hausdorff_pct_max": float(rows.hausdorff_pct.max()),
+                 "trajectory_wall_time_s": float(rows.wall_time_s.sum()),
+                 "speedup_trajectory": t_ref / float(rows.wall_time_s.sum())}
+        if name in counted:
+            entry["flagged_share_mean"] = float(rows.flagged_share.mean())
+            entry["flagged_share_max"] = float(rows.flagged_share.max())
+        summary["models"][name] = entry
+    summary["n_seeds_all_cases"] = sum(summary["models"][m]["n_satisfactory"] == len(cases) for m in members)
+    return table, summary

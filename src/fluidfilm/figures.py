@@ -213,6 +213,47 @@ def plot_orbits(panels: dict, clearance: float, t_settle: float, title: str):
     return fig
 
 
+def plot_ensemble(table: pd.DataFrame, threshold_pct: float):
+    """The ensemble study: orbit error per case and model (left), share answered by the reference (right).
+
+    ``table``: ``comparison.ensemble_study``'s rows (case, model, rms_pct, hausdorff_pct, flagged_share).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = table[table.model != "reference"]
+    models = list(dict.fromkeys(rows.model))
+    cases = sorted(set(rows.case))
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.2), gridspec_kw={"width_ratios": [3, 2]})
+    width = 0.8 / len(models)
+    x = np.arange(len(cases))
+    for k, name in enumerate(models):
+        r = rows[rows.model == name].set_index("case").reindex(cases)
+        worst = np.maximum(r.rms_pct.to_numpy(float), r.hausdorff_pct.to_numpy(float))
+        ax.bar(x + (k - (len(models) - 1) / 2) * width, worst, width, label=name)
+    ax.axhline(threshold_pct, color="k", lw=1, ls="--", label=f"satisfactory: both below {threshold_pct:g} % of c")
+    ax.set_yscale("log")
+    ax.set_xticks(x, cases)
+    ax.set_xlabel("case (Fig. 4)")
+    ax.set_ylabel("max(orbit RMS, Hausdorff) distance from the reference [% of c]")
+    ax.legend(fontsize=7, ncol=2)
+    counted = [m for m in models if m.startswith("hybrid") or m == "ensemble"]
+    width = 0.8 / max(len(counted), 1)
+    for k, name in enumerate(counted):
+        r = rows[rows.model == name].set_index("case").reindex(cases)
+        bx.bar(x + (k - (len(counted) - 1) / 2) * width, 100 * r.flagged_share.to_numpy(float), width, label=name)
+    bx.set_xticks(x, cases)
+    bx.set_xlabel("case (Fig. 4)")
+    bx.set_ylabel("force evaluations flagged [%]")
+    bx.set_title("ensemble: members disagree; hybrid: answered by the reference", fontsize=9)
+    bx.legend(fontsize=7)
+    fig.suptitle("Seeds of the best surrogate, their ensemble and the hybrid with the reference")
+    fig.tight_layout()
+    return fig
+
+
 def plot_equilibrium_locus(locus: pd.DataFrame, clearance: float):
     """The journal-centre locus of static equilibria for growing load (X2 down the page: gravity)."""
     import matplotlib

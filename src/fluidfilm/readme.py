@@ -172,6 +172,23 @@ def render_characteristics(reports: Path) -> str:
     return "\n".join(lines)
 
 
+def render_ensemble(reports: Path) -> str:
+    ens = _load(reports, "ensemble.json")
+    n = ens["n_cases"]
+    rows = []
+    for name, m in ens["models"].items():
+        share = m.get("flagged_share_mean")
+        rows.append([name, f"{m['n_satisfactory']} of {n} ({m['satisfactory_cases'] or '-'})",
+                     _num(m["orbit_rms_pct_max"], ".2f", " %"), _num(m["orbit_hausdorff_pct_max"], ".2f", " %"),
+                     "-" if share is None else _num(100 * share, ".2f", " %"), _num(m["speedup_trajectory"], ".1f", "x")])
+    return (f"Seeds satisfactory in all {n} cases: **{ens['n_seeds_all_cases']} of {len(ens['members'])}** "
+            f"({', '.join(ens['members'])}). Ensemble flag: spread of the members' forces above "
+            f"{100 * ens['rel_tol']:g} % of the mean force (floor {ens['floor_N']:g} N); hybrid_<tol>: the "
+            "reference model answers wherever the spread exceeds <tol>.\n\n"
+            + _table(["model", "satisfactory", "worst orbit RMS (% of c)", "worst Hausdorff (% of c)",
+                      "flagged / answered by the reference", "trajectory speed-up vs reference"], rows))
+
+
 def render_characteristics_timing(reports: Path) -> str:
     ch = _load(reports, "characteristics.json")
     t = ch["timing_ms_per_coefficient_set"]
@@ -268,6 +285,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "controller_training": render_controller_training,
     "characteristics_timing": render_characteristics_timing,
     "characteristics": render_characteristics,
+    "ensemble": render_ensemble,
     "raimondi_boyd": render_raimondi_boyd,
     "raimondi_boyd_no_feed": render_raimondi_boyd_no_feed,
     "reproduce_timing": render_reproduce_timing,

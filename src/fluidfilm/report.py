@@ -45,6 +45,7 @@ class ReportInputs:
     batch_speed: dict                 # reports/batch_speed.json
     controller_training_speed: dict   # reports/controller_training_speed.json
     characteristics: dict | None      # reports/characteristics.json, where that stage ran
+    ensemble: dict | None = None      # reports/ensemble.json, where that stage ran
 
 
 def _load(path: Path) -> Any:
@@ -56,6 +57,7 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
     """Read the report's inputs; a missing file raises ``FileNotFoundError`` naming it."""
     rd, md = Path(report_dir), Path(models_dir)
     charac = rd / "characteristics.json"
+    ens = rd / "ensemble.json"
     return ReportInputs(
         comparison=_load(rd / "comparison.json"), train_time=_load(rd / "train_time.json"),
         trajectories=pd.read_csv(rd / "trajectory_metrics.csv"), speed=pd.read_csv(rd / "speed.csv"),
@@ -64,7 +66,7 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         active_dataset_meta=_load(Path(active_dataset_dir) / "_metadata.json"),
         active_model=_load(md / active_model / "report.json"), batch_speed=_load(rd / "batch_speed.json"),
         controller_training_speed=_load(rd / "controller_training_speed.json"),
-        characteristics=_load(charac) if charac.exists() else None)
+        characteristics=_load(charac) if charac.exists() else None, ensemble=_load(ens) if ens.exists() else None)
 
 
 def _f(x, spec=".1f"):
@@ -143,6 +145,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
     })
     if inp.characteristics is not None:  # the characteristics stage: K/C and whirl-threshold errors of the surrogates
         metrics.update(inp.characteristics["metrics"])
+    if inp.ensemble is not None:  # the ensemble stage: every seed of the best model, the ensemble, the hybrids
+        metrics.update(ensemble_metrics(inp.ensemble))
     # fast surrogates (docs/fast_surrogates.md): per-force cost, batched trajectories, controller training
     per_eval = dict(zip(inp.speed.model, inp.speed.time_per_eval_us))
     metrics["force_eval_us_best"] = float(per_eval["best"])
@@ -283,11 +287,47 @@ Onset of oil whirl of the paper's rotor ({ch['rotor_mass_per_bearing_kg']:.2f} k
 """
 
 
+def ensemble_metrics(ens: Mapping) -> dict:
+    """The ensemble stage's headline numbers: verdicts per seed, of the ensemble and of each hybrid."""
+    out: dict = {"best_seeds_all_seven": int(ens["n_seeds_all_cases"]), "best_seeds": len(ens["members"])}
+    for name, m in ens["models"].items():
+        out[f"satisfactory_cases_{name}"] = m["satisfactory_cases"]
+        if "flagged_share_mean" in m:
+            out[f"flagged_share_mean_{name}"] = m["flagged_share_mean"]
+            out[f"speedup_trajectory_{name}"] = m["speedup_trajectory"]
+    return out
+
+
+def ensemble_section(ens: Mapping) -> str:
+    """Markdown summary of reports/ensemble.json."""
+    rows = "\n".join(
+        f"| {n} | {m['n_satisfactory']}/{ens['n_cases']} ({m['satisfactory_cases'] or '-'}) | "
+        f"{m['orbit_rms_pct_max']:.2f} | {m['orbit_hausdorff_pct_max']:.2f} | "
+        f"{_f(100 * m['flagged_share_mean'] if 'flagged_share_mean' in m else None, '.2f')} | "
+        f"{m['speedup_trajectory']:.1f}x |" for n, m in ens["models"].items())
+    return f"""
+## Every seed of the best model, their ensemble, and the hybrid with the reference
+
+{len(ens['members'])} training seeds of the best model ({', '.join(ens['members'])}); satisfactory in all
+{ens['n_cases']} cases: {ens['n_seeds_all_cases']} of {len(ens['members'])} seeds. The ensemble answers the
+members' mean and flags a state where their spread exceeds {100 * ens['rel_tol']:g} % of the mean force (floor
+{ens['floor_N']:g} N); a hybrid answers with the reference model at the states it flags (its tolerance in the name).
+
+| model | satisfactory | worst orbit RMS % of c | worst Hausdorff % of c | flagged / fallback % of evaluations | trajectory speed-up vs reference |
+|---|---|---|---|---|---|
+{rows}
+
+![ensemble](figures/ensemble.png)
+"""
+
+
 def paper_comparison_markdown(inp: ReportInputs, paper: Mapping, threshold_pct: float, active_model: str) -> str:
     """reports/paper_comparison.md: every number beside the paper's (``paper``: the config's paper values)."""
     md = _body(inp, paper, threshold_pct, active_model)
     if inp.characteristics is not None:
         md += characteristics_section(inp.characteristics)
+    if inp.ensemble is not None:
+        md += ensemble_section(inp.ensemble)
     return md
 
 

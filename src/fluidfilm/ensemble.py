@@ -1,0 +1,232 @@
+"""Ensembles of force models: a disagreement signal, and a hybrid that falls back to a reference model.
+
+Several surrogates trained alike but from different seeds agree where the data pinned them down and
+drift apart where they extrapolate or where the data were thin.  Their spread is therefore a cheap
+uncertainty signal (deep ensembles; Lakshminarayanan et al., NeurIPS 2017):
+
+- ``EnsembleForceModel`` answers the members' mean force and counts the evaluations whose spread
+  exceeds a tolerance (*flagged*: the states where the surrogate should not be trusted);
+- ``HybridForceModel`` answers the members' mean where they agree and the fallback model (the
+  reference solver) at flagged states, so a trajectory costs a few reference solves where the
+  surrogate is unsure and a network evaluation everywhere else.
+
+The spread of the forces F_k of n members is the sample standard deviation of the force vector,
+``s = sqrt(sum_k |F_k - F_mean|^2 / (n - 1))``; a state is flagged when
+``s > rel_tol * max(|F_mean|, floor_N)`` (the floor keeps near-zero forces, whose relative spread is
+meaningless, from being flagged everywhere near the bearing centre).
+
+Both implement ``fluidfilm.models.ForceModel`` and run in the compiled integrator: the kernel
+``ensemble_force`` calls the members' kernel on each member's parameters, and the fallback's kernel
+when the hybrid flag is set.  The members must share one kernel (e.g. surrogates of one
+architecture, whose parameters then form a homogeneous tuple for the compiled loop).
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+from numba import njit
+from numba.core.errors import NumbaExperimentalFeatureWarning
+from numpy.typing import ArrayLike
+
+from .models import Bearing, ForceModel, ValidityDomain
+from .states import as_state_pairs
+
+# The members' and the fallback's kernels travel in the parameter tuple as numba first-class functions
+# (any force model's kernel may be a member or the fallback); numba still labels that feature
+# experimental and says so at every compilation.  The tests check the results against the members
+# and the fallback evaluated on their own.
+warnings.filterwarnings("ignore", message=".*First-class function type feature is experimental",
+                        category=NumbaExperimentalFeatureWarning)
+
+
+@njit(cache=True)
+def ensemble_force(params, x1, x2, v1, v2):
+    """The members' mean force, or the fallback's force where the members disagree (hybrid).
+
+    ``params``: (member kernel, members' parameters (tuple), fallback kernel, fallback parameters,
+    [rel_tol, floor_N, hybrid 0/1], (n_members, 2) scratch, (2,) int64 counts [evaluations, flagged]).
+    """
+    member_fn, members, fallback_fn, fallback_params, tol, scratch, counts = params
+    s1 = 0.0
+    s2 = 0.0
+    k = 0
+    for p in members:
+        f1, f2 = member_fn(p, x1, x2, v1, v2)
+        scratch[k, 0] = f1
+        scratch[k, 1] = f2
+        s1 += f1
+        s2 += f2
+        k += 1
+    m1 = s1 / k
+    m2 = s2 / k
+    var = 0.0
+    for j in range(k):
+        var += (scratch[j, 0] - m1) ** 2 + (scratch[j, 1] - m2) ** 2
+    spread = math.sqrt(var / (k - 1))
+    counts[0] += 1
+    if spread > tol[0] * max(math.hypot(m1, m2), tol[1]):
+        counts[1] += 1
+        if tol[2] > 0.0:
+            return fallback_fn(fallback_params, x1, x2, v1, v2)
+    return m1, m2
+
+
+@njit(cache=True)
+def _ensemble_batch(params, x, v, out):
+    for p in range(x.shape[0]):
+        f1, f2 = ensemble_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        out[p, 0] = f1
+        out[p, 1] = f2
+
+
+@njit(cache=True)
+def _member_spread(member_fn, members, x, v, out):
+    """Per state: the members' mean force (out[:, :2]), their spread s (out[:, 2])."""
+    n = len(members)
+    f = np.empty((n, 2))
+    for p in range(x.shape[0]):
+        k = 0
+        for q in members:
+            f[k, 0], f[k, 1] = member_fn(q, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+            k += 1
+        m1 = f[:, 0].mean()
+        m2 = f[:, 1].mean()
+        out[p, 0] = m1
+        out[p, 1] = m2
+        out[p, 2] = math.sqrt((((f[:, 0] - m1) ** 2).sum() + ((f[:, 1] - m2) ** 2).sum()) / (n - 1))
+
+
+class EnsembleForceModel:
+    """The mean of ``members`` (force models sharing one kernel), with a disagreement flag.
+
+    ``rel_tol``: the spread, relative to the mean force, above which a state is flagged; ``floor_N``:
+    the force below which the relative spread is measured against ``floor_N`` instead [N].
+    """
+
+    _hybrid = False
+
+    def __init__(self, members: Sequence[ForceModel], rel_tol: float = 0.02, floor_N: float = 1.0,
+                 name: str = "ensemble", fallback: ForceModel | None = None):
+        members = list(members)
+        if len(members) < 2:
+            raise ValueError(f"an ensemble needs at least 2 members, got {len(members)}")
+        for m in members:
+            if not isinstance(m, ForceModel):
+                raise ValueError(f"{type(m).__name__} is not a force model (fluidfilm.models.ForceModel)")
+        kernels = [m.force_kernel for m in members]
+        fn = kernels[0][0]
+        odd = [m.name for m, (f, _) in zip(members, kernels) if f is not fn]
+        if odd:
+            raise ValueError(f"ensemble members must share one force kernel; {odd} differ from {members[0].name}")
+        c = members[0].clearance
+        for m in members[1:]:
+            if not math.isclose(m.clearance, c, rel_tol=1e-12) or m.bearing != members[0].bearing:
+                raise ValueError(f"ensemble members must model one bearing: {m.name} differs from {members[0].name}")
+        for key, value in (("rel_tol", rel_tol), ("floor_N", floor_N)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{key} must be a positive number, got {value!r}")
+        if fallback is not None:
+            if not isinstance(fallback, ForceModel):
+                raise ValueError(f"fallback {type(fallback).__name__} is not a force model")
+            if fallback.bearing != members[0].bearing:
+                raise ValueError(f"the fallback {fallback.name} models another bearing than the members")
+        self.members = members
+        self.fallback = fallback
+        self.name = name
+        self.rel_tol = float(rel_tol)
+        self.floor_N = float(floor_N)
+        self._counts = np.zeros(2, dtype=np.int64)
+        self._tol = np.array([self.rel_tol, self.floor_N, 1.0 if self._hybrid else 0.0])
+        member_params = tuple(p for _, p in kernels)
+        fb_fn, fb_params = fallback.force_kernel if fallback is not None else (fn, member_params[0])
+        self._params = (fn, member_params, fb_fn, fb_params, self._tol, np.zeros((len(members), 2)), self._counts)
+
+    # ------------------------------------------------------------------ the ForceModel contract
+    @property
+    def bearing(self) -> Bearing:
+        return self.members[0].bearing
+
+    @property
+    def clearance(self) -> float:
+        return self.members[0].clearance
+
+    @property
+    def force_kernel(self):
+        return ensemble_force, self._params
+
+    @property
+    def validity(self) -> ValidityDomain:
+        """The members' domain (they were trained on the same data)."""
+        return self.members[0].validity
+
+    def reset_domain_counter(self) -> None:
+        for m in self.members:
+            m.reset_domain_counter()
+        self._counts[:] = 0
+
+    def domain_report(self) -> str | None:
+        return self.members[0].domain_report()
+
+    @property
+    def n_outside_domain(self) -> int:
+        return self.members[0].n_outside_domain
+
+    def forces(self, X: ArrayLike, V: ArrayLike) -> np.ndarray:
+        x, v, shape = as_state_pairs(X, V, self.clearance)
+        out = np.empty_like(x)
+        if x.shape[0]:
+            _ensemble_batch(self._params, x, v, out)
+        return out.reshape(shape + (2,))
+
+    # ------------------------------------------------------------------ the uncertainty signal
+    @property
+    def n_evaluations(self) -> int:
+        """Force evaluations since the last ``reset_domain_counter`` (the integrator resets it per run)."""
+        return int(self._counts[0])
+
+    @property
+    def n_flagged(self) -> int:
+        """Of those, the evaluations whose members disagreed beyond the tolerance."""
+        return int(self._counts[1])
+
+    def spread(self, X: ArrayLike, V: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """(mean force (..., 2) N, spread (...) N) of the members at the given states (counts nothing)."""
+        x, v, shape = as_state_pairs(X, V, self.clearance)
+        out = np.empty((x.shape[0], 3))
+        if x.shape[0]:
+            _member_spread(self._params[0], self._params[1], x, v, out)
+        return out[:, :2].reshape(shape + (2,)), out[:, 2].reshape(shape)
+
+    def flagged(self, X: ArrayLike, V: ArrayLike) -> np.ndarray:
+        """Boolean mask of the states the members disagree on (the rule of the module docstring)."""
+        mean, s = self.spread(X, V)
+        return s > self.rel_tol * np.maximum(np.hypot(mean[..., 0], mean[..., 1]), self.floor_N)
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}({self.name!r}, members={[m.name for m in self.members]}, "
+                f"rel_tol={self.rel_tol:g}, floor_N={self.floor_N:g})")
+
+
+class HybridForceModel(EnsembleForceModel):
+    """An ensemble that answers with ``fallback`` (the reference model) wherever its members disagree."""
+
+    _hybrid = True
+
+    def __init__(self, members: Sequence[ForceModel], fallback: ForceModel, rel_tol: float = 0.02,
+                 floor_N: float = 1.0, name: str = "hybrid"):
+        if fallback is None:
+            raise ValueError("a hybrid model needs a fallback force model (the reference)")
+        super().__init__(members, rel_tol, floor_N, name, fallback)
+
+    @property
+    def validity(self) -> ValidityDomain:
+        """The members' domain: outside it the members are not asked to agree, only counted."""
+        return self.members[0].validity
+
+    @property
+    def n_fallbacks(self) -> int:
+        """Evaluations answered by the fallback since the last reset (= ``n_flagged``)."""
+        return self.n_flagged

@@ -1,0 +1,140 @@
+"""Ensembles and the hybrid model, checked against what the members and the fallback give on their own.
+
+Independent truths: the mean of linear bearings is the linear bearing of the mean coefficients (so an
+ensemble's trajectory must equal that bearing's); the spread of two members has a closed form; a hybrid
+that flags every state must reproduce its fallback, one that flags none its members' mean.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fluidfilm import Rotor, paper_bearing, simulate
+from fluidfilm.ensemble import EnsembleForceModel, HybridForceModel
+from fluidfilm.models import ForceModel
+from fluidfilm.reynolds import ReynoldsSolver
+from fluidfilm.rotor import LinearBearing
+
+from golden_models import _net, _scaling
+
+
+def _states(c, n=50, seed=3):
+    rng = np.random.default_rng(seed)
+    eps = 0.85 * rng.random(n)
+    ang = 2 * np.pi * rng.random(n)
+    X = c * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
+    return X, rng.uniform(-0.05, 0.05, (n, 2))
+
+
+def _surrogates(k=3):
+    from fluidfilm.surrogate import SurrogateForceModel
+
+    jb = paper_bearing()
+    out = []
+    for seed in range(k):
+        rng = np.random.default_rng(seed)
+        out.append(SurrogateForceModel(jb, [_net(rng, 4, 8, 2)], [_scaling(np.random.default_rng(99), "standard",
+                                                                             jb.clearance, jb.omega, "cartesian")],
+                                       "tanh", name=f"s{seed}"))
+    return out
+
+
+def test_ensemble_is_the_members_mean_and_its_spread_the_sample_deviation():
+    members = _surrogates(3)
+    X, V = _states(members[0].clearance)
+    each = np.stack([m.forces(X, V) for m in members])            # (3, n, 2), each member on its own
+    mean = each.mean(axis=0)
+    s = np.sqrt(((each - mean) ** 2).sum(axis=(0, 2)) / 2)
+    tol = float(np.median(s / np.maximum(np.hypot(mean[:, 0], mean[:, 1]), 0.5)))  # flags about half
+    ens = EnsembleForceModel(members, rel_tol=tol, floor_N=0.5)
+    assert isinstance(ens, ForceModel)
+    np.testing.assert_allclose(ens.forces(X, V), mean, rtol=1e-13, atol=1e-12)
+    got_mean, got_s = ens.spread(X, V)
+    np.testing.assert_allclose(got_mean, mean, rtol=1e-13, atol=1e-12)
+    np.testing.assert_allclose(got_s, s, rtol=1e-12, atol=1e-12)
+    expect = s > tol * np.maximum(np.hypot(mean[:, 0], mean[:, 1]), 0.5)
+    assert 0 < expect.sum() < len(expect)  # the test states exercise both outcomes
+    np.testing.assert_array_equal(ens.flagged(X, V), expect)
+    ens.reset_domain_counter()
+    ens.forces(X, V)
+    assert (ens.n_evaluations, ens.n_flagged) == (len(X), int(expect.sum()))
+
+
+def test_identical_members_agree_everywhere():
+    m = _surrogates(1)[0]
+    ens = EnsembleForceModel([m, m, m], rel_tol=1e-9, floor_N=1e-9)
+    X, V = _states(m.clearance)
+    np.testing.assert_allclose(ens.forces(X, V), m.forces(X, V), rtol=1e-14, atol=1e-13)
+    assert not ens.flagged(X, V).any() and ens.n_flagged == 0
+
+
+def test_hybrid_answers_with_the_fallback_exactly_where_the_members_disagree():
+    members = _surrogates(3)
+    fallback = ReynoldsSolver(paper_bearing(), 16, 16)
+    X, V = _states(fallback.clearance)
+    mean, s = EnsembleForceModel(members).spread(X, V)
+    tol = float(np.median(s / np.maximum(np.hypot(mean[:, 0], mean[:, 1]), 0.5)))
+    ens = EnsembleForceModel(members, rel_tol=tol, floor_N=0.5)
+    hyb = HybridForceModel(members, fallback, rel_tol=tol, floor_N=0.5)
+    assert isinstance(hyb, ForceModel)
+    flag = ens.flagged(X, V)
+    expect = np.where(flag[:, None], fallback.forces(X, V), ens.forces(X, V))
+    hyb.reset_domain_counter()
+    np.testing.assert_allclose(hyb.forces(X, V), expect, rtol=1e-12, atol=1e-12)
+    assert 0 < hyb.n_fallbacks == int(flag.sum()) < len(X)
+
+
+def test_mean_of_linear_bearings_is_the_linear_bearing_of_the_mean_in_a_trajectory():
+    jb = paper_bearing()
+    a, b = LinearBearing(jb, 2.0e5, 300.0), LinearBearing(jb, 3.0e5, 500.0)
+    mean = LinearBearing(jb, 2.5e5, 400.0)
+    rotor = Rotor(mass=0.5, imbalance=2e-6)
+    # the relative spread of the two is constant where the damping force is small: flag nothing ...
+    ens = EnsembleForceModel([a, b], rel_tol=10.0, floor_N=1e-6)
+    t_ens = simulate(ens, rotor, t_end=0.05, dt=1e-4)
+    t_mean = simulate(mean, rotor, t_end=0.05, dt=1e-4)
+    np.testing.assert_allclose(t_ens.x, t_mean.x, rtol=1e-10, atol=1e-16)
+    assert ens.n_evaluations == t_ens.n_force_evals and ens.n_flagged == 0
+    # ... and a hybrid that flags every state (any spread beats a zero tolerance) is its fallback
+    other = LinearBearing(jb, 4.0e5, 250.0)
+    hyb = HybridForceModel([a, b], other, rel_tol=1e-12, floor_N=1e-12)
+    t_hyb = simulate(hyb, rotor, t_end=0.05, dt=1e-4, x0=(1e-6, 0.0))
+    t_other = simulate(other, rotor, t_end=0.05, dt=1e-4, x0=(1e-6, 0.0))
+    np.testing.assert_allclose(t_hyb.x, t_other.x, rtol=1e-12, atol=1e-18)
+    assert hyb.n_fallbacks == t_hyb.n_force_evals
+
+
+def test_two_member_spread_has_its_closed_form():
+    jb = paper_bearing()
+    a, b = LinearBearing(jb, 2.0e5, 0.0), LinearBearing(jb, 3.0e5, 0.0)
+    ens = EnsembleForceModel([a, b], rel_tol=0.5, floor_N=1e-9)
+    X, V = _states(jb.clearance)
+    mean, s = ens.spread(X, V)
+    # s = |F_a - F_b| / sqrt(2), and relative to |mean| it is sqrt(2) (k_b - k_a) / (k_a + k_b) everywhere
+    np.testing.assert_allclose(s / np.hypot(mean[:, 0], mean[:, 1]), math.sqrt(2) * 1e5 / 5e5, rtol=1e-12)
+    assert not ens.flagged(X, V).any()  # 0.28 < 0.5
+    assert EnsembleForceModel([a, b], rel_tol=0.25, floor_N=1e-9).flagged(X, V).all()
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(rel_tol=0.0), "rel_tol must be a positive number, got 0.0"),
+    (dict(floor_N=float("nan")), "floor_N must be a positive number, got nan"),
+    (dict(rel_tol=True), "rel_tol must be a positive number, got True"),
+])
+def test_bad_tolerances_are_refused_by_name(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        EnsembleForceModel(_surrogates(2), **kwargs)
+
+
+def test_bad_members_are_refused():
+    jb = paper_bearing()
+    with pytest.raises(ValueError, match="at least 2 members, got 1"):
+        EnsembleForceModel(_surrogates(1))
+    with pytest.raises(ValueError, match="share one force kernel"):
+        EnsembleForceModel([_surrogates(1)[0], LinearBearing(jb, 1e5, 1.0)])
+    with pytest.raises(ValueError, match="not a force model"):
+        EnsembleForceModel([object(), object()])
+    with pytest.raises(ValueError, match="needs a fallback"):
+        HybridForceModel(_surrogates(2), None)
