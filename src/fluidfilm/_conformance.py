@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from .ensemble import EnsembleForceModel, HybridForceModel
     from .models import AdjustableForceModel, BatchSettable, ForceModel, LinearPressureModel
     from .reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
     from .reynolds.feed import GroovedReynoldsSolver
@@ -18,8 +19,8 @@ if TYPE_CHECKING:
 
     def _force_models(a: ReynoldsSolver, b: GradedReynoldsModel, c: ConicalReynoldsSolver,
                       d: SurrogateForceModel, e: LinearBearing, f: SparseReferenceModel,
-                      g: GroovedReynoldsSolver) -> list[ForceModel]:
-        return [a, b, c, d, e, f, g]
+                      g: GroovedReynoldsSolver, h: EnsembleForceModel, i: HybridForceModel) -> list[ForceModel]:
+        return [a, b, c, d, e, f, g, h, i]
 
     def _adjustable_models(b: GradedReynoldsModel, c: ConicalReynoldsSolver,
                            d: SurrogateForceModel) -> list[AdjustableForceModel]:

@@ -127,7 +127,8 @@ def _release_interrupted_transactions(exc: BaseException) -> int:
     import sqlite3
     import traceback
 
-    pending, seen = [exc], set()
+    pending: list[BaseException | None] = [exc]
+    seen: set[int] = set()
     while pending:
         e = pending.pop()
         if e is None or id(e) in seen:
