@@ -129,3 +129,26 @@ def test_write_report_writes_both_files(inputs, tmp_path):
     assert "| training time, single network | 5.70 h |" in md
     assert "within 2.0 % of c" in md
     assert "## Bearing characteristics" in md     # the characteristics section is appended
+
+
+def _ensemble_study():
+    entry = {"satisfactory_cases": "bcdef", "n_satisfactory": 5, "orbit_rms_pct_max": 2.5,
+             "orbit_hausdorff_pct_max": 3.1, "trajectory_wall_time_s": 1.0, "speedup_trajectory": 9.0}
+    hybrid = dict(entry, satisfactory_cases="abcdefg", n_satisfactory=7, flagged_share_mean=0.04,
+                  flagged_share_max=0.2, speedup_trajectory=2.0)
+    return {"members": ["best", "best_s1"], "rel_tol": 0.01, "floor_N": 1.0, "n_cases": 7, "n_seeds_all_cases": 0,
+            "hybrid_rel_tols": [0.01], "models": {"best": entry, "best_s1": entry, "hybrid_0.01": hybrid}}
+
+
+def test_ensemble_stage_adds_its_numbers_without_replacing_the_compare_stages(inputs):
+    import dataclasses
+
+    before = report.headline_metrics(dataclasses.replace(inputs, ensemble=None))
+    m = report.headline_metrics(dataclasses.replace(inputs, ensemble=_ensemble_study()))
+    # the compare stage's count of satisfactory cases stays a count (a string once replaced it)
+    assert m["satisfactory_cases_best"] == before["satisfactory_cases_best"]
+    assert m["seed_study_satisfactory_best"] == 5 and m["seed_study_cases_hybrid_0.01"] == "abcdefg"
+    assert m["flagged_share_mean_hybrid_0.01"] == 0.04 and m["best_seeds_all_seven"] == 0
+    md = report.ensemble_section(_ensemble_study())
+    assert "| hybrid_0.01 | 7/7 (abcdefg) | 2.50 | 3.10 | 4.00 | 2.0x |" in md
+    assert "| best | 5/7 (bcdef) | 2.50 | 3.10 | n/a | 9.0x |" in md

@@ -146,7 +146,11 @@ def headline_metrics(inp: ReportInputs) -> dict:
     if inp.characteristics is not None:  # the characteristics stage: K/C and whirl-threshold errors of the surrogates
         metrics.update(inp.characteristics["metrics"])
     if inp.ensemble is not None:  # the ensemble stage: every seed of the best model, the ensemble, the hybrids
-        metrics.update(ensemble_metrics(inp.ensemble))
+        extra = ensemble_metrics(inp.ensemble)
+        clash = sorted(set(extra) & set(metrics))
+        if clash:  # a key of another stage would be silently replaced by the ensemble stage's value
+            raise ValueError(f"the ensemble stage's metrics would overwrite {clash}")
+        metrics.update(extra)
     # fast surrogates (docs/fast_surrogates.md): per-force cost, batched trajectories, controller training
     per_eval = dict(zip(inp.speed.model, inp.speed.time_per_eval_us))
     metrics["force_eval_us_best"] = float(per_eval["best"])
@@ -291,7 +295,9 @@ def ensemble_metrics(ens: Mapping) -> dict:
     """The ensemble stage's headline numbers: verdicts per seed, of the ensemble and of each hybrid."""
     out: dict = {"best_seeds_all_seven": int(ens["n_seeds_all_cases"]), "best_seeds": len(ens["members"])}
     for name, m in ens["models"].items():
-        out[f"satisfactory_cases_{name}"] = m["satisfactory_cases"]
+        # (``satisfactory_cases_<model>`` is the compare stage's count; these are the ensemble stage's run)
+        out[f"seed_study_satisfactory_{name}"] = int(m["n_satisfactory"])
+        out[f"seed_study_cases_{name}"] = m["satisfactory_cases"]
         if "flagged_share_mean" in m:
             out[f"flagged_share_mean_{name}"] = m["flagged_share_mean"]
             out[f"speedup_trajectory_{name}"] = m["speedup_trajectory"]
