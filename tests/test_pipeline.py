@@ -94,8 +94,8 @@ def test_pipeline_writes_every_headline_number(quick_reproduce):
     # the ensemble stage: three seeds of best, their ensemble and the hybrids, through the seven cases
     ens = json.loads((workdir / "reports" / "ensemble.json").read_text())
     assert ens["members"] == ["best", "best_s1", "best_s2"] and metrics["best_seeds"] == 3
-    assert set(ens["models"]) == {"best", "best_s1", "best_s2", "ensemble", "hybrid_0.005", "hybrid_0.01",
-                                  "hybrid_0.02"}
+    assert set(ens["models"]) == {"best", "best_s1", "best_s2", "ensemble", "hybrid_0.01", "hybrid_0.03", "hybrid_0.1",
+                                  "hybrid_0.3"}
     for name in ("ensemble", "hybrid_0.01"):
         assert 0.0 <= metrics[f"flagged_share_mean_{name}"] <= 1.0
     assert (workdir / "reports" / "figures" / "ensemble.png").stat().st_size > 10_000
