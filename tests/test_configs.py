@@ -100,8 +100,9 @@ def test_pipeline_profile_names_every_stage(profile):
     assert prof["profile"] == profile
     assert set(prof["args"]) == set(stages)
     for name, stage in stages.items():
-        assert stage["cmd"].startswith("${python} experiments/"), name
-        assert stage["cmd"].endswith("${args.%s}" % name), name
+        cmd = stage["do"]["cmd"] if "foreach" in stage else stage["cmd"]  # a foreach stage: one command per item
+        assert cmd.startswith("${python} experiments/"), name
+        assert cmd.endswith("${args.%s}" % name), name
 
 
 def _plain_values(d: dict) -> dict:

@@ -44,7 +44,9 @@ def quick_reproduce(tmp_path_factory):
 
 def test_every_stage_of_the_pipeline_ran_with_the_workspace_interpreter(quick_reproduce):
     workdir, out = quick_reproduce
-    stages = yaml.safe_load((ROOT / "dvc.yaml").read_text())["stages"]
+    stages = [f"{name}@{item}" for name, st in yaml.safe_load((ROOT / "dvc.yaml").read_text())["stages"].items()
+              for item in st.get("foreach", [None])]
+    stages = [s.removesuffix("@None") for s in stages]  # DVC names a foreach stage's items name@item
     for name in stages:
         assert f"Running stage '{name}'" in out, f"stage {name} did not run"
     lock = yaml.safe_load((workdir / "dvc.lock").read_text())["stages"]
