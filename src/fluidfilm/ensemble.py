@@ -42,7 +42,7 @@ warnings.filterwarnings("ignore", message=".*First-class function type feature i
                         category=NumbaExperimentalFeatureWarning)
 
 
-@njit(cache=True)
+@njit  # not cached: a signature holding first-class functions cannot be written back (rotor.integrate)
 def ensemble_force(params, x1, x2, v1, v2):
     """The members' mean force, or the fallback's force where the members disagree (hybrid).
 
@@ -74,7 +74,7 @@ def ensemble_force(params, x1, x2, v1, v2):
     return m1, m2
 
 
-@njit(cache=True)
+@njit  # not cached: a signature holding first-class functions cannot be written back (rotor.integrate)
 def _ensemble_batch(params, x, v, out):
     for p in range(x.shape[0]):
         f1, f2 = ensemble_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
@@ -82,7 +82,7 @@ def _ensemble_batch(params, x, v, out):
         out[p, 1] = f2
 
 
-@njit(cache=True)
+@njit  # not cached: a signature holding first-class functions cannot be written back (rotor.integrate)
 def _member_spread(member_fn, members, x, v, out):
     """Per state: the members' mean force (out[:, :2]), their spread s (out[:, 2])."""
     n = len(members)

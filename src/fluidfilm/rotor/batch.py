@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit
 
 from ..models import BatchSettable, ForceModel
-from .integrate import CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration
+from .integrate import CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration, _library_types, _uncached
 from .model import Rotor
 
 
@@ -155,6 +155,10 @@ def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_step
                 n_rec[p] = r + 1
 
 
+# kernels the on-disk cache cannot take (a user's model, an ensemble's members): an uncached twin
+_rk4_batch_uncached = _uncached(_rk4_batch, _acceleration=_uncached(_acceleration))
+
+
 def _rows(value, n: int, what: str) -> np.ndarray:
     a = np.zeros((n, 2)) if value is None else np.asarray(value, dtype=float)
     if a.ndim == 1:
@@ -240,7 +244,8 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     saved = setting.copy()
     t_start = time.perf_counter()
     try:
-        _rk4_batch(kernel, params, setting, settings_arr, consts, x0, v0, float(t0), float(dt), n_steps,
+        run = _rk4_batch if _library_types(kernel, params) else _rk4_batch_uncached
+        run(kernel, params, setting, settings_arr, consts, x0, v0, float(t0), float(dt), n_steps,
                    record_every, float(eps_stop), float(eps_substep), int(max_substeps), out_x, out_v, n_rec,
                    status, t_stop, n_evals)
     finally:

@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
+from numba.core.registry import CPUDispatcher as Dispatcher
 
 from ..models import ForceModel
 from .model import Rotor, ramped
@@ -201,10 +202,25 @@ def _uncached(dispatcher, **replace):
 _rk4_run_uncached = _uncached(_rk4_run, _acceleration=_uncached(_acceleration))
 
 
+def _holds_functions(params) -> bool:
+    """True where the parameters carry compiled functions (an ensemble's members' kernels).
+
+    Numba keys a cached specialisation by its argument types, and types of compiled functions refer to
+    their dispatchers weakly; once, after an ensemble had run through the cached loop, a later process
+    could not write that loop's cache index back ("ReferenceError: underlying object has vanished") and
+    the simulation failed.  The sequence was not reproduced in isolation; such parameters take the
+    uncached twins, as models from outside the library do."""
+    if isinstance(params, Dispatcher):
+        return True
+    return isinstance(params, tuple) and any(_holds_functions(p) for p in params)
+
+
 def _library_types(kernel, params) -> bool:
+    """Whether the cached compiled loops may take this kernel: the library's own kernels and parameter
+    types, without compiled functions inside the parameters."""
     fn = getattr(kernel, "py_func", kernel)
     return fn.__module__.split(".")[0] == "fluidfilm" and \
-        type(params).__module__.split(".")[0] in ("fluidfilm", "builtins")
+        type(params).__module__.split(".")[0] in ("fluidfilm", "builtins") and not _holds_functions(params)
 
 
 def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
