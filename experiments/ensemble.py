@@ -12,6 +12,7 @@ from fluidfilm.benchmarking import machine
 from fluidfilm.comparison import ensemble_study
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.config_check import check_config
+from fluidfilm.data import load_test_set
 from fluidfilm.figures import plot_ensemble
 
 
@@ -22,7 +23,8 @@ def main(cfg: DictConfig) -> None:
     members = {name: load_surrogate(path) for name, path in cfg.members.items()}
     cases = {k: cfg.cases[k] for k in sorted(cfg.cases)}
     table, summary = ensemble_study(reference, members, cfg.rotor, cases, cfg.integrator, cfg.metrics.threshold_pct,
-                                    cfg.rel_tol, list(cfg.hybrid_rel_tols), cfg.floor_N, cfg.timing_repeats)
+                                    cfg.rel_tol, list(cfg.hybrid_rel_tols), cfg.floor_N, cfg.timing_repeats,
+                                    held_out=load_test_set(cfg.testset_dir))
     summary["machine"] = machine()
     report = Path(cfg.report_dir)
     io.write_csv(report / "ensemble_cases.csv", table)
@@ -33,6 +35,10 @@ def main(cfg: DictConfig) -> None:
                               for k, v in m.items() if not isinstance(v, str)})
         tracking.log_artifact(report / "ensemble.json")
         tracking.log_artifact(Path(cfg.figure_dir) / "ensemble.png")
+    cal = summary["flag_calibration"]
+    print(f"flag on the held-out set ({cal['n_states']} states): {100 * cal['flagged_share']:.1f} % flagged, "
+          f"{100 * cal['wrong_share']:.1f} % with the ensemble's error above rel_tol, recall {cal['recall']}, "
+          f"precision {cal['precision']}")
     for name, m in summary["models"].items():
         share = f", flagged {100 * m['flagged_share_mean']:.2f} % of evaluations" if "flagged_share_mean" in m else ""
         print(f"{name}: satisfactory in {m['n_satisfactory']}/{summary['n_cases']} ({m['satisfactory_cases'] or '-'}), "

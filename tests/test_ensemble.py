@@ -150,3 +150,28 @@ def test_ensembles_take_the_uncached_compiled_loops():
     assert _library_types(*members[0].force_kernel)
     assert not _library_types(*EnsembleForceModel(members).force_kernel)
     assert not _library_types(*HybridForceModel(members, ReynoldsSolver(paper_bearing(), 16, 16)).force_kernel)
+
+
+def test_flag_calibration_counts_what_the_flag_catches():
+    """Two linear members around a known truth: the members' mean errs by a known ratio everywhere, and the
+    flag fires everywhere (the spread ratio is constant), so recall and precision are 1 or the shares 0."""
+    from fluidfilm.ensemble import flag_calibration
+
+    jb = paper_bearing()
+    a, b = LinearBearing(jb, 2.0e5, 0.0), LinearBearing(jb, 3.0e5, 0.0)   # mean 2.5e5
+    X, V = _states(jb.clearance)
+    truth = LinearBearing(jb, 2.0e5, 0.0).forces(X, V)                    # the mean errs by 25 % everywhere
+    # spread / |mean| = sqrt(2) * 0.2 = 0.283 and error 0.5e5 / 2e5 = 0.25: both above 0.2, both below 0.3
+    cal = flag_calibration(EnsembleForceModel([a, b], rel_tol=0.2, floor_N=1e-9), X, V, truth)
+    assert cal["flagged_share"] == 1.0 and cal["wrong_share"] == 1.0
+    assert cal["recall"] == 1.0 and cal["precision"] == 1.0
+    assert cal["median_err_flagged"] == pytest.approx(0.25) and cal["median_err_unflagged"] is None
+    cal = flag_calibration(EnsembleForceModel([a, b], rel_tol=0.3, floor_N=1e-9), X, V, truth)
+    assert cal["flagged_share"] == 0.0 and cal["wrong_share"] == 0.0
+    assert cal["recall"] is None and cal["precision"] is None
+    # the truth at the mean: nothing is wrong, whatever the flag says
+    cal = flag_calibration(EnsembleForceModel([a, b], rel_tol=0.2, floor_N=1e-9), X, V,
+                           LinearBearing(jb, 2.5e5, 0.0).forces(X, V))
+    assert cal["wrong_share"] == 0.0 and cal["precision"] == 0.0
+    with pytest.raises(ValueError, match="F must have the shape"):
+        flag_calibration(EnsembleForceModel([a, b]), X, V, truth[:3])

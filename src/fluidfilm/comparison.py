@@ -133,7 +133,8 @@ def sparse_reference_speed(sparse, table: pd.DataFrame, rotor_cfg: Mapping, case
 
 def ensemble_study(reference: ForceModel, members: Mapping[str, ForceModel], rotor_cfg: Mapping,
                    cases: Mapping[str, Mapping], integrator_cfg: Mapping, threshold_pct: float, rel_tol: float,
-                   hybrid_rel_tols: Sequence[float], floor_N: float, repeats: int = 3) -> tuple[pd.DataFrame, dict]:
+                   hybrid_rel_tols: Sequence[float], floor_N: float, repeats: int = 3,
+                   held_out: pd.DataFrame | None = None) -> tuple[pd.DataFrame, dict]:
     """The members (seeds of one surrogate) one by one, their ensemble and hybrids, through the seven cases.
 
     Every model runs every case through the same integrator (``trajectory_comparison``); the ensemble
@@ -141,9 +142,10 @@ def ensemble_study(reference: ForceModel, members: Mapping[str, ForceModel], rot
     ``rel_tol`` (``fluidfilm.ensemble``), each hybrid (one per tolerance in ``hybrid_rel_tols``) the
     share it answered with the reference.  Returns the per-case table and a summary (per model: the
     satisfactory cases, orbit errors, flagged/fallback shares, trajectory time and its speed-up on the
-    reference).
+    reference).  ``held_out`` (a test set: X1, X2, V1, V2, F1, F2) adds the flag's calibration there
+    (``ensemble.flag_calibration``: does the flag mark the states where the ensemble is wrong?).
     """
-    from .ensemble import EnsembleForceModel, HybridForceModel
+    from .ensemble import EnsembleForceModel, HybridForceModel, flag_calibration
 
     ensemble = EnsembleForceModel(list(members.values()), rel_tol=rel_tol, floor_N=floor_N, name="ensemble")
     hybrids = {f"hybrid_{tol:g}": HybridForceModel(list(members.values()), reference, rel_tol=tol, floor_N=floor_N,
@@ -177,4 +179,8 @@ def ensemble_study(reference: ForceModel, members: Mapping[str, ForceModel], rot
             entry["flagged_share_max"] = float(rows.flagged_share.max())
         summary["models"][name] = entry
     summary["n_seeds_all_cases"] = sum(summary["models"][m]["n_satisfactory"] == len(cases) for m in members)
+    if held_out is not None:
+        summary["flag_calibration"] = flag_calibration(ensemble, held_out[["X1", "X2"]].to_numpy(),
+                                                       held_out[["V1", "V2"]].to_numpy(),
+                                                       held_out[["F1", "F2"]].to_numpy())
     return table, summary

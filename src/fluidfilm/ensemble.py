@@ -230,3 +230,35 @@ class HybridForceModel(EnsembleForceModel):
     def n_fallbacks(self) -> int:
         """Evaluations answered by the fallback since the last reset (= ``n_flagged``)."""
         return self.n_flagged
+
+
+def flag_calibration(model: EnsembleForceModel, X: ArrayLike, V: ArrayLike, F: ArrayLike) -> dict:
+    """How well the disagreement flag marks the states where the ensemble is actually wrong.
+
+    ``X, V, F``: held-out states and their true forces (the reference's).  The ensemble's error at a
+    state is ``|F_mean - F| / max(|F|, floor_N)``; a state is *wrong* when that error exceeds
+    ``rel_tol`` (the tolerance the flag uses).  Returns the share flagged, the share wrong, the recall
+    (share of the wrong states that are flagged), the precision (share of the flagged states that are
+    wrong), the median error of flagged and unflagged states, and the rank correlation of spread and
+    error (Spearman).  Recall near 1 with a small flagged share is a flag one can act on.
+    """
+    from scipy.stats import spearmanr
+
+    F = np.asarray(F, dtype=float)
+    mean, s = model.spread(X, V)
+    if F.shape != mean.shape:
+        raise ValueError(f"F must have the shape of the states' forces {mean.shape}, got {F.shape}")
+    scale = np.maximum(np.hypot(F[..., 0], F[..., 1]), model.floor_N)
+    d = mean - F
+    err = np.hypot(d[..., 0], d[..., 1]) / scale
+    flag = s > model.rel_tol * np.maximum(np.hypot(mean[..., 0], mean[..., 1]), model.floor_N)
+    wrong = err > model.rel_tol
+
+    def median(a):
+        return float(np.median(a)) if a.size else None
+
+    return {"n_states": int(flag.size), "flagged_share": float(flag.mean()), "wrong_share": float(wrong.mean()),
+            "recall": float(flag[wrong].mean()) if wrong.any() else None,
+            "precision": float(wrong[flag].mean()) if flag.any() else None,
+            "median_err_flagged": median(err[flag]), "median_err_unflagged": median(err[~flag]),
+            "spearman_spread_error": float(spearmanr(s.ravel(), err.ravel()).statistic)}

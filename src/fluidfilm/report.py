@@ -301,6 +301,10 @@ def ensemble_metrics(ens: Mapping) -> dict:
         if "flagged_share_mean" in m:
             out[f"flagged_share_mean_{name}"] = m["flagged_share_mean"]
             out[f"speedup_trajectory_{name}"] = m["speedup_trajectory"]
+    cal = ens.get("flag_calibration")
+    if cal is not None:  # the flag on the held-out set: does it mark the states where the ensemble is wrong?
+        out.update({f"ensemble_flag_{k}_held_out": cal[k] for k in ("flagged_share", "wrong_share", "recall",
+                                                                    "precision")})
     return out
 
 
