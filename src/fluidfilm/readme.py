@@ -183,7 +183,7 @@ def render_ensemble(reports: Path) -> str:
                      "-" if share is None else _num(100 * share, ".2f", " %"), _num(m["speedup_trajectory"], ".1f", "x")])
     cal = ens.get("flag_calibration")
     calibration = "" if cal is None else (
-        f"\n\nThe flag on the held-out orbit test set ({cal['n_states']:,} states, reference forces): "
+        f"\nThe flag on the held-out orbit test set ({cal['n_states']:,} states, reference forces): "
         f"{_num(100 * cal['flagged_share'], '.1f', ' %')} of the states flagged, "
         f"{_num(100 * cal['wrong_share'], '.1f', ' %')} with the ensemble's force error above the tolerance; of "
         f"those, {_num(None if cal['recall'] is None else 100 * cal['recall'], '.0f', ' %')} flagged (recall), "
@@ -191,7 +191,7 @@ def render_ensemble(reports: Path) -> str:
         f"states are such (precision); median error flagged / unflagged "
         f"{_num(None if cal['median_err_flagged'] is None else 100 * cal['median_err_flagged'], '.2f', ' %')} / "
         f"{_num(None if cal['median_err_unflagged'] is None else 100 * cal['median_err_unflagged'], '.2f', ' %')}; "
-        f"rank correlation of spread and error {_num(cal['spearman_spread_error'], '.2f')}.")
+        f"rank correlation of spread and error {_num(cal['spearman_spread_error'], '.2f')}.\n")
     return (f"Seeds satisfactory in all {n} cases: **{ens['n_seeds_all_cases']} of {len(ens['members'])}** "
             f"({', '.join(ens['members'])}). Ensemble flag: spread of the members' forces above "
             f"{100 * ens['rel_tol']:g} % of the mean force (floor {ens['floor_N']:g} N); hybrid_<tol>: the "
