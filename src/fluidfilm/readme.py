@@ -78,6 +78,13 @@ def render_headline(reports: Path) -> str:
         ["cases satisfactory, single", "e only", _num(g("satisfactory_cases_single"), "d", " of 7")],
         ["cases satisfactory, split", "a-e (5 of 7)", _num(g("satisfactory_cases_split"), "d", " of 7")],
         ["cases satisfactory, best (ours)", "-", _num(g("satisfactory_cases_best"), "d", " of 7")],
+    ]
+    if g("best_seeds") is not None:  # the ensemble stage: every training seed of best, and their ensemble
+        seeds = [k for k in m if k.startswith("seed_study_satisfactory_best")]
+        rows.append([f"cases satisfactory, each of best's {g('best_seeds')} training seeds / their ensemble", "-",
+                     ", ".join(str(m[k]) for k in sorted(seeds)) + " of 7 / "
+                     + _num(g("seed_study_satisfactory_ensemble"), "d", " of 7")])
+    rows += [
         ["held-out median relative force error, single / split / best", "not given",
          " / ".join(_num(g(f"test_rel_err_median_{k}"), ".2%") for k in ("paper_single", "paper_split", "best"))],
         ["Fig. 5: largest orbit amplitude, DQN vs no control", "growth restrained (qualitative)",
