@@ -43,13 +43,8 @@ warnings.filterwarnings("ignore", message=".*First-class function type feature i
 
 
 @njit  # not cached: a signature holding first-class functions cannot be written back (rotor.integrate)
-def ensemble_force(params, x1, x2, v1, v2):
-    """The members' mean force, or the fallback's force where the members disagree (hybrid).
-
-    ``params``: (member kernel, members' parameters (tuple), fallback kernel, fallback parameters,
-    [rel_tol, floor_N, hybrid 0/1], (n_members, 2) scratch, (2,) int64 counts [evaluations, flagged]).
-    """
-    member_fn, members, fallback_fn, fallback_params, tol, scratch, counts = params
+def _mean_and_spread(member_fn, members, scratch, x1, x2, v1, v2):
+    """The members' mean force and their spread s at one state (each member's force left in ``scratch``)."""
     s1 = 0.0
     s2 = 0.0
     k = 0
@@ -65,7 +60,18 @@ def ensemble_force(params, x1, x2, v1, v2):
     var = 0.0
     for j in range(k):
         var += (scratch[j, 0] - m1) ** 2 + (scratch[j, 1] - m2) ** 2
-    spread = math.sqrt(var / (k - 1))
+    return m1, m2, math.sqrt(var / (k - 1))
+
+
+@njit  # not cached: a signature holding first-class functions cannot be written back (rotor.integrate)
+def ensemble_force(params, x1, x2, v1, v2):
+    """The members' mean force, or the fallback's force where the members disagree (hybrid).
+
+    ``params``: (member kernel, members' parameters (tuple), fallback kernel, fallback parameters,
+    [rel_tol, floor_N, hybrid 0/1], (n_members, 2) scratch, (2,) int64 counts [evaluations, flagged]).
+    """
+    member_fn, members, fallback_fn, fallback_params, tol, scratch, counts = params
+    m1, m2, spread = _mean_and_spread(member_fn, members, scratch, x1, x2, v1, v2)
     counts[0] += 1
     if spread > tol[0] * max(math.hypot(m1, m2), tol[1]):
         counts[1] += 1
@@ -83,30 +89,20 @@ def _ensemble_batch(params, x, v, out):
 
 
 @njit  # not cached: a signature holding first-class functions cannot be written back (rotor.integrate)
-def _member_spread(member_fn, members, x, v, out):
+def _member_spread(member_fn, members, scratch, x, v, out):
     """Per state: the members' mean force (out[:, :2]), their spread s (out[:, 2])."""
-    n = len(members)
-    f = np.empty((n, 2))
     for p in range(x.shape[0]):
-        k = 0
-        for q in members:
-            f[k, 0], f[k, 1] = member_fn(q, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
-            k += 1
-        m1 = f[:, 0].mean()
-        m2 = f[:, 1].mean()
-        out[p, 0] = m1
-        out[p, 1] = m2
-        out[p, 2] = math.sqrt((((f[:, 0] - m1) ** 2).sum() + ((f[:, 1] - m2) ** 2).sum()) / (n - 1))
+        out[p, 0], out[p, 1], out[p, 2] = _mean_and_spread(member_fn, members, scratch, x[p, 0], x[p, 1],
+                                                           v[p, 0], v[p, 1])
 
 
 class EnsembleForceModel:
     """The mean of ``members`` (force models sharing one kernel), with a disagreement flag.
 
     ``rel_tol``: the spread, relative to the mean force, above which a state is flagged; ``floor_N``:
-    the force below which the relative spread is measured against ``floor_N`` instead [N].
+    the force below which the relative spread is measured against ``floor_N`` instead [N];
+    ``fallback``: a force model answering at the flagged states (what ``HybridForceModel`` requires).
     """
-
-    _hybrid = False
 
     def __init__(self, members: Sequence[ForceModel], rel_tol: float = 0.02, floor_N: float = 1.0,
                  name: str = "ensemble", fallback: ForceModel | None = None):
@@ -139,7 +135,7 @@ class EnsembleForceModel:
         self.rel_tol = float(rel_tol)
         self.floor_N = float(floor_N)
         self._counts = np.zeros(2, dtype=np.int64)
-        self._tol = np.array([self.rel_tol, self.floor_N, 1.0 if self._hybrid else 0.0])
+        self._tol = np.array([self.rel_tol, self.floor_N, 0.0 if fallback is None else 1.0])
         member_params = tuple(p for _, p in kernels)
         fb_fn, fb_params = fallback.force_kernel if fallback is not None else (fn, member_params[0])
         self._params = (fn, member_params, fb_fn, fb_params, self._tol, np.zeros((len(members), 2)), self._counts)
@@ -197,12 +193,14 @@ class EnsembleForceModel:
         x, v, shape = as_state_pairs(X, V, self.clearance)
         out = np.empty((x.shape[0], 3))
         if x.shape[0]:
-            _member_spread(self._params[0], self._params[1], x, v, out)
+            _member_spread(self._params[0], self._params[1], self._params[5], x, v, out)
         return out[:, :2].reshape(shape + (2,)), out[:, 2].reshape(shape)
 
     def flagged(self, X: ArrayLike, V: ArrayLike) -> np.ndarray:
         """Boolean mask of the states the members disagree on (the rule of the module docstring)."""
-        mean, s = self.spread(X, V)
+        return self._flag(*self.spread(X, V))
+
+    def _flag(self, mean: np.ndarray, s: np.ndarray) -> np.ndarray:
         return s > self.rel_tol * np.maximum(np.hypot(mean[..., 0], mean[..., 1]), self.floor_N)
 
     def __repr__(self) -> str:
@@ -213,18 +211,11 @@ class EnsembleForceModel:
 class HybridForceModel(EnsembleForceModel):
     """An ensemble that answers with ``fallback`` (the reference model) wherever its members disagree."""
 
-    _hybrid = True
-
     def __init__(self, members: Sequence[ForceModel], fallback: ForceModel, rel_tol: float = 0.02,
                  floor_N: float = 1.0, name: str = "hybrid"):
         if fallback is None:
             raise ValueError("a hybrid model needs a fallback force model (the reference)")
         super().__init__(members, rel_tol, floor_N, name, fallback)
-
-    @property
-    def validity(self) -> ValidityDomain:
-        """The members' domain: outside it the members are not asked to agree, only counted."""
-        return self.members[0].validity
 
     @property
     def n_fallbacks(self) -> int:
@@ -251,7 +242,7 @@ def flag_calibration(model: EnsembleForceModel, X: ArrayLike, V: ArrayLike, F: A
     scale = np.maximum(np.hypot(F[..., 0], F[..., 1]), model.floor_N)
     d = mean - F
     err = np.hypot(d[..., 0], d[..., 1]) / scale
-    flag = s > model.rel_tol * np.maximum(np.hypot(mean[..., 0], mean[..., 1]), model.floor_N)
+    flag = model._flag(mean, s)
     wrong = err > model.rel_tol
 
     def median(a):

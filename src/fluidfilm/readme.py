@@ -188,16 +188,17 @@ def render_ensemble(reports: Path) -> str:
         rows.append([name, f"{m['n_satisfactory']} of {n} ({m['satisfactory_cases'] or '-'})",
                      _num(m["orbit_rms_pct_max"], ".2f", " %"), _num(m["orbit_hausdorff_pct_max"], ".2f", " %"),
                      "-" if share is None else _num(100 * share, ".2f", " %"), _num(m["speedup_trajectory"], ".1f", "x")])
-    cal = ens.get("flag_calibration")
-    calibration = "" if cal is None else (
+    cal = ens.get("flag_calibration") or {}
+
+    def pct(key: str, spec: str) -> str:  # a share of the calibration in per cent ("n/a" where undefined)
+        return _num(None if cal[key] is None else 100 * cal[key], spec, " %")
+
+    calibration = "" if not cal else (
         f"\nThe flag on the held-out orbit test set ({cal['n_states']:,} states, reference forces): "
-        f"{_num(100 * cal['flagged_share'], '.1f', ' %')} of the states flagged, "
-        f"{_num(100 * cal['wrong_share'], '.1f', ' %')} with the ensemble's force error above the tolerance; of "
-        f"those, {_num(None if cal['recall'] is None else 100 * cal['recall'], '.0f', ' %')} flagged (recall), "
-        f"and {_num(None if cal['precision'] is None else 100 * cal['precision'], '.0f', ' %')} of the flagged "
-        f"states are such (precision); median error flagged / unflagged "
-        f"{_num(None if cal['median_err_flagged'] is None else 100 * cal['median_err_flagged'], '.2f', ' %')} / "
-        f"{_num(None if cal['median_err_unflagged'] is None else 100 * cal['median_err_unflagged'], '.2f', ' %')}; "
+        f"{pct('flagged_share', '.1f')} of the states flagged, {pct('wrong_share', '.1f')} with the ensemble's "
+        f"force error above the tolerance; of those, {pct('recall', '.0f')} flagged (recall), and "
+        f"{pct('precision', '.0f')} of the flagged states are such (precision); median error flagged / "
+        f"unflagged {pct('median_err_flagged', '.2f')} / {pct('median_err_unflagged', '.2f')}; "
         f"rank correlation of spread and error {_num(cal['spearman_spread_error'], '.2f')}.\n")
     return (f"Seeds satisfactory in all {n} cases: **{ens['n_seeds_all_cases']} of {len(ens['members'])}** "
             f"({', '.join(ens['members'])}). Ensemble flag: spread of the members' forces above "

@@ -110,8 +110,8 @@ def ensure_experiment(uri: str, name: str) -> str:
         return exp.experiment_id
 
 
-def _release_interrupted_transactions(exc: BaseException) -> int:
-    """Release the SQLite locks that a Ctrl-C left held in this process; return how many were released.
+def _release_interrupted_transactions(exc: BaseException) -> None:
+    """Release the SQLite locks that a Ctrl-C left held in this process.
 
     A KeyboardInterrupt can land inside an MLflow call while SQLAlchemy is reading rows.  SQLAlchemy
     then invalidates (closes) that connection, but SQLite cannot close a connection whose statement is
@@ -119,12 +119,11 @@ def _release_interrupted_transactions(exc: BaseException) -> int:
     connection as a zombie that holds the store's shared lock.  Every later write in this process -
     ending the run as KILLED - then waits SQLite's 20 s busy timeout and fails with "database is
     locked" (about 1 interrupt in 15 of a logging loop).  Clearing the finished frames of the
-    interrupt's traceback (and of the exceptions chained to it) frees the cursor, which finalises its
-    statement and lets the zombie close.  A transaction the interrupt left open on a live connection
-    is rolled back: what the interrupted call was writing is abandoned anyway.
+    interrupt's traceback (and of the exceptions chained to it) and collecting frees the cursor and
+    the connection, which finalises the statement and closes the zombie (or rolls back a transaction
+    the interrupt left open): what the interrupted call was doing is abandoned anyway.
     """
     import gc
-    import sqlite3
     import traceback
 
     pending: list[BaseException | None] = [exc]
@@ -137,16 +136,6 @@ def _release_interrupted_transactions(exc: BaseException) -> int:
         traceback.clear_frames(e.__traceback__)  # frames still running (ours) are skipped
         pending += [e.__context__, e.__cause__]
     gc.collect()
-    released = 0
-    for obj in gc.get_objects():
-        if isinstance(obj, sqlite3.Connection):
-            try:
-                if obj.in_transaction:
-                    obj.rollback()
-                    released += 1
-            except sqlite3.ProgrammingError:  # closed, or owned by another thread: not ours to touch
-                continue
-    return released
 
 
 @contextlib.contextmanager
