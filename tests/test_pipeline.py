@@ -106,6 +106,27 @@ def test_pipeline_writes_every_headline_number(quick_reproduce):
     for key in ("force_eval_us_best", "trajectories_per_s_batch_speedup", "controller_training_speedup",
                 "controller_decision_ms_mpc", "mpc_amplitude_reduction_pct"):
         assert isinstance(metrics[key], float) and metrics[key] == metrics[key], key
+    # the grading study and the ablation: Hydra multiruns whose jobs each made (or reused) a dataset, trained
+    # and were judged; the summary holds exactly the sweep's jobs
+    for study, jobs in (("grading_study", {"grading.n_per_side=3", "grading.n_per_side=5"}),
+                        ("ablation", {"scaling=physics_polar", "scaling=standard"})):
+        summary = json.loads((workdir / "reports" / study / "summary.json").read_text())
+        assert {j["job"] for j in summary["jobs"]} == jobs and metrics[f"{study}_jobs"] == 2
+        assert all(0 <= j["n_satisfactory"] <= 7 and j["n_samples"] > 0 for j in summary["jobs"])
+        assert (workdir / "reports" / study / "figure.png").stat().st_size > 10_000
+    # a finished job's training checkpoint is gone (it is there to resume an interrupted job, not to skip a later one)
+    assert not list((workdir / "checkpoints" / "grading_study").glob("*"))
+    sizes = {j["job"]: j["n_samples"] for j in json.loads((workdir / "reports" / "grading_study" / "summary.json")
+                                                           .read_text())["jobs"]}
+    # the quick layout's positions times (2 n + 1)^2 velocity pairs (no V = 0 on that grid: (2 n)^2)
+    assert sizes["grading.n_per_side=5"] * 6 ** 2 == sizes["grading.n_per_side=3"] * 10 ** 2
+    # the error map: every seed, held out and along the orbits; the goals table in the report
+    for name in ("best", "best_s1", "best_s2"):
+        assert 0 <= metrics[f"orbit_state_rel_err_median_{name}"] <= metrics[f"orbit_state_rel_err_p99_{name}"]
+    assert (workdir / "reports" / "figures" / "error_map.png").stat().st_size > 10_000
+    assert metrics["surrogate_goals"] == 11 and 0 <= metrics["surrogate_goals_met"] <= 11
+    assert 0 <= metrics["satisfactory_cases_best_min_over_seeds"] <= 7
+    assert "## The best surrogate against its goals" in md
 
 
 def test_a_second_reproduce_finds_every_stage_up_to_date(quick_reproduce):

@@ -152,3 +152,44 @@ def test_ensemble_stage_adds_its_numbers_without_replacing_the_compare_stages(in
     md = report.ensemble_section(_ensemble_study())
     assert "| hybrid_0.01 | 7/7 (abcdefg) | 2.50 | 3.10 | 4.00 | 2.0x |" in md
     assert "| best | 5/7 (bcdef) | 2.50 | 3.10 | n/a | 9.0x |" in md
+
+
+def test_the_worst_seed_decides_the_seeds_verdict():
+    ens = _ensemble_study()
+    ens["models"]["best_s1"] = dict(ens["models"]["best_s1"], n_satisfactory=3, satisfactory_cases="deg")
+    assert report.ensemble_metrics(ens)["satisfactory_cases_best_min_over_seeds"] == 3  # min of 5 and 3, not the hybrid's 7
+
+
+def test_goals_are_met_missed_or_not_measured_in_the_units_shown():
+    metrics = {"satisfactory_cases_best_min_over_seeds": 7, "test_rel_err_median_best": 0.004,   # 0.4 % <= 0.5 %
+               "test_rel_err_p99_best": 2.5, "force_eval_us_best": 0.31, "controller_decision_ms_mpc": 10.0,
+               "mpc_amplitude_reduction_pct": 56.9}
+    goals = {g["key"]: g for g in report.surrogate_goals(metrics)}
+    assert len(goals) == len(report.SURROGATE_GOALS)
+    assert goals["satisfactory_cases_best_min_over_seeds"]["met"] is True
+    assert goals["test_rel_err_median_best"]["met"] is True and goals["test_rel_err_median_best"]["measured"] == "0.4 %"
+    assert goals["test_rel_err_p99_best"]["met"] is False and goals["test_rel_err_p99_best"]["measured"] == "250 %"
+    assert goals["force_eval_us_best"]["met"] is False                 # 0.31 > 0.3
+    assert goals["controller_decision_ms_mpc"]["met"] is True          # the bound itself is within
+    assert goals["mpc_amplitude_reduction_pct"]["met"] is False        # 56.9 < 57
+    assert goals["controller_training_speedup"]["met"] is None         # not in the metrics: not measured
+    md = report.goals_section(metrics)
+    assert "| 99th-percentile force error, held-out random states | ≤ 10 % | 250 % | **missed** |" in md
+    assert "not measured" in md
+
+
+def test_error_map_metrics_take_the_worst_seed():
+    em = {"models": {name: {"held_out": {"median": 0.01, "p99": p}, "orbit_states": {"median": 0.04, "p99": 2 * p}}
+                     for name, p in (("best", 2.5), ("best_s1", 3.9), ("best_s2", 3.1), ("other", 9.0))}}
+    m = report.error_map_metrics(em)
+    assert m["test_rel_err_p99_best_max_over_seeds"] == 3.9 and m["orbit_state_rel_err_p99_best_max_over_seeds"] == 7.8
+    assert m["orbit_state_rel_err_p99_other"] == 18.0 and m["orbit_state_rel_err_median_best"] == 0.04
+
+
+def test_study_rows_show_each_job_in_per_cent():
+    job = {"job": "grading.n_per_side=8", "n_samples": 330000, "generation_s": 2.4, "train_time_s": 31.0,
+           "held_out_rel_err_median": 0.0212, "held_out_rel_err_p99": 8.7, "orbit_states_rel_err_median": 0.1,
+           "orbit_states_rel_err_p99": 0.75, "n_satisfactory": 1, "satisfactory_cases": "e", "time_per_eval_us": 0.7}
+    rows = report.study_rows({"jobs": [job, dict(job, job="x", n_satisfactory=float("nan"))]})
+    assert rows[0] == ["`grading.n_per_side=8`", "330,000", "2", "31", "2.12", "870", "10.00", "75", "1/7 (e)", "0.70"]
+    assert rows[1][8] == "-"  # a job run without the cases

@@ -159,3 +159,34 @@ def test_bad_rotor_raises(kwargs, match):
 def test_bad_simulation_settings_raise(solver, kwargs, match):
     with pytest.raises(ValueError, match=match):
         simulate(solver, Rotor(mass=1.0), **kwargs)
+
+
+def test_a_cache_write_that_numba_cannot_do_falls_back_to_the_uncached_loop(monkeypatch):
+    """Numba raises ReferenceError when it cannot re-pickle its cache index (a kernel type whose dispatcher this
+    process does not hold); the integrator must then run the same loop uncompiled-from-cache, not fail."""
+    from fluidfilm.rotor import batch, integrate
+
+    from fluidfilm import paper_bearing
+
+    model = LinearBearing(paper_bearing(), stiffness=2e6, damping=2e3)
+    rotor = Rotor(mass=2.0, imbalance=1e-5)
+    expected = integrate.simulate(model, rotor, t_end=0.01, dt=1e-5)
+    real_batch = batch._rk4_batch
+    expected_batch = batch.simulate_batch(model, rotor, t_end=0.01, dt=1e-5)
+
+    class Vanishing:
+        """A cached loop whose cache write fails the way numba's does."""
+
+        def __call__(self, *args):
+            raise ReferenceError("underlying object has vanished")
+
+    monkeypatch.setattr(integrate, "_rk4_run", Vanishing())
+    with pytest.warns(RuntimeWarning, match="could not update its on-disk cache"):
+        got = integrate.simulate(model, rotor, t_end=0.01, dt=1e-5)
+    np.testing.assert_array_equal(got.x, expected.x)
+    assert got.status == expected.status
+    monkeypatch.setattr(batch, "_rk4_batch", Vanishing())
+    with pytest.warns(RuntimeWarning, match="could not update its on-disk cache"):
+        got_b = batch.simulate_batch(model, rotor, t_end=0.01, dt=1e-5)
+    np.testing.assert_array_equal(got_b.x, expected_batch.x)
+    assert real_batch is not batch._rk4_batch  # the batch really went through the failing "cached" loop

@@ -352,3 +352,75 @@ def fig5_panels(runs: dict, clearance: float, out_dir, ramp: tuple[float, float]
     plt.close(fig)
     written.append(path)
     return written
+
+
+def plot_grading_study(table: pd.DataFrame, title: str):
+    """The grading study: held-out and orbit force error against dataset size (left) and against the time
+    the reference model took to make the dataset (right), one point per job, labelled by the job.
+
+    ``table``: ``grading.summarise``'s rows (job, n_samples, generation_s, held_out_rel_err_*,
+    orbit_states_rel_err_*, n_satisfactory).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5.0), sharey=True)
+    series = (("held_out_rel_err_median", "held-out random states, median", "o"),
+              ("held_out_rel_err_p99", "held-out random states, 99th percentile", "s"),
+              ("orbit_states_rel_err_median", "states along the reference orbits, median", "^"),
+              ("orbit_states_rel_err_p99", "states along the reference orbits, 99th percentile", "D"))
+    for ax, xkey, xlabel in ((axes[0], "n_samples", "dataset size [samples]"),
+                             (axes[1], "generation_s", "dataset generation time [s] (reference model, 2 cores)")):
+        for key, label, marker in series:
+            ax.scatter(table[xkey], 100 * table[key], marker=marker, label=label)
+        for _, r in table.iterrows():
+            cases = f" ({int(r['n_satisfactory'])}/7)" if "n_satisfactory" in r and not pd.isna(r["n_satisfactory"]) else ""
+            label = str(r["job"]).replace("grading.", "")  # the swept keys are the grading's: say them once, in the title
+            ax.annotate(f"{label}{cases}", (r[xkey], 100 * r["orbit_states_rel_err_p99"]), fontsize=6,
+                        xytext=(3, 3), textcoords="offset points")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel(xlabel)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_ylabel("relative force error [%]")
+    axes[0].legend(fontsize=7)
+    fig.suptitle(f"{title}: labels are the jobs' swept values (grading.* shortened), (n/7) the Fig. 4 cases "
+                 "within 2 % of c", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def plot_error_map(maps: dict, title: str):
+    """Where a surrogate's force errors sit: the 99th-percentile relative error per (eccentricity, |V|) bin,
+    one heat map per state set (``maps``: name -> ``grading.binned_errors`` table), the number of states in
+    each bin written in it."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import LogNorm
+
+    fig, axes = plt.subplots(1, len(maps), figsize=(6.2 * len(maps), 4.8), squeeze=False)
+    vmax = max(float(t["p99"].max()) for t in maps.values()) * 100
+    for ax, (name, t) in zip(axes[0], maps.items()):
+        e_edges = np.unique(np.concatenate([t.eps_low, t.eps_high]))
+        s_edges = np.unique(np.concatenate([t.speed_low, t.speed_high]))
+        grid = np.full((len(s_edges) - 1, len(e_edges) - 1), np.nan)
+        for _, r in t.iterrows():
+            i = int(np.searchsorted(e_edges, r.eps_low))
+            j = int(np.searchsorted(s_edges, r.speed_low))
+            grid[j, i] = 100 * r.p99
+            ax.text(i + 0.5, j + 0.5, f"{100 * r.p99:.3g}\n(n={int(r.n_states)})", ha="center", va="center", fontsize=6)
+        mesh = ax.pcolormesh(np.arange(len(e_edges)), np.arange(len(s_edges)), grid, cmap="viridis",
+                             norm=LogNorm(vmin=max(np.nanmin(grid), 1e-3), vmax=max(vmax, 1e-2)))
+        ax.set_xticks(np.arange(len(e_edges)), [f"{e:g}" for e in e_edges], fontsize=7)
+        ax.set_yticks(np.arange(len(s_edges)), [f"{1000 * s:g}" for s in s_edges], fontsize=7)
+        ax.set_xlabel("eccentricity ratio eps")
+        ax.set_ylabel("journal speed |V| [mm/s]")
+        ax.set_title(name, fontsize=9)
+        fig.colorbar(mesh, ax=ax, label="99th percentile relative force error [%]")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig

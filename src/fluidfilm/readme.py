@@ -87,6 +87,12 @@ def render_headline(reports: Path) -> str:
     rows += [
         ["held-out median relative force error, single / split / best", "not given",
          " / ".join(_num(g(f"test_rel_err_median_{k}"), ".2%") for k in ("paper_single", "paper_split", "best"))],
+    ]
+    if g("orbit_state_rel_err_p99_best") is not None:  # the error map stage
+        rows.append(["99th-percentile force error of best, held-out random states / along the reference orbits",
+                     "not given", _num(g("test_rel_err_p99_best"), ".0%") + " / "
+                     + _num(g("orbit_state_rel_err_p99_best"), ".0%")])
+    rows += [
         ["Fig. 5: largest orbit amplitude, DQN vs no control", "growth restrained (qualitative)",
          _num(g("controller_amplitude_reduction_pct"), ".0f", " % smaller")],
         ["Fig. 5: MPC vs no control", "not shown", _num(g("mpc_amplitude_reduction_pct"), ".0f", " % smaller")],
@@ -102,6 +108,9 @@ def render_headline(reports: Path) -> str:
     ):
         if g(key) is not None:
             rows.append([label, paper, _num(g(key), spec, unit)])
+    if g("surrogate_goals") is not None:
+        rows.append(["goals of the fast, accurate surrogate met (table below)", "-",
+                     f"{g('surrogate_goals_met')} of {g('surrogate_goals')}"])
     return _table(["quantity", "paper", "this workspace"], rows)
 
 
@@ -209,6 +218,56 @@ def render_ensemble(reports: Path) -> str:
             + calibration)
 
 
+def _study(reports: Path, name: str, what: str) -> str:
+    from .report import STUDY_HEADER, study_rows
+
+    summary = _load(reports, f"{name}/summary.json")
+    return (f"{what} {summary['n_jobs']} jobs (`reports/{name}/table.csv`, figure `reports/{name}/figure.png`); "
+            f"the lowest 99th-percentile force error along the orbits: `{summary['lowest_orbit_p99_job']}` "
+            f"({100 * summary['lowest_orbit_p99']:.0f} %).\n\n" + _table(STUDY_HEADER, study_rows(summary)))
+
+
+def render_grading_study(reports: Path) -> str:
+    return _study(reports, "grading_study", "Stage `grading_study`, swept over the velocity values per side and the "
+                  "angular positions per eccentricity:")
+
+
+def render_ablation(reports: Path) -> str:
+    return _study(reports, "ablation", "Stage `ablation`, swept over the force scaling and frame and the "
+                  "eccentricity split:")
+
+
+def render_error_map(reports: Path) -> str:
+    em = _load(reports, "error_map.json")
+    rows = [[name, _num(100 * m["held_out"]["median"], ".2f", " %"), _num(100 * m["held_out"]["p99"], ".0f", " %"),
+             _num(100 * m["orbit_states"]["median"], ".2f", " %"), _num(100 * m["orbit_states"]["p99"], ".0f", " %")]
+            for name, m in em["models"].items()]
+    best = em["models"].get("best")
+    worst = ""
+    if best is not None:
+        def where(b: dict) -> str:
+            return (f"eps {b['eps_low']:g}-{b['eps_high']:g}, |V| {1e3 * b['speed_low']:g}-{1e3 * b['speed_high']:g} mm/s "
+                    f"({100 * b['p99']:.0f} %, {b['n_states']:,} states)")
+
+        worst = ("\nWorst bins of `best` (99th percentile, bins with at least 20 states): held out "
+                 + "; ".join(where(b) for b in best["held_out"]["worst_bins"]) + ". Along the orbits: "
+                 + "; ".join(where(b) for b in best["orbit_states"]["worst_bins"]) + ".\n")
+    return (f"Relative force error |F_model - F| / max(|F|, {em['floor_N']:g} N):\n\n"
+            + _table(["model", "held-out median", "held-out p99", "along the orbits, median", "along the orbits, p99"],
+                     rows) + worst)
+
+
+def render_surrogate_goals(reports: Path) -> str:
+    from .report import surrogate_goals
+
+    m = _load(reports, "metrics.json")
+    rows = [[g["what"], g["target"], g["measured"] or "not measured",
+             "met" if g["met"] else ("not measured" if g["met"] is None else "**missed**"), g["tried"]]
+            for g in surrogate_goals(m)]
+    return (f"Met: **{m['surrogate_goals_met']} of {m['surrogate_goals']}** (`reports/metrics.json`).\n\n"
+            + _table(["goal", "target", "measured", "", "what was done"], rows))
+
+
 def render_characteristics_timing(reports: Path) -> str:
     ch = _load(reports, "characteristics.json")
     t = ch["timing_ms_per_coefficient_set"]
@@ -310,6 +369,10 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "raimondi_boyd_no_feed": render_raimondi_boyd_no_feed,
     "reproduce_timing": render_reproduce_timing,
     "headline": render_headline,
+    "grading_study": render_grading_study,
+    "ablation": render_ablation,
+    "error_map": render_error_map,
+    "surrogate_goals": render_surrogate_goals,
     "control": render_control,
 }
 

@@ -46,6 +46,9 @@ class ReportInputs:
     controller_training_speed: dict   # reports/controller_training_speed.json
     characteristics: dict | None      # reports/characteristics.json, where that stage ran
     ensemble: dict | None = None      # reports/ensemble.json, where that stage ran
+    grading_study: dict | None = None  # reports/grading_study/summary.json, where that stage ran
+    ablation: dict | None = None      # reports/ablation/summary.json, where that stage ran
+    error_map: dict | None = None     # reports/error_map.json, where that stage ran
 
 
 def _load(path: Path) -> Any:
@@ -58,6 +61,10 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
     rd, md = Path(report_dir), Path(models_dir)
     charac = rd / "characteristics.json"
     ens = rd / "ensemble.json"
+
+    def optional(path: Path) -> Any:
+        return _load(path) if path.exists() else None
+
     return ReportInputs(
         comparison=_load(rd / "comparison.json"), train_time=_load(rd / "train_time.json"),
         trajectories=pd.read_csv(rd / "trajectory_metrics.csv"), speed=pd.read_csv(rd / "speed.csv"),
@@ -66,7 +73,9 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         active_dataset_meta=_load(Path(active_dataset_dir) / "_metadata.json"),
         active_model=_load(md / active_model / "report.json"), batch_speed=_load(rd / "batch_speed.json"),
         controller_training_speed=_load(rd / "controller_training_speed.json"),
-        characteristics=_load(charac) if charac.exists() else None, ensemble=_load(ens) if ens.exists() else None)
+        characteristics=optional(charac), ensemble=optional(ens),
+        grading_study=optional(rd / "grading_study" / "summary.json"), ablation=optional(rd / "ablation" / "summary.json"),
+        error_map=optional(rd / "error_map.json"))
 
 
 def _f(x, spec=".1f"):
@@ -151,13 +160,122 @@ def headline_metrics(inp: ReportInputs) -> dict:
         if clash:  # a key of another stage would be silently replaced by the ensemble stage's value
             raise ValueError(f"the ensemble stage's metrics would overwrite {clash}")
         metrics.update(extra)
+    if inp.error_map is not None:  # the error map: the seeds' force errors held out and along the reference orbits
+        metrics.update(error_map_metrics(inp.error_map))
+    for study in ("grading_study", "ablation"):
+        summary = getattr(inp, study)
+        if summary is not None:
+            metrics[f"{study}_jobs"] = summary["n_jobs"]
+            metrics[f"{study}_lowest_orbit_p99"] = summary["lowest_orbit_p99"]
+            metrics[f"{study}_lowest_orbit_p99_job"] = summary["lowest_orbit_p99_job"]
     # fast surrogates (docs/fast_surrogates.md): per-force cost, batched trajectories, controller training
     per_eval = dict(zip(inp.speed.model, inp.speed.time_per_eval_us))
     metrics["force_eval_us_best"] = float(per_eval["best"])
     metrics["trajectories_per_s_batch_speedup"] = inp.batch_speed["trajectories_per_s_batch_speedup"]
     metrics["trajectories_per_s_single_speedup"] = inp.batch_speed["trajectories_per_s_single_speedup"]
     metrics["controller_training_speedup"] = inp.controller_training_speed["controller_training_speedup"]
+    metrics["surrogate_goals_met"] = sum(g["met"] is True for g in surrogate_goals(metrics))
+    metrics["surrogate_goals"] = len(SURROGATE_GOALS)
     return metrics
+
+
+def error_map_metrics(em: Mapping) -> dict:
+    """Held-out and orbit-state force errors of every model of the error map (fractions, not per cent)."""
+    out = {}
+    for name, m in em["models"].items():
+        for q in ("median", "p99"):
+            out[f"orbit_state_rel_err_{q}_{name}"] = m["orbit_states"][q]
+    seeds = [k for k in em["models"] if k == "best" or k.startswith("best_s")]
+    if seeds:
+        out["test_rel_err_p99_best_max_over_seeds"] = max(em["models"][k]["held_out"]["p99"] for k in seeds)
+        out["orbit_state_rel_err_p99_best_max_over_seeds"] = max(em["models"][k]["orbit_states"]["p99"] for k in seeds)
+    return out
+
+
+#: the goals of the fast-and-accurate-surrogate work for the best model: (metrics key, what, target,
+#: direction, scale to the unit shown, unit, what was tried); a key missing from the metrics is "not measured"
+SURROGATE_GOALS = (
+    ("satisfactory_cases_best_min_over_seeds", "Fig. 4 cases satisfactory, worst of the 3 training seeds", 7, ">=",
+     1, "/7", "three seeds, their ensemble (7/7) and hybrids with the reference (7/7); the grading study and "
+              "the ablation (which grading and which ingredients buy accuracy)"),
+    ("test_rel_err_median_best", "median force error, held-out random states", 0.5, "<=", 100, " %",
+     "orbit-graded data, the journal's own frame, physics scaling, five blended regions, 240 epochs"),
+    ("orbit_state_rel_err_median_best", "median force error, states along the reference orbits", 0.5, "<=", 100, " %",
+     "as above; the error map shows where the errors sit"),
+    ("test_rel_err_p99_best", "99th-percentile force error, held-out random states", 10, "<=", 100, " %",
+     "as above; where the worst errors sit (eccentricity, speed): the error map"),
+    ("orbit_state_rel_err_p99_best", "99th-percentile force error, along the reference orbits", 10, "<=", 100, " %",
+     "as above"),
+    ("force_eval_us_best", "time per force evaluation", 0.3, "<=", 1, " us",
+     "one flat weight array for all regions; most of the rest is the 64-wide network's own arithmetic "
+     "(docs/fast_surrogates.md)"),
+    ("trajectories_per_s_single_speedup", "one trajectory, surrogate vs graded reference", 20, ">=", 1, "x",
+     "the compiled integrator with the surrogate kernel"),
+    ("trajectories_per_s_batch_speedup", "batched trajectories, surrogate vs graded reference", 100, ">=", 1, "x",
+     "one compiled lockstep loop over the batch; no SIMD across the batch, no threads"),
+    ("controller_decision_ms_mpc", "MPC time per decision (control period 20 ms)", 10, "<=", 1, " ms",
+     "candidates as one batch, 4e-4 s prediction step, one-revolution horizon"),
+    ("mpc_amplitude_reduction_pct", "MPC amplitude reduction on the reference model", 57, ">=", 1, " %",
+     "as above"),
+    ("controller_training_speedup", "DQN training, surrogate vs reference, same steps", 10, ">=", 1, "x",
+     "measured per environment step; the environment's own cost bounds the ratio"),
+)
+
+
+def surrogate_goals(metrics: Mapping) -> list[dict]:
+    """Each goal of ``SURROGATE_GOALS`` against its measured value: met (True/False) or not measured (None)."""
+    rows = []
+    for key, what, target, direction, scale, unit, tried in SURROGATE_GOALS:
+        value = metrics.get(key)
+        measured = None if value is None else float(value) * scale
+        met = None if measured is None else (measured >= target if direction == ">=" else measured <= target)
+        rows.append({"key": key, "what": what, "target": f"{direction.replace('>=', '≥').replace('<=', '≤')} {target:g}{unit}",
+                     "measured": None if measured is None else f"{measured:.3g}{unit}", "met": met, "tried": tried})
+    return rows
+
+
+STUDY_HEADER = ["job", "samples", "generation s", "training s", "held-out median %", "held-out p99 %",
+                "orbit-state median %", "orbit-state p99 %", "Fig. 4 cases", "us per force"]
+
+
+def study_rows(summary: Mapping) -> list[list[str]]:
+    """One row per job of a grading study or ablation (``grading.summarise``), in the table's order."""
+    rows = []
+    for j in summary["jobs"]:
+        cases = "-" if j.get("n_satisfactory") is None or j["n_satisfactory"] != j["n_satisfactory"] else \
+            f"{int(j['n_satisfactory'])}/7 ({j.get('satisfactory_cases') or '-'})"
+        rows.append([f"`{j['job']}`", f"{int(j['n_samples']):,}", f"{j['generation_s']:.0f}", f"{j['train_time_s']:.0f}",
+                     f"{100 * j['held_out_rel_err_median']:.2f}", f"{100 * j['held_out_rel_err_p99']:.0f}",
+                     f"{100 * j['orbit_states_rel_err_median']:.2f}", f"{100 * j['orbit_states_rel_err_p99']:.0f}",
+                     cases, f"{j['time_per_eval_us']:.2f}"])
+    return rows
+
+
+def study_section(summary: Mapping, title: str, figure: str) -> str:
+    """Markdown: a grading study's or ablation's jobs as a table, and its figure."""
+    table = "\n".join(["| " + " | ".join(STUDY_HEADER) + " |", "|" + "---|" * len(STUDY_HEADER)]
+                      + ["| " + " | ".join(r) + " |" for r in study_rows(summary)])
+    return f"""
+## {title}
+
+{table}
+
+![{title}]({figure})
+"""
+
+
+def goals_section(metrics: Mapping) -> str:
+    """Markdown: the surrogate goals, what was measured, met or missed."""
+    rows = "\n".join(f"| {g['what']} | {g['target']} | {g['measured'] or 'not measured'} | "
+                     f"{'met' if g['met'] else ('not measured' if g['met'] is None else '**missed**')} | {g['tried']} |"
+                     for g in surrogate_goals(metrics))
+    return f"""
+## The best surrogate against its goals
+
+| goal | target | measured | | what was done |
+|---|---|---|---|---|
+{rows}
+"""
 
 
 # --- the tables' rows ---------------------------------------------------------------------------------
@@ -293,7 +411,9 @@ Onset of oil whirl of the paper's rotor ({ch['rotor_mass_per_bearing_kg']:.2f} k
 
 def ensemble_metrics(ens: Mapping) -> dict:
     """The ensemble stage's headline numbers: verdicts per seed, of the ensemble and of each hybrid."""
-    out: dict = {"best_seeds_all_seven": int(ens["n_seeds_all_cases"]), "best_seeds": len(ens["members"])}
+    out: dict = {"best_seeds_all_seven": int(ens["n_seeds_all_cases"]), "best_seeds": len(ens["members"]),
+                 "satisfactory_cases_best_min_over_seeds": min(int(ens["models"][m]["n_satisfactory"])
+                                                               for m in ens["members"])}
     for name, m in ens["models"].items():
         # (``satisfactory_cases_<model>`` is the compare stage's count; these are the ensemble stage's run)
         out[f"seed_study_satisfactory_{name}"] = int(m["n_satisfactory"])
@@ -338,6 +458,13 @@ def paper_comparison_markdown(inp: ReportInputs, paper: Mapping, threshold_pct: 
         md += characteristics_section(inp.characteristics)
     if inp.ensemble is not None:
         md += ensemble_section(inp.ensemble)
+    if inp.grading_study is not None:
+        md += study_section(inp.grading_study, "Grading study: what each dataset grading buys", "grading_study/figure.png")
+    if inp.ablation is not None:
+        md += study_section(inp.ablation, "Ablation of the best surrogate's ingredients", "ablation/figure.png")
+    if inp.error_map is not None:
+        md += "\n## Where the best surrogate's force errors sit\n\n![error map](figures/error_map.png)\n"
+    md += goals_section(headline_metrics(inp))
     return md
 
 

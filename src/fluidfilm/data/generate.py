@@ -207,6 +207,12 @@ def _dask_client(scheduler: str, n_workers: int | None):
             yield client
 
 
+def dataset_digest(bearing: JournalBearing, reference: dict, spec: DatasetSpec) -> str:
+    """The dataset's identity: format, bearing, reference grid policy and layout (``config_hash`` in its
+    metadata; the key of the grading study's dataset cache)."""
+    return config_hash(FORMAT_VERSION, bearing.to_dict(), dict(reference), spec.to_dict())
+
+
 def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec, out_dir, *,
                      scheduler: str = "local", n_workers: int | None = None, progress: bool = True,
                      config: dict | None = None) -> dict:
@@ -226,7 +232,7 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
     # the whole config is checked (and the model built) before anything on disk is touched
     check_reference(reference)
     _reference(json.dumps(bearing.to_dict(), sort_keys=True), json.dumps(dict(reference), sort_keys=True))
-    digest = config_hash(FORMAT_VERSION, bearing.to_dict(), dict(reference), spec.to_dict())
+    digest = dataset_digest(bearing, reference, spec)
     work = _choose_dir(out, digest)
     state = _prepare_dir(work, digest)
     c = bearing.clearance

@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit
 
 from ..models import BatchSettable, ForceModel
-from .integrate import CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration, _library_types, _uncached
+from .integrate import CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration, _uncached, run_loop
 from .model import Rotor
 
 
@@ -244,10 +244,9 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     saved = setting.copy()
     t_start = time.perf_counter()
     try:
-        run = _rk4_batch if _library_types(kernel, params) else _rk4_batch_uncached
-        run(kernel, params, setting, settings_arr, consts, x0, v0, float(t0), float(dt), n_steps,
-                   record_every, float(eps_stop), float(eps_substep), int(max_substeps), out_x, out_v, n_rec,
-                   status, t_stop, n_evals)
+        run_loop(_rk4_batch, _rk4_batch_uncached, kernel, params, setting, settings_arr, consts, x0, v0, float(t0),
+                 float(dt), n_steps, record_every, float(eps_stop), float(eps_substep), int(max_substeps), out_x, out_v,
+                 n_rec, status, t_stop, n_evals)
     finally:
         setting[:] = saved
     wall = time.perf_counter() - t_start

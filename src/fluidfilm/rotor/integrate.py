@@ -215,6 +215,26 @@ def _holds_functions(params) -> bool:
     return isinstance(params, tuple) and any(_holds_functions(p) for p in params)
 
 
+def run_loop(cached, uncached, kernel, params, *args):
+    """Run the integrator's compiled loop: the cached one for the library's kernels (``_library_types``), the
+    uncached twin otherwise, and the uncached twin as well where numba cannot write its cache index back.
+
+    Numba keys a cached specialisation by its argument types, and a kernel argument's type refers to its
+    dispatcher weakly: a later process that adds a specialisation to an index holding such keys re-pickles
+    them, and a key whose dispatcher that process does not hold raises ``ReferenceError: underlying object
+    has vanished`` (seen with a workspace's cache filled by many pipeline processes). The loop itself had
+    compiled; only the cache write failed, so the same loop compiled without the cache gives the same
+    trajectory."""
+    if not _library_types(kernel, params):
+        return uncached(kernel, params, *args)
+    try:
+        return cached(kernel, params, *args)
+    except ReferenceError as err:
+        warnings.warn(f"numba could not update its on-disk cache of the integrator loop ({err}); this process "
+                      "compiles the loop without the cache (same arithmetic)", RuntimeWarning, stacklevel=3)
+        return uncached(kernel, params, *args)
+
+
 def _library_types(kernel, params) -> bool:
     """Whether the cached compiled loops may take this kernel: the library's own kernels and parameter
     types, without compiled functions inside the parameters."""
@@ -280,9 +300,8 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
               u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0)
     model.reset_domain_counter()
     t_start = time.perf_counter()
-    run = _rk4_run if _library_types(kernel, params) else _rk4_run_uncached
-    n_rec, status, t_stop, n_evals = run(kernel, params, consts, x0, v0, float(t0), float(dt), n_steps,
-                                              record_every, float(eps_stop), float(eps_substep),
+    n_rec, status, t_stop, n_evals = run_loop(_rk4_run, _rk4_run_uncached, kernel, params, consts, x0, v0, float(t0),
+                                              float(dt), n_steps, record_every, float(eps_stop), float(eps_substep),
                                               int(max_substeps), out_t, out_x, out_v)
     wall = time.perf_counter() - t_start
     if status == OK:

@@ -1,0 +1,175 @@
+"""The grading study's pieces against independent truth.
+
+- a grading puts its values into every section, and the sample count follows the layout's formula
+  (positions x (2 n_per_side + 1)^2 with V = 0 on the grid);
+- a repeated grading is served from the cache, byte for byte the same, and any change of the layout or
+  of the solver's source makes a new dataset; a damaged cached part is recomputed, not trained on;
+- the reference judged on its own orbits has zero force error and passes every case; a surrogate that
+  is the reference times 1.1 has exactly 10 % error;
+- a sweep's summary holds that sweep's jobs only, ordered by size.
+"""
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from fluidfilm import GradedReynoldsModel, paper_bearing
+from fluidfilm import grading
+from fluidfilm.data import DatasetConfigError, DatasetSpec
+from fluidfilm.rotor.cases import run_case
+
+ROOT = Path(__file__).resolve().parents[1]
+REFERENCE = {"coarse": [30, 30], "dense": [55, 55], "eps_threshold": 0.9, "cavitation": "gumbel"}
+
+
+def _orbit_cfg():
+    return yaml.safe_load((ROOT / "conf" / "dataset" / "orbit.yaml").read_text())
+
+
+def _tiny_cfg():
+    return {"name": "tiny",
+            "position_sections": [{"name": "low", "eps_start": 0.0, "eps_stop": 0.5, "endpoint": False, "n_eps": 2,
+                                   "n_angle": 4},
+                                  {"name": "high", "eps_start": 0.5, "eps_stop": 0.8, "endpoint": True, "n_eps": 2,
+                                   "n_angle": 4}],
+            "velocity_sections": [{"eps_low": 0.0, "eps_high": 1.0, "v_max": 0.1, "core": 0.03, "core_fraction": 0.5,
+                                   "n_per_side": 2, "include_zero": True}],
+            "combine": "product", "positions_per_chunk": 4, "n_test": 0, "test_seed": 1}
+
+
+def test_a_grading_reaches_every_section_and_the_sample_count_follows_the_layout():
+    base = _orbit_cfg()
+    cfg = grading.apply_grading(base, {"n_per_side": 8, "n_angle": 24, "core_fraction": 0.5, "v_max": 0.08,
+                                       "core": 0.02, "eps_density": 0.5, "eps_split": 0.85})
+    assert base == _orbit_cfg()  # the input config is not touched
+    assert all(s["n_per_side"] == 8 and s["core_fraction"] == 0.5 and s["v_max"] == 0.08 and s["core"] == 0.02
+               for s in cfg["velocity_sections"])
+    assert [s["n_angle"] for s in cfg["position_sections"]] == [24, 24]
+    assert [s["n_eps"] for s in cfg["position_sections"]] == [9, 3]  # 18 and 6 halved
+    assert cfg["position_sections"][0]["eps_stop"] == cfg["position_sections"][1]["eps_start"] == 0.85
+    spec = DatasetSpec.from_cfg(cfg)
+    c = paper_bearing().clearance
+    # positions: 9 rows x 24 angles in the first section less the 23 repeats of the centre, 3 x 24 in the second
+    n_pos = 9 * 24 - 23 + 3 * 24
+    assert spec.n_samples(c) == n_pos * (2 * 8 + 1) ** 2
+    values = spec.velocity_sections[0].values()
+    assert len(values) == 17 and values.max() == pytest.approx(0.08) and np.count_nonzero(np.abs(values) <= 0.02) == 9
+    # None keeps the config's values
+    assert grading.apply_grading(base, {k: None for k in grading.GRADING_KEYS}) == base
+
+
+@pytest.mark.parametrize("grading_cfg, named", [
+    ({"n_per_sid": 8}, "grading.n_per_sid"),
+    ({"eps_density": 0}, "grading.eps_density=0"),
+    ({"eps_split": 0.99}, "grading.eps_split=0.99"),
+    ({"v_max": "fast"}, "grading.v_max='fast'"),
+    ({"core": 0.5}, "core=0.5"),                      # beyond v_max = 0.1: the spec names it
+    ({"n_per_side": 2.5}, "n_per_side=2.5"),
+])
+def test_a_bad_grading_is_refused_naming_the_value(grading_cfg, named):
+    with pytest.raises(DatasetConfigError, match=named.replace("(", r"\(").replace(")", r"\)")):
+        grading.apply_grading(_orbit_cfg(), grading_cfg)
+
+
+def test_a_repeated_grading_is_reused_and_a_changed_one_or_changed_solver_is_not(tmp_path, monkeypatch):
+    jb = paper_bearing()
+    spec = DatasetSpec.from_cfg(_tiny_cfg())
+    path, meta, reused = grading.cached_dataset(jb, REFERENCE, spec, tmp_path, scheduler="inline", progress=False)
+    assert not reused and meta["n_samples"] == spec.n_samples(jb.clearance)
+    parts = {p.name: p.read_bytes() for p in path.glob("*.parquet")}
+    again, meta2, reused2 = grading.cached_dataset(jb, REFERENCE, spec, tmp_path, scheduler="inline", progress=False)
+    assert reused2 and again == path and meta2["generation_seconds_total"] == meta["generation_seconds_total"]
+    assert {p.name: p.read_bytes() for p in again.glob("*.parquet")} == parts
+    # another layout, another dataset
+    other = DatasetSpec.from_cfg(grading.apply_grading(_tiny_cfg(), {"n_per_side": 3}))
+    p3, _, r3 = grading.cached_dataset(jb, REFERENCE, other, tmp_path, scheduler="inline", progress=False)
+    assert not r3 and p3 != path
+    # the same layout computed by other solver source: not the old forces
+    monkeypatch.setattr(grading, "source_digest", lambda: "0123456789abcdef")
+    p4, _, r4 = grading.cached_dataset(jb, REFERENCE, spec, tmp_path, scheduler="inline", progress=False)
+    assert not r4 and p4 not in (path, p3)
+
+
+def test_a_damaged_cached_dataset_is_recomputed_before_use(tmp_path):
+    jb = paper_bearing()
+    spec = DatasetSpec.from_cfg(_tiny_cfg())
+    path, _, _ = grading.cached_dataset(jb, REFERENCE, spec, tmp_path, scheduler="inline", progress=False)
+    part = sorted(path.glob("*.parquet"))[0]
+    good = part.read_bytes()
+    part.write_bytes(good[:-20] + b"\0" * 20)
+    again, _, reused = grading.cached_dataset(jb, REFERENCE, spec, tmp_path, scheduler="inline", progress=False)
+    assert not reused and again == path and part.read_bytes() == good
+
+
+class _Scaled:
+    """The reference model's forces times a factor (a surrogate with a known error)."""
+
+    def __init__(self, model, factor):
+        self.model, self.factor = model, factor
+        self.bearing = model.bearing
+
+    def forces(self, x, v):
+        return self.factor * np.asarray(self.model.forces(x, v))
+
+
+@pytest.fixture(scope="module")
+def short_orbits(tmp_path_factory):
+    """Two Fig. 4 cases run briefly with the reference model, saved as the reference trajectories."""
+    from hydra import compose, initialize_config_dir
+
+    with initialize_config_dir(str(ROOT / "conf"), version_base="1.3"):
+        cfg = compose("grading_study", overrides=["integrator.t_end=0.02", "integrator.t_settle=0.01"])
+    ref = GradedReynoldsModel(paper_bearing())
+    out = tmp_path_factory.mktemp("orbits")
+    cases = {k: cfg.cases[k] for k in ("a", "e")}
+    for name, case in cases.items():
+        run_case(ref, cfg.rotor, case, cfg.integrator).to_npz(out / f"{name}.npz")
+    return ref, out, cfg, cases
+
+
+def test_the_reference_judged_on_its_own_orbits_is_exact_and_a_scaled_one_is_off_by_the_scale(short_orbits):
+    ref, out, cfg, cases = short_orbits
+    bench = grading.OrbitBenchmark.from_dir(ref, out, cases)
+    assert len(bench.x) == sum(len(t.t) for t in bench.trajectories.values())
+    assert grading.OrbitBenchmark.from_dir(ref, out, cases).force_errors(ref, 0.1)["p99"] == 0.0
+    err = bench.force_errors(_Scaled(ref, 1.1), 1e-9)
+    assert err["median"] == pytest.approx(0.1, rel=1e-9) and err["max"] == pytest.approx(0.1, rel=1e-9)
+    v = bench.verdicts(ref, cfg.rotor, cases, cfg.integrator, 2.0)
+    assert v["satisfactory_cases"] == "ae" and v["orbit_rms_pct_max"] == 0.0
+    # other integrator settings than the reference run's are refused, not compared sample by sample
+    longer = copy.deepcopy(cfg.integrator)
+    longer.t_end = 0.03
+    with pytest.raises(ValueError, match="other integrator settings"):
+        bench.verdicts(ref, cfg.rotor, cases, longer, 2.0)
+
+
+def test_a_missing_reference_orbit_is_named(tmp_path):
+    with pytest.raises(FileNotFoundError, match=r"a\.npz"):
+        grading.OrbitBenchmark.from_dir(GradedReynoldsModel(paper_bearing()), tmp_path, ["a"])
+
+
+def _result(job, n, p99, sweep_id):
+    return {"job": job, "swept": {"grading.n_per_side": str(n)}, "sweep_id": sweep_id,
+            "dataset": {"n_samples": n * 1000, "generation_s": n / 10},
+            "training": {"train_time_s": 1.0}, "time_per_eval_us": 0.5,
+            "held_out": {"median": 0.01, "p99": p99, "max": 1.0},
+            "orbit_states": {"median": 0.02, "p99": 2 * p99, "max": 1.0},
+            "cases": {"satisfactory_cases": "ab", "n_satisfactory": 2, "orbit_rms_pct_max": 3.0}}
+
+
+def test_a_sweeps_summary_holds_its_own_jobs_in_size_order(tmp_path):
+    for k, (n, p99, sid) in enumerate([(24, 0.05, "this"), (8, 0.3, "this"), (16, 0.1, "this"), (32, 0.01, "old")]):
+        (tmp_path / str(k)).mkdir()
+        (tmp_path / str(k) / "result.json").write_text(json.dumps(_result(f"n={n}", n, p99, sid)))
+    results = grading.read_results(tmp_path, "this")
+    summary = grading.write_summary(results, tmp_path / "summary", "test")
+    assert [j["job"] for j in summary["jobs"]] == ["n=8", "n=16", "n=24"]  # the old sweep's job is left out
+    assert summary["lowest_orbit_p99_job"] == "n=24" and summary["lowest_orbit_p99"] == pytest.approx(0.1)
+    assert {p.name for p in (tmp_path / "summary").iterdir()} == {"summary.json", "table.csv", "figure.png"}
+    with pytest.raises(ValueError, match="no finished jobs"):
+        grading.summarise([])
