@@ -19,8 +19,9 @@ from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.config_check import check_config
 from fluidfilm.data import DatasetSpec, config_hash, load_test_set
 from fluidfilm.data.spec import check_reference
-from fluidfilm.grading import (SWEEP_ID_ENV, OrbitBenchmark, apply_grading, cached_dataset, error_quantiles,
-                               flat_metrics, relative_errors)
+from fluidfilm.grading import (SWEEP_ID_ENV, OrbitBenchmark, StiffnessBenchmark, apply_grading, cached_dataset,
+                               error_quantiles, flat_metrics, relative_errors)
+from fluidfilm.reynolds import ReynoldsSolver
 from fluidfilm.speed import sample_states, time_per_force_eval
 from fluidfilm.surrogate.fit import fit_surrogate
 
@@ -45,6 +46,8 @@ def main(cfg: DictConfig) -> dict:
     cases = {k: cfg.cases[k] for k in sorted(cfg.cases)}
     bench = OrbitBenchmark.from_dir(reference_from_cfg(bearing, cfg.reference), cfg.reference_trajectories_dir, cases)
     held_out = load_test_set(cfg.testset_dir)
+    stiffness = (StiffnessBenchmark.from_reference(ReynoldsSolver(bearing, *cfg.kc_reference_grid), cfg.kc_eps)
+                 if cfg.kc_eps else None)
     print(f"job {name}: {spec.n_samples(bearing.clearance):,} samples planned", flush=True)
     with tracking.run(cfg.tracking, f"grading {name}", c, tags={"study": cfg.title}):
         path, meta, reused = cached_dataset(bearing, reference_policy, spec, cfg.cache_dir, scheduler=cfg.dask.scheduler,
@@ -65,6 +68,7 @@ def main(cfg: DictConfig) -> dict:
             "orbit_states": bench.force_errors(model, cfg.error_floor_N),
             "cases": (bench.verdicts(model, cfg.rotor, cases, cfg.integrator, cfg.metrics.threshold_pct)
                       if cfg.evaluate_cases else None),
+            "stiffness": stiffness.errors(model) if stiffness is not None else None,
             "time_per_eval_us": 1e6 * time_per_force_eval(model, x, v),
             "config": {k: c[k] for k in ("model", "split", "scaling", "trainer", "seed")},
         }
@@ -72,7 +76,7 @@ def main(cfg: DictConfig) -> dict:
         # the checkpoint is there to resume an interrupted job, not to skip the training of a later one
         shutil.rmtree(Path(cfg.checkpoint_dir) / digest, ignore_errors=True)
         row = flat_metrics(result)
-        tracking.log_metrics({k: float(v) for k, v in row.items()})
+        tracking.log_metrics({k: float(v) for k, v in row.items() if v is not None})
     cases_note = f", {row['n_satisfactory']}/7 cases" if "n_satisfactory" in row else ""
     print(f"job {name}: {row['n_samples']:,} samples ({'cached' if reused else 'made'} in {row['generation_s']:.1f} s), "
           f"trained {row['train_time_s']:.0f} s; held-out median {100 * row['held_out_rel_err_median']:.2f} %, "

@@ -173,3 +173,53 @@ def test_a_sweeps_summary_holds_its_own_jobs_in_size_order(tmp_path):
     assert {p.name for p in (tmp_path / "summary").iterdir()} == {"summary.json", "table.csv", "figure.png"}
     with pytest.raises(ValueError, match="no finished jobs"):
         grading.summarise([])
+
+
+def test_the_reference_has_no_stiffness_error_against_itself_and_a_coarser_grid_a_small_one():
+    from fluidfilm import ReynoldsSolver
+
+    jb = paper_bearing()
+    bench = grading.StiffnessBenchmark.from_reference(ReynoldsSolver(jb, 30, 30), [0.3, 0.7])
+    assert len(bench.table) == 2 and np.allclose(bench.table.eps, [0.3, 0.7], atol=2e-3)  # its equilibria (grid: symmetry to 1e-3)
+    same = bench.errors(ReynoldsSolver(jb, 30, 30))
+    assert same["direct_max"] == 0.0 and same["cross_max"] == 0.0 and same["status"] == "ok"
+    coarse = bench.errors(ReynoldsSolver(jb, 20, 20))  # a second discretisation: close, not equal
+    assert 0.0 < coarse["direct_max"] < 0.2 and 0.0 < coarse["cross_max"] < 0.3
+
+
+def test_a_force_with_a_kink_at_rest_gets_the_symmetric_derivative_and_an_undefined_one_is_said(monkeypatch):
+    """physics_v divides the force by (1 + |V|/(c omega)): |V| has a kink at V = 0. The exact Jacobian there is the
+    symmetric derivative, which central differences converge to (the reference's K and C are central
+    differences); where coefficients are not finite all the same, the study says "not differentiable"."""
+    import sys
+
+    from fluidfilm import ReynoldsSolver
+    from fluidfilm.characteristics import study
+    from fluidfilm.characteristics.jacobian import surrogate_jacobian
+    from fluidfilm.surrogate import SurrogateForceModel
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from golden_models import _net, _scaling
+
+    jb = paper_bearing()
+    rng = np.random.default_rng(5)
+    model = SurrogateForceModel(jb, [_net(rng, 3, 8, 2)], [_scaling(rng, "physics_v", jb.clearance, jb.omega, "polar")],
+                                "tanh")
+    x0 = np.array([0.0, 0.4 * jb.clearance])
+    _, J = surrogate_jacobian(model, x0, np.zeros(2))
+    h = np.array([1e-7 * jb.clearance] * 2 + [1e-7 * jb.clearance * jb.omega] * 2)
+    fd = np.empty((2, 4))
+    for k in range(4):
+        e = np.zeros(4)
+        e[k] = h[k]
+        plus = model.forces((x0 + e[:2])[None], e[None, 2:])[0]
+        minus = model.forces((x0 - e[:2])[None], -e[None, 2:])[0]
+        fd[:, k] = (plus - minus) / (2 * h[k])
+    np.testing.assert_allclose(J, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
+    bench = grading.StiffnessBenchmark.from_reference(ReynoldsSolver(jb, 30, 30), [0.4])
+    row = bench.table.assign(model="model")
+    for k in ("Cxx", "Cyy"):
+        row[k] = np.nan  # a model whose coefficients are not finite at its equilibrium
+    monkeypatch.setattr(study, "coefficient_table", lambda models, loads, h: row)
+    out = bench.errors(model)
+    assert out["status"] == "not differentiable" and out["direct_max"] is None

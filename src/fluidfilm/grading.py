@@ -8,8 +8,9 @@ eccentricity sections meet) and one surrogate configuration:
    is never regenerated and a changed solver never reuses old forces);
 2. a surrogate trained on it (``fluidfilm.surrogate.fit``);
 3. the surrogate judged on what does not depend on the grading: the held-out random test set, the
-   states along the seven reference orbits (``OrbitBenchmark.force_errors``) and the seven cases
-   themselves by the Fig. 4 rule (``OrbitBenchmark.verdicts``).
+   states along the seven reference orbits (``OrbitBenchmark.force_errors``), the seven cases
+   themselves by the Fig. 4 rule (``OrbitBenchmark.verdicts``) and the stiffness and damping
+   coefficients at the reference's equilibria (``StiffnessBenchmark``).
 
 ``summarise`` turns the jobs of a sweep into one table; ``SweepSummaryCallback`` (a Hydra callback by
 duck typing: this module imports no Hydra) writes it when a multirun ends.
@@ -185,6 +186,46 @@ class OrbitBenchmark:
                 "orbit_rms_pct": {k: float(r["rms_pct"]) for k, r in rows.items()}}
 
 
+@dataclass
+class StiffnessBenchmark:
+    """The reference's eight stiffness and damping coefficients at its equilibria along eccentricity: what a
+    job's K and C are checked on (``fluidfilm.characteristics``: the same loads for both, the surrogate at
+    its own equilibrium under each load, its exact Jacobian)."""
+
+    loads: list
+    table: pd.DataFrame
+
+    @classmethod
+    def from_reference(cls, reference, eps_values: Sequence[float], h_rel: float = 1e-4) -> "StiffnessBenchmark":
+        from .characteristics import study
+
+        loads = study.loads_for_eccentricities(reference, list(eps_values))
+        return cls(loads, study.coefficient_table({"reference": reference}, loads, {"default": h_rel}))
+
+    def errors(self, model) -> dict:
+        """Largest error of the direct (Kxx, Kyy, Cxx, Cyy) and cross terms over the loads, each relative to
+        the reference coefficient (floored at a tenth of its matrix's largest; ``study.coefficient_errors``).
+        None where the model finds no equilibrium under one of the loads."""
+        from .characteristics import study
+
+        try:
+            table = study.coefficient_table({"model": model}, self.loads, {})
+        except (ValueError, RuntimeError, FloatingPointError) as err:
+            return {"direct_max": None, "cross_max": None, "status": "no equilibrium", "note": str(err)}
+        eps = table.eps.to_numpy(float)
+        if not (np.isfinite(eps).all() and (eps < 1.0).all()):  # a poor surrogate "balances" the load outside the film
+            return {"direct_max": None, "cross_max": None, "status": "no equilibrium",
+                    "note": f"no equilibrium inside the clearance (eps {', '.join(f'{e:.3g}' for e in eps)})"}
+        e = study.coefficient_errors(pd.concat([self.table, table], ignore_index=True), "reference")
+        if not np.isfinite(e.rel_err.to_numpy(float)).all():
+            # the force has no derivative there: e.g. a scaling by (1 + |V|/(c omega)) has a kink at V = 0 (no
+            # damping coefficient at rest), or an equilibrium at the centre, where the polar frame is singular
+            return {"direct_max": None, "cross_max": None, "status": "not differentiable",
+                    "note": f"coefficients not finite at the equilibria (eps {', '.join(f'{v:.3g}' for v in eps)})"}
+        return {"direct_max": float(e[e.kind == "direct"].rel_err.max()),
+                "cross_max": float(e[e.kind == "cross"].rel_err.max()), "status": "ok"}
+
+
 def flat_metrics(result: Mapping) -> dict:
     """A job's numbers as one flat row (the summary table and MLflow)."""
     d, t = result["dataset"], result["training"]
@@ -196,6 +237,9 @@ def flat_metrics(result: Mapping) -> dict:
     cases = result.get("cases")
     if cases:
         row.update(n_satisfactory=cases["n_satisfactory"], orbit_rms_pct_max=cases["orbit_rms_pct_max"])
+    kc = result.get("stiffness")
+    if kc:
+        row.update(kc_max_rel_err_direct=kc["direct_max"], kc_max_rel_err_cross=kc["cross_max"])
     return row
 
 
@@ -204,7 +248,8 @@ def summarise(results: Sequence[Mapping]) -> tuple[pd.DataFrame, dict]:
     if not results:
         raise ValueError("no finished jobs to summarise")
     rows = [{"job": r["job"], **{k: v for k, v in r["swept"].items()}, **flat_metrics(r),
-             "satisfactory_cases": (r.get("cases") or {}).get("satisfactory_cases", "")} for r in results]
+             "satisfactory_cases": (r.get("cases") or {}).get("satisfactory_cases", ""),
+             "kc_status": (r.get("stiffness") or {}).get("status", "not measured")} for r in results]
     table = pd.DataFrame(rows).sort_values(["n_samples", "job"]).reset_index(drop=True)
     swept = sorted({k for r in results for k in r["swept"]})
     best = table.loc[table["orbit_states_rel_err_p99"].idxmin()]

@@ -258,11 +258,10 @@ def render_error_map(reports: Path) -> str:
 
 
 def render_surrogate_goals(reports: Path) -> str:
-    from .report import surrogate_goals
+    from .report import goal_verdict, surrogate_goals
 
     m = _load(reports, "metrics.json")
-    rows = [[g["what"], g["target"], g["measured"] or "not measured",
-             "met" if g["met"] else ("not measured" if g["met"] is None else "**missed**"), g["tried"]]
+    rows = [[g["what"], g["target"], g["measured"] or "not measured", goal_verdict(g), g["tried"]]
             for g in surrogate_goals(m)]
     return (f"Met: **{m['surrogate_goals_met']} of {m['surrogate_goals']}** (`reports/metrics.json`).\n\n"
             + _table(["goal", "target", "measured", "", "what was done"], rows))

@@ -229,13 +229,28 @@ def surrogate_goals(metrics: Mapping) -> list[dict]:
         value = metrics.get(key)
         measured = None if value is None else float(value) * scale
         met = None if measured is None else (measured >= target if direction == ">=" else measured <= target)
+        gap = ""  # how far a missed goal is: a limit overshot by a factor, a target reached to a share
+        if met is False and measured is not None:
+            gap = (f"{measured / target:.3g}x the limit" if direction == "<=" else f"{100 * measured / target:.3g} % of it")
         rows.append({"key": key, "what": what, "target": f"{direction.replace('>=', '≥').replace('<=', '≤')} {target:g}{unit}",
-                     "measured": None if measured is None else f"{measured:.3g}{unit}", "met": met, "tried": tried})
+                     "measured": None if measured is None else f"{measured:.3g}{unit}", "met": met, "gap": gap,
+                     "tried": tried})
     return rows
 
 
 STUDY_HEADER = ["job", "samples", "generation s", "training s", "held-out median %", "held-out p99 %",
-                "orbit-state median %", "orbit-state p99 %", "Fig. 4 cases", "us per force"]
+                "orbit-state median %", "orbit-state p99 %", "Fig. 4 cases", "K/C error direct / cross %", "us per force"]
+
+
+def _kc_cell(job: Mapping) -> str:
+    """Largest K/C errors of a job in per cent, or why there are none ("no equilibrium", "not differentiable",
+    "-" where not measured)."""
+    status = job.get("kc_status", "not measured")
+    if status == "not measured":
+        return "-"
+    if status != "ok":
+        return str(status)
+    return f"{100 * job['kc_max_rel_err_direct']:.0f} / {100 * job['kc_max_rel_err_cross']:.0f}"
 
 
 def study_rows(summary: Mapping) -> list[list[str]]:
@@ -247,7 +262,7 @@ def study_rows(summary: Mapping) -> list[list[str]]:
         rows.append([f"`{j['job']}`", f"{int(j['n_samples']):,}", f"{j['generation_s']:.0f}", f"{j['train_time_s']:.0f}",
                      f"{100 * j['held_out_rel_err_median']:.2f}", f"{100 * j['held_out_rel_err_p99']:.0f}",
                      f"{100 * j['orbit_states_rel_err_median']:.2f}", f"{100 * j['orbit_states_rel_err_p99']:.0f}",
-                     cases, f"{j['time_per_eval_us']:.2f}"])
+                     cases, _kc_cell(j), f"{j['time_per_eval_us']:.2f}"])
     return rows
 
 
@@ -266,9 +281,8 @@ def study_section(summary: Mapping, title: str, figure: str) -> str:
 
 def goals_section(metrics: Mapping) -> str:
     """Markdown: the surrogate goals, what was measured, met or missed."""
-    rows = "\n".join(f"| {g['what']} | {g['target']} | {g['measured'] or 'not measured'} | "
-                     f"{'met' if g['met'] else ('not measured' if g['met'] is None else '**missed**')} | {g['tried']} |"
-                     for g in surrogate_goals(metrics))
+    rows = "\n".join(f"| {g['what']} | {g['target']} | {g['measured'] or 'not measured'} | {goal_verdict(g)} | "
+                     f"{g['tried']} |" for g in surrogate_goals(metrics))
     return f"""
 ## The best surrogate against its goals
 
@@ -276,6 +290,13 @@ def goals_section(metrics: Mapping) -> str:
 |---|---|---|---|---|
 {rows}
 """
+
+
+def goal_verdict(goal: Mapping) -> str:
+    """"met", "not measured", or "**missed** (by how much)"."""
+    if goal["met"] is None:
+        return "not measured"
+    return "met" if goal["met"] else f"**missed** ({goal['gap']})"
 
 
 # --- the tables' rows ---------------------------------------------------------------------------------

@@ -49,6 +49,14 @@ def _sqrt(a):
     return np.concatenate([[r], a[1:] / (2.0 * r)])
 
 
+def _speed(v1, v2):
+    """|V| as a dual number.  At rest |V| has no derivative (a kink); its symmetric derivative, the limit of
+    central differences (how the reference's K and C are taken), is zero in every direction: used there."""
+    if v1[0] == 0.0 and v2[0] == 0.0:
+        return _const(0.0)
+    return _sqrt(_mul(v1, v1) + _mul(v2, v2))
+
+
 def _activate(z, act):
     """Activation on a layer of duals z (n, 5)."""
     a = z[:, 0]
@@ -121,7 +129,7 @@ def _region(model, r, x1, x2, v1, v2):
         dd = _const(1.0) - e2
         g = _fn(dd, lambda u: fscale * u ** (-power), lambda u: -power * fscale * u ** (-power - 1.0))
         if s[0] == 2.0:
-            g = _mul(g, _const(1.0) + _sqrt(_mul(v1, v1) + _mul(v2, v2)) / (c * omega))
+            g = _mul(g, _const(1.0) + _speed(v1, v2) / (c * omega))
         f1, f2 = _mul(f1, g), _mul(f2, g)
     if polar:
         return _mul(f1, er1) + _mul(f2, er2), _mul(f1, er2) - _mul(f2, er1)
