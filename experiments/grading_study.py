@@ -19,10 +19,9 @@ from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.config_check import check_config
 from fluidfilm.data import DatasetSpec, config_hash, load_test_set
 from fluidfilm.data.spec import check_reference
-from fluidfilm.grading import (SWEEP_ID_ENV, OrbitBenchmark, StiffnessBenchmark, apply_grading, cached_dataset,
-                               error_quantiles, flat_metrics, relative_errors)
+from fluidfilm.grading import (SWEEP_ID_ENV, Judges, OrbitBenchmark, StiffnessBenchmark, apply_grading, cached_dataset,
+                               flat_metrics)
 from fluidfilm.reynolds import ReynoldsSolver
-from fluidfilm.speed import sample_states, time_per_force_eval
 from fluidfilm.surrogate.fit import fit_surrogate
 
 
@@ -31,23 +30,21 @@ def main(cfg: DictConfig) -> dict:
     check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
     hc = HydraConfig.get()
     keys = os.environ.get(sweeps.SWEEP_KEYS_ENV)  # set by the sweep callback in the launching process
-    swept_keys = set(keys.split(",")) if keys else set()
-    swept = {}
-    for o in hc.overrides.task:
-        key, _, value = o.partition("=")
-        if key.lstrip("+~") in swept_keys:
-            swept[key.lstrip("+~")] = value
+    swept = sweeps.swept_values(hc.overrides.task, keys.split(",") if keys else [])
     name = ",".join(f"{k}={v}" for k, v in swept.items()) or "single"
     c = OmegaConf.to_container(cfg, resolve=True)
-    # everything is checked, and the orbits to judge on are read, before the long work starts
+    # everything is checked, and what the surrogate is judged on is read or computed, before the long work
     bearing = bearing_from_cfg(cfg.bearing)
     reference_policy = check_reference(c["reference"])
     spec = DatasetSpec.from_cfg(apply_grading(c["dataset"], c["grading"]))
     cases = {k: cfg.cases[k] for k in sorted(cfg.cases)}
-    bench = OrbitBenchmark.from_dir(reference_from_cfg(bearing, cfg.reference), cfg.reference_trajectories_dir, cases)
-    held_out = load_test_set(cfg.testset_dir)
-    stiffness = (StiffnessBenchmark.from_reference(ReynoldsSolver(bearing, *cfg.kc_reference_grid), cfg.kc_eps)
-                 if cfg.kc_eps else None)
+    judges = Judges(held_out=load_test_set(cfg.testset_dir),
+                    orbits=OrbitBenchmark.from_dir(reference_from_cfg(bearing, cfg.reference),
+                                                   cfg.reference_trajectories_dir, cases),
+                    stiffness=(StiffnessBenchmark.from_reference(ReynoldsSolver(bearing, *cfg.kc_reference_grid),
+                                                                 cfg.kc_eps) if cfg.kc_eps else None),
+                    rotor=cfg.rotor, cases=cases, integrator=cfg.integrator, threshold_pct=cfg.metrics.threshold_pct,
+                    floor_N=cfg.error_floor_N, evaluate_cases=cfg.evaluate_cases)
     print(f"job {name}: {spec.n_samples(bearing.clearance):,} samples planned", flush=True)
     with tracking.run(cfg.tracking, f"grading {name}", c, tags={"study": cfg.title}):
         path, meta, reused = cached_dataset(bearing, reference_policy, spec, cfg.cache_dir, scheduler=cfg.dask.scheduler,
@@ -56,20 +53,13 @@ def main(cfg: DictConfig) -> dict:
         model, report = fit_surrogate(path, c["model"], c["split"], c["scaling"], c["trainer"], None, seed=cfg.seed,
                                       name=name, ckpt_root=Path(cfg.checkpoint_dir) / digest,
                                       val_fraction=cfg.trainer.val_fraction, batch_size=cfg.trainer.batch_size)
-        predicted = model.forces(held_out[["X1", "X2"]].to_numpy(), held_out[["V1", "V2"]].to_numpy())
-        x, v = sample_states(bearing.clearance)
         result = {
             "job": name, "swept": swept, "sweep_id": os.environ.get(SWEEP_ID_ENV), "grading": c["grading"],
             "dataset": {"n_samples": int(meta["n_samples"]), "generation_s": float(meta["generation_seconds_total"]),
                         "reused": reused, "path": str(path), "spec": spec.to_dict()},
             "training": {"train_time_s": report["train_time_s"], "epochs": c["trainer"]["max_epochs"],
                          "networks": report["networks"]},
-            "held_out": error_quantiles(relative_errors(predicted, held_out[["F1", "F2"]].to_numpy(), cfg.error_floor_N)),
-            "orbit_states": bench.force_errors(model, cfg.error_floor_N),
-            "cases": (bench.verdicts(model, cfg.rotor, cases, cfg.integrator, cfg.metrics.threshold_pct)
-                      if cfg.evaluate_cases else None),
-            "stiffness": stiffness.errors(model) if stiffness is not None else None,
-            "time_per_eval_us": 1e6 * time_per_force_eval(model, x, v),
+            **judges.judge(model),
             "config": {k: c[k] for k in ("model", "split", "scaling", "trainer", "seed")},
         }
         io.write_json(Path(hc.runtime.output_dir) / "result.json", result)
@@ -77,12 +67,11 @@ def main(cfg: DictConfig) -> dict:
         shutil.rmtree(Path(cfg.checkpoint_dir) / digest, ignore_errors=True)
         row = flat_metrics(result)
         tracking.log_metrics({k: float(v) for k, v in row.items() if v is not None})
-    cases_note = f", {row['n_satisfactory']}/7 cases" if "n_satisfactory" in row else ""
     print(f"job {name}: {row['n_samples']:,} samples ({'cached' if reused else 'made'} in {row['generation_s']:.1f} s), "
           f"trained {row['train_time_s']:.0f} s; held-out median {100 * row['held_out_rel_err_median']:.2f} %, "
           f"p99 {100 * row['held_out_rel_err_p99']:.1f} %; along the orbits median "
-          f"{100 * row['orbit_states_rel_err_median']:.2f} %, p99 {100 * row['orbit_states_rel_err_p99']:.1f} %{cases_note}",
-          flush=True)
+          f"{100 * row['orbit_states_rel_err_median']:.2f} %, p99 {100 * row['orbit_states_rel_err_p99']:.1f} %"
+          + (f", {row['n_satisfactory']}/7 cases" if "n_satisfactory" in row else ""), flush=True)
     return row
 
 

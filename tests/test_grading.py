@@ -223,3 +223,24 @@ def test_a_force_with_a_kink_at_rest_gets_the_symmetric_derivative_and_an_undefi
     monkeypatch.setattr(study, "coefficient_table", lambda models, loads, h: row)
     out = bench.errors(model)
     assert out["status"] == "not differentiable" and out["direct_max"] is None
+
+
+def test_the_judges_find_no_error_in_the_reference_itself(short_orbits):
+    import pandas as pd
+
+    ref, out, cfg, cases = short_orbits
+    rng = np.random.default_rng(2)
+    c = ref.bearing.clearance
+    X = c * rng.uniform(-0.6, 0.6, (50, 2))
+    V = rng.uniform(-0.05, 0.05, (50, 2))
+    F = np.asarray(ref.forces(X, V))
+    held = pd.DataFrame({"X1": X[:, 0], "X2": X[:, 1], "V1": V[:, 0], "V2": V[:, 1], "F1": F[:, 0], "F2": F[:, 1]})
+    judges = grading.Judges(held, grading.OrbitBenchmark.from_dir(ref, out, cases), None, cfg.rotor, cases,
+                            cfg.integrator, 2.0, 0.1)
+    got = judges.judge(ref)
+    assert got["held_out"]["max"] == 0.0 and got["orbit_states"]["max"] == 0.0
+    assert got["cases"]["satisfactory_cases"] == "ae" and got["stiffness"] is None and got["time_per_eval_us"] > 0
+    from fluidfilm import ReynoldsSolver
+
+    coarse = judges.judge(ReynoldsSolver(ref.bearing, 12, 12))  # another discretisation: close, not equal
+    assert 0.0 < coarse["held_out"]["median"] < 0.2 and 0.0 < coarse["orbit_states"]["median"] < 0.2

@@ -49,3 +49,12 @@ def test_grid_density_sweep_logs_error_and_time_per_evaluation(tmp_path):
     # the finer grid is closer to the converged one, and both report a time per evaluation
     assert jobs["grid_40x21"]["force_error_pct_eps_0.9"] < jobs["grid_20x21"]["force_error_pct_eps_0.9"]
     assert all(m["time_per_eval_us"] > 0 for m in jobs.values())
+
+
+def test_swept_values_are_the_jobs_values_of_the_swept_keys_groups_included():
+    from fluidfilm.sweeps import swept_values
+
+    task = ["scaling=standard", "grading.n_per_side=12", "+extra.key=3", "title=ablation", "split=none"]
+    assert swept_values(task, ["scaling", "split", "extra.key"]) == {"scaling": "standard", "extra.key": "3",
+                                                                     "split": "none"}
+    assert swept_values(task, []) == {}

@@ -226,6 +226,40 @@ class StiffnessBenchmark:
                 "cross_max": float(e[e.kind == "cross"].rel_err.max()), "status": "ok"}
 
 
+@dataclass
+class Judges:
+    """What every job's surrogate is judged on, fixed for a sweep: the held-out random states (X1, X2, V1, V2,
+    F1, F2), the reference orbits (``OrbitBenchmark``), the reference's K and C (``StiffnessBenchmark``, or
+    None), and the settings of the Fig. 4 cases (rotor, cases, integrator, threshold in % of c)."""
+
+    held_out: pd.DataFrame
+    orbits: OrbitBenchmark
+    stiffness: StiffnessBenchmark | None
+    rotor: Mapping
+    cases: Mapping
+    integrator: Mapping
+    threshold_pct: float
+    floor_N: float
+    evaluate_cases: bool = True
+
+    def judge(self, model) -> dict:
+        """The surrogate's held-out and orbit-state force errors, its verdicts in the cases, its K/C errors and
+        its time per force evaluation (the compiled loop of ``fluidfilm.speed``)."""
+        from .speed import sample_states, time_per_force_eval
+
+        h = self.held_out
+        predicted = np.asarray(model.forces(h[["X1", "X2"]].to_numpy(), h[["V1", "V2"]].to_numpy()))
+        x, v = sample_states(model.bearing.clearance)
+        return {
+            "held_out": error_quantiles(relative_errors(predicted, h[["F1", "F2"]].to_numpy(), self.floor_N)),
+            "orbit_states": self.orbits.force_errors(model, self.floor_N),
+            "cases": (self.orbits.verdicts(model, self.rotor, self.cases, self.integrator, self.threshold_pct)
+                      if self.evaluate_cases else None),
+            "stiffness": self.stiffness.errors(model) if self.stiffness is not None else None,
+            "time_per_eval_us": 1e6 * time_per_force_eval(model, x, v),
+        }
+
+
 def flat_metrics(result: Mapping) -> dict:
     """A job's numbers as one flat row (the summary table and MLflow)."""
     d, t = result["dataset"], result["training"]

@@ -30,6 +30,18 @@ def swept_keys(sweep_overrides: Iterable[str]) -> list[str]:
     return keys
 
 
+def swept_values(task_overrides: Iterable[str], sweep_keys: Iterable[str]) -> dict[str, str]:
+    """A sweep job's value of each swept key (config groups included), from its task overrides, in order."""
+    keys = set(sweep_keys)
+    out = {}
+    for o in task_overrides:
+        key, _, value = o.partition("=")
+        key = key.lstrip("+~")
+        if key in keys:
+            out[key] = value
+    return out
+
+
 def job_name(base: str, task_overrides: Iterable[str], group_choices: Mapping[str, str], multirun: bool,
              sweep_keys: Iterable[str] | None = None) -> str:
     """``base`` for a single run; in a sweep, ``base`` plus the job's values of the swept keys that ``base``
