@@ -244,3 +244,27 @@ def test_the_judges_find_no_error_in_the_reference_itself(short_orbits):
 
     coarse = judges.judge(ReynoldsSolver(ref.bearing, 12, 12))  # another discretisation: close, not equal
     assert 0.0 < coarse["held_out"]["median"] < 0.2 and 0.0 < coarse["orbit_states"]["median"] < 0.2
+
+
+def test_non_finite_forces_are_refused_not_tabulated():
+    rel = grading.relative_errors(np.array([[1.0, 0.0], [np.nan, 0.0], [2.0, 0.0]]), np.ones((3, 2)), 0.1)
+    with pytest.raises(ValueError, match="non-finite forces at 1 of 3 states"):
+        grading.error_quantiles(rel, "net")
+    assert grading.error_quantiles(rel[[0, 2]])["max"] == pytest.approx(np.hypot(1.0, 1.0) / np.sqrt(2))
+
+
+def test_parallel_jobs_wanting_one_grading_make_it_once(tmp_path):
+    """Two processes ask for the same grading at once: one generates, the other waits and reuses it."""
+    import subprocess
+    import sys
+
+    code = ("import json, sys; sys.path.insert(0, %r)\n"
+            "from fluidfilm import paper_bearing, grading\n"
+            "from fluidfilm.data import DatasetSpec\n"
+            "import test_grading as t\n"
+            "p, m, reused = grading.cached_dataset(paper_bearing(), t.REFERENCE, DatasetSpec.from_cfg(t._tiny_cfg()), %r,"
+            " scheduler='inline', progress=False)\n"
+            "print(json.dumps({'reused': reused, 'path': str(p)}))" % (str(ROOT / "tests"), str(tmp_path)))
+    procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True) for _ in range(2)]
+    outs = [json.loads(p.communicate(timeout=300)[0].strip().splitlines()[-1]) for p in procs]
+    assert sorted(o["reused"] for o in outs) == [False, True] and outs[0]["path"] == outs[1]["path"]

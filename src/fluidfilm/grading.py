@@ -89,11 +89,11 @@ def _plain(node) -> dict:
 
 
 def source_digest() -> str:
-    """SHA-256 (16 hex) of the source that computes a dataset's forces: the bearing, the Reynolds solver
-    package and the dataset generator."""
+    """SHA-256 (16 hex) of the source that computes and writes a dataset's forces: the bearing, the states,
+    the force-model protocol, the Reynolds solver package and the dataset generator, layout and schema."""
     root = Path(__file__).resolve().parent
-    files = [root / "bearing.py", root / "data" / "generate.py", root / "data" / "spec.py",
-             *sorted((root / "reynolds").rglob("*.py"))]
+    files = [root / "bearing.py", root / "states.py", root / "models.py", root / "data" / "generate.py",
+             root / "data" / "spec.py", root / "data" / "schema.py", *sorted((root / "reynolds").rglob("*.py"))]
     h = hashlib.sha256()
     for f in files:
         h.update(f.relative_to(root).as_posix().encode())
@@ -109,16 +109,24 @@ def cached_dataset(bearing, reference: Mapping, spec: DatasetSpec, cache_dir, *,
     from .data import generate
     from .data.schema import DatasetIntegrityError, verify_dataset
 
+    import fcntl
+
     key = config_hash(generate.dataset_digest(bearing, dict(reference), spec), source_digest())
     path = Path(cache_dir) / key
-    if (path / "_metadata.json").exists():
-        try:
-            return path, verify_dataset(path), True
-        except DatasetIntegrityError as err:  # the generator below recomputes what is damaged
-            print(f"cached dataset {path} is damaged ({err}); repairing it", flush=True)
-    meta = generate.generate_dataset(bearing, dict(reference), spec, path, scheduler=scheduler, n_workers=n_workers,
-                                     progress=progress, config={"spec": spec.to_dict(), "source": source_digest()})
-    return path, meta, False
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # jobs of a parallel sweep (hydra/launcher=joblib) may want the same grading: one makes it, the others
+    # wait for it and then find it complete
+    with open(path.parent / f".{key}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if (path / "_metadata.json").exists():
+            try:
+                return path, verify_dataset(path), True
+            except DatasetIntegrityError as err:  # the generator below recomputes what is damaged
+                print(f"cached dataset {path} is damaged ({err}); repairing it", flush=True)
+        meta = generate.generate_dataset(bearing, dict(reference), spec, path, scheduler=scheduler,
+                                         n_workers=n_workers, progress=progress,
+                                         config={"spec": spec.to_dict(), "source": source_digest()})
+        return path, meta, False
 
 
 def relative_errors(predicted: np.ndarray, truth: np.ndarray, floor_N: float) -> np.ndarray:
@@ -126,7 +134,12 @@ def relative_errors(predicted: np.ndarray, truth: np.ndarray, floor_N: float) ->
     return np.hypot(*(predicted - truth).T) / np.maximum(np.hypot(*truth.T), floor_N)
 
 
-def error_quantiles(rel: np.ndarray) -> dict:
+def error_quantiles(rel: np.ndarray, what: str = "the model") -> dict:
+    """Median, 99th percentile and largest relative error; a non-finite error (a diverged network's NaN
+    forces) is refused with the number of such states, never averaged into a table."""
+    bad = int(np.count_nonzero(~np.isfinite(rel)))
+    if bad:
+        raise ValueError(f"{what} gives non-finite forces at {bad} of {len(rel)} states")
     return {"median": float(np.median(rel)), "p99": float(np.quantile(rel, 0.99)), "max": float(rel.max())}
 
 
@@ -163,7 +176,8 @@ class OrbitBenchmark:
 
     def force_errors(self, model, floor_N: float) -> dict:
         """Relative force error of ``model`` at the states along the reference orbits."""
-        return error_quantiles(relative_errors(np.asarray(model.forces(self.x, self.v)), self.forces, floor_N))
+        return error_quantiles(relative_errors(np.asarray(model.forces(self.x, self.v)), self.forces, floor_N),
+                               f"{getattr(model, 'name', 'the model')} (along the reference orbits)")
 
     def verdicts(self, model, rotor_cfg: Mapping, cases: Mapping[str, Mapping], integrator_cfg: Mapping,
                  threshold_pct: float) -> dict:
@@ -251,7 +265,8 @@ class Judges:
         predicted = np.asarray(model.forces(h[["X1", "X2"]].to_numpy(), h[["V1", "V2"]].to_numpy()))
         x, v = sample_states(model.bearing.clearance)
         return {
-            "held_out": error_quantiles(relative_errors(predicted, h[["F1", "F2"]].to_numpy(), self.floor_N)),
+            "held_out": error_quantiles(relative_errors(predicted, h[["F1", "F2"]].to_numpy(), self.floor_N),
+                                        f"{getattr(model, 'name', 'the model')} (held-out states)"),
             "orbit_states": self.orbits.force_errors(model, self.floor_N),
             "cases": (self.orbits.verdicts(model, self.rotor, self.cases, self.integrator, self.threshold_pct)
                       if self.evaluate_cases else None),
