@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -211,11 +212,23 @@ def child_logger_factory(parent, tracking: Mapping, name: str):
 
     client = mlflow.tracking.MlflowClient(tracking["uri"])
 
+    class InterruptibleMLFlowLogger(MLFlowLogger):
+        """Lightning ends its logger's run inside its own Ctrl-C handler, before ours: the SQLite locks the
+        interrupt left held are released first (``_release_interrupted_transactions``), and the run ends
+        KILLED, as the job's run does, rather than FAILED."""
+
+        def finalize(self, status: str = "success") -> None:
+            exc = sys.exc_info()[1]
+            if isinstance(exc, KeyboardInterrupt):
+                _release_interrupted_transactions(exc)
+                status = "KILLED"
+            super().finalize(status)
+
     def logger_for(r):
         child = client.create_run(parent.info.experiment_id, run_name=f"{name}/network{r}",
                                   tags={"mlflow.parentRunId": parent.info.run_id})
-        return MLFlowLogger(experiment_name=tracking["experiment"], tracking_uri=tracking["uri"],
-                            run_id=child.info.run_id)
+        return InterruptibleMLFlowLogger(experiment_name=tracking["experiment"], tracking_uri=tracking["uri"],
+                                         run_id=child.info.run_id)
 
     return logger_for
 

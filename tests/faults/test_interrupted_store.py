@@ -66,3 +66,25 @@ def test_ctrl_c_during_an_mlflow_read_still_ends_the_run_killed(tmp_path):
             # way: a zombie connection on mlflow.db with a half-read cursor (two rows: Default and this one)
             _interrupted_read(tmp_path / "mlflow.db", "experiments")
     assert mlflow.tracking.MlflowClient(uri).get_run(run_id).info.status == "KILLED"
+
+
+def test_ctrl_c_during_an_mlflow_read_inside_lightning_ends_the_network_run_killed(tmp_path):
+    """Lightning ends its logger's run in its own Ctrl-C handler (``logger.finalize("failed")``), before the
+    job's handler; CI once saw that write fail with "database is locked" (test_sweep_faults), which this
+    sqlite3-made state does not reproduce through MLflow deterministically. Checked here: the network's
+    logger runs the same release first (``_release_interrupted_transactions``, tested above) and ends the
+    run KILLED, as the job's run, where Lightning's own logger would mark it FAILED."""
+    uri = f"sqlite:///{tmp_path / 'mlflow.db'}"
+    cfg = {"uri": uri, "experiment": "interrupts"}
+    with pytest.raises(KeyboardInterrupt):
+        with tracking.run(cfg, "job") as parent:
+            logger = tracking.child_logger_factory(parent, cfg, "job")(0)
+            child_id = logger.run_id
+            try:
+                _interrupted_read(tmp_path / "mlflow.db", "experiments")
+            except KeyboardInterrupt:
+                logger.finalize("failed")  # what Lightning's _interrupt does
+                raise
+    client = mlflow.tracking.MlflowClient(uri)
+    assert client.get_run(child_id).info.status == "KILLED"
+    assert client.get_run(parent.info.run_id).info.status == "KILLED"
