@@ -1,7 +1,7 @@
 """The grading study: generate (or reuse) the dataset of one grading, train a surrogate on it, evaluate it.
 
     python experiments/grading_study.py -m grading.n_per_side=8,16,24 grading.n_angle=24,48
-    python experiments/grading_study.py -m scaling=physics_polar,standard split=five_blend,none
+    python experiments/grading_study.py -m scaling=physics_whirl,standard split=five_blend,none
 Each job writes result.json in its Hydra output folder and logs a run to MLflow (nested under the
 sweep's run); when the multirun ends, fluidfilm.grading.SweepSummaryCallback writes the sweep's
 summary.json, table.csv and figure.png (to summary_dir, or the sweep's folder).

@@ -30,7 +30,7 @@ def _net(rng, n_in, width, n_out, depth=2):
 
 
 def _scaling(rng, kind, c, omega, frame, extras=(), gain=0.0):
-    n = (3 if frame == "polar" else 4) + len(extras)
+    n = (4 if frame == "cartesian" else 3) + len(extras)
     return Scaling(kind, c, omega, 50.0, 1.5, rng.normal(0, 0.1, n), 1 + rng.random(n), rng.normal(0, 1, 2),
                    1 + rng.random(2), frame, tuple(extras), gain)
 

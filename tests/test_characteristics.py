@@ -218,7 +218,7 @@ def _random_surrogate(kind, frame, activation, structure, boundaries, blend, see
     from fluidfilm.surrogate import Scaling, SurrogateForceModel
     rng = np.random.default_rng(seed)
     b = paper_bearing()
-    n_in = 3 if frame == "polar" else 4
+    n_in = 4 if frame == "cartesian" else 3
 
     def net(n_out, inputs=n_in):
         return [(rng.normal(size=(16, inputs)), rng.normal(size=16)), (rng.normal(size=(n_out, 16)) / 4, rng.normal(size=n_out))]
@@ -240,6 +240,8 @@ def _random_surrogate(kind, frame, activation, structure, boundaries, blend, see
     ("physics", "polar", "relu", "plain", (0.5, 0.7), 0.04),
     ("physics_v", "cartesian", "silu", "damping", (0.5,), 0.0),
     ("physics", "polar", "sigmoid", "damping", (0.4, 0.8), 0.06),
+    ("physics", "whirl", "tanh", "plain", (0.5,), 0.04),
+    ("physics_v", "whirl", "silu", "plain", (), 0.0),
 ])
 def test_surrogate_jacobian_is_the_networks_derivative(kind, frame, activation, structure, boundaries, blend):
     """Forward-mode value = the compiled kernel's force; derivatives = central differences (~1e-7)."""

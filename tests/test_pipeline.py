@@ -109,7 +109,7 @@ def test_pipeline_writes_every_headline_number(quick_reproduce):
     # the grading study and the ablation: Hydra multiruns whose jobs each made (or reused) a dataset, trained
     # and were judged; the summary holds exactly the sweep's jobs
     for study, jobs in (("grading_study", {"grading.n_per_side=3", "grading.n_per_side=5"}),
-                        ("ablation", {"scaling=physics_polar", "scaling=standard"})):
+                        ("ablation", {"scaling=physics_whirl", "scaling=standard"})):
         summary = json.loads((workdir / "reports" / study / "summary.json").read_text())
         assert {j["job"] for j in summary["jobs"]} == jobs and metrics[f"{study}_jobs"] == 2
         assert all(0 <= j["n_satisfactory"] <= 7 and j["n_samples"] > 0 for j in summary["jobs"])

@@ -28,6 +28,7 @@ def _numpy_net(layers, act, z):
 
 CASES = [(kind, frame, sleeve) for kind in ("standard", "physics", "physics_v") for frame in ("cartesian", "polar")
          for sleeve in (False, True) if not (sleeve and kind == "standard")]
+CASES += [("physics", "whirl", False), ("physics_v", "whirl", False)]
 
 
 @pytest.mark.parametrize("kind,frame,sleeve", CASES)

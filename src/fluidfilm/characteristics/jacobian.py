@@ -97,12 +97,20 @@ def _region(model, r, x1, x2, v1, v2):
         raise ValueError("surrogate_jacobian does not cover surrogates with extra (sleeve) inputs")
     physics = s[0] >= 1.0
     c, omega, fscale, power = s[1], s[2], s[3], s[4]
-    polar = s[19] == 1.0
+    polar = s[19] >= 1.0
+    drive = None
     if polar:
         rr = _sqrt(_mul(x1, x1) + _mul(x2, x2))
         er1, er2 = _div(x1, rr), _div(x2, rr)
         cw = c * omega
         z = [rr / c, (_mul(v1, er1) + _mul(v2, er2)) / cw, (_mul(v1, er2) - _mul(v2, er1)) / cw]
+        if s[19] == 2.0:  # frame 'whirl': the drive u = (eps - 2 v_t, 2 v_r), its direction in, |u| out
+            ua, ub = z[0] - 2.0 * z[2], 2.0 * z[1]
+            drive = _sqrt(_mul(ua, ua) + _mul(ub, ub))
+            if drive[0] == 0.0:
+                raise ValueError("the force of a 'whirl'-frame surrogate has no derivative where its drive vanishes "
+                                 "(a whirl at half the shaft speed, or the centred journal at rest)")
+            z = [z[0], _div(ua, drive), _div(ub, drive)]
     elif physics:
         z = [x1 / c, x2 / c, v1 / (c * omega), v2 / (c * omega)]
     else:
@@ -130,6 +138,8 @@ def _region(model, r, x1, x2, v1, v2):
         g = _fn(dd, lambda u: fscale * u ** (-power), lambda u: -power * fscale * u ** (-power - 1.0))
         if s[0] == 2.0:
             g = _mul(g, _const(1.0) + _speed(v1, v2) / (c * omega))
+        if drive is not None:
+            g = _mul(g, drive)
         f1, f2 = _mul(f1, g), _mul(f2, g)
     if polar:
         return _mul(f1, er1) + _mul(f2, er2), _mul(f1, er2) - _mul(f2, er1)

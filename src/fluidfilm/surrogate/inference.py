@@ -37,7 +37,7 @@ from ..models import ValidityDomain
 from ..states import as_state_pairs
 from .scaling import Scaling
 from .transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
-                         standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb)
+                         standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb, whirl_direction_nb)
 
 class Activation(IntEnum):
     """Hidden-layer activation of the networks (the kernel reads the integer value)."""
@@ -150,9 +150,10 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         inv_c2 = params.setting[0]
         fscale = sleeve_force_scale_nb(fscale, c, inv_c2)
         c = 1.0 / math.sqrt(inv_c2)
-    polar = s[19] == 1.0
+    polar = s[19] >= 1.0  # 1: polar, 2: whirl (polar with the drive's direction as input)
     z = params.scratch[2]
     er1, er2 = 0.0, 1.0
+    drive = 1.0
     if polar:
         # the journal's frame: along (e_r) and across (e_t) the line of centres
         er1, er2 = radial_axis_nb(x1, x2)
@@ -161,6 +162,9 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         z[0] = speed_nb(x1, x2) / c  # |X| / c
         z[1] = vr / cw
         z[2] = vt / cw
+        if s[19] == 2.0:
+            # the film is homogeneous in its drive u: the network sees u's direction, |u| scales the force
+            drive, z[1], z[2] = whirl_direction_nb(z[0], z[1], z[2])
         n_in = 3
     else:
         if physics:
@@ -191,6 +195,7 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         g = film_gain_nb(fscale, e2, power)
         if s[0] == 2.0:
             g *= velocity_factor_nb(speed_nb(v1, v2), c, omega)
+        g *= drive
         f1 *= g
         f2 *= g
     if polar:
@@ -331,6 +336,9 @@ class SurrogateForceModel:
             raise ValueError("all networks of a split model must take the same extra inputs")
         if self._n_extra and structure == "damping":
             raise ValueError("the damping structure takes no extra inputs")
+        if structure == "damping" and any(sc.frame == "whirl" for sc in scalings):
+            raise ValueError("the damping structure needs velocity inputs; frame 'whirl' gives the network the "
+                             "drive's direction instead (use structure 'plain' with it)")
         if self._n_extra and not isinstance(bearing, ConicalBearing):
             raise ValueError(f"extra inputs {scalings[0].extras} need an active (conical) bearing")
         # one flat weight array for all regions: each region's table offsets shifted to its block
@@ -478,7 +486,7 @@ class SurrogateFileError(ValueError):
 def _check_network(npz: Path, meta: dict, arrays) -> None:
     structure = meta.get("structure", "plain")
     for r, scal in enumerate(meta["scalings"]):
-        n_in = (3 if scal.get("frame", "cartesian") == "polar" else 4) + len(scal.get("extras", ()))
+        n_in = (4 if scal.get("frame", "cartesian") == "cartesian" else 3) + len(scal.get("extras", ()))
         chains = [("", meta["n_layers"][r], n_in, 2)]
         if structure == "damping":  # the static load S sees the position inputs only (all but the velocities)
             chains = [("", meta["n_layers"][r], n_in - 2, 2), ("d", meta["n_layers_damping"][r], n_in, 4)]

@@ -24,6 +24,15 @@ Two frames for the inputs and outputs:
   c omega) and G the force in that frame.  Learning G is a 3-D problem
   instead of 4-D, the static force is a function of eps alone, and the
   symmetry holds exactly for the surrogate too.
+- ``whirl``: the journal's frame and the film's homogeneity in velocity.  In
+  that frame the Reynolds equation is driven by u = (eps - 2 v_t, 2 v_r)
+  (wedge with the whirl's relative speed, squeeze) over pressure fields of
+  eps alone, so F = |u| R(phi) G(eps, u/|u|) exactly (``transforms.
+  whirl_direction``).  The network sees (eps, u1/|u|, u2/|u|), a smooth
+  function on a cylinder; |u| multiplies the force scale.  At rest u =
+  (eps, 0): the static load, the stiffness and the damping are values and
+  first derivatives of G near one smooth direction, instead of a corner of a
+  velocity range the network spends most of its weights on.
 
 Extra inputs (``extras``, e.g. ``("S",)`` the sleeve displacement of an
 active bearing) follow the state inputs and are standardised like them.
@@ -44,7 +53,9 @@ import numpy as np
 from . import transforms as tf
 
 SCALINGS = ("standard", "physics", "physics_v", "minmax")
-FRAMES = ("cartesian", "polar")
+FRAMES = ("cartesian", "polar", "whirl")
+#: frame -> kernel code (kernel_row[19])
+FRAME_CODES = {"cartesian": 0.0, "polar": 1.0, "whirl": 2.0}
 # minmax is an affine map like standard (only its centre and half-range differ): same kernel code
 KIND_CODES = {"standard": 0.0, "physics": 1.0, "physics_v": 2.0, "minmax": 0.0}
 AFFINE = ("standard", "minmax")
@@ -89,7 +100,11 @@ class Scaling:
             raise ValueError(f"extra inputs {extras} with scaling kind {kind!r} need the sleeve input S and "
                              f"sleeve_gain = dc/dS > 0 (got {sleeve_gain!r}): the physics scalings need the "
                              "clearance of each sample")
-        n = (3 if frame == "polar" else 4) + len(extras)
+        if frame == "whirl" and (kind in AFFINE or extras):
+            raise ValueError(f"frame 'whirl' needs a physics scaling kind without extra inputs, got kind {kind!r}, "
+                             f"extras {extras}: the drive u is in clearance units and the homogeneity holds for a "
+                             "cylindrical film")
+        n = (4 if frame == "cartesian" else 3) + len(extras)
         if n > cls.MAX_INPUTS:
             raise ValueError(f"{n} network inputs; the compiled kernel takes at most {cls.MAX_INPUTS}")
         s = cls(kind, float(clearance), float(omega), float(force_scale), float(power),
@@ -128,11 +143,20 @@ class Scaling:
         g = tf.film_gain(fscale, tf.eps2(X[..., 0], X[..., 1], inv_c2), self.power)
         if self.kind == "physics_v":
             g = g * tf.velocity_factor(tf.speed(V[..., 0], V[..., 1]), c, self.omega)
+        if self.frame == "whirl":
+            g = g * self._whirl(X, V)[0]
         return g
+
+    def _whirl(self, X, V):
+        """(|u|, u1/|u|, u2/|u|) of each state (``transforms.whirl_direction``)."""
+        er1, er2 = tf.radial_axis(X[..., 0], X[..., 1])
+        vr, vt = tf.to_polar(er1, er2, V[..., 0], V[..., 1])
+        cw = self.clearance * self.omega
+        return tf.whirl_direction(tf.speed(X[..., 0], X[..., 1]) / self.clearance, vr / cw, vt / cw)
 
     @property
     def n_inputs(self) -> int:
-        return (3 if self.frame == "polar" else 4) + len(self.extras)
+        return (4 if self.frame == "cartesian" else 3) + len(self.extras)
 
     def _axes(self, X):
         """Unit vectors along (e_r) and across (e_t) the line of centres; e_r = +X2 at the centre."""
@@ -155,7 +179,10 @@ class Scaling:
     def _raw_inputs(self, X, V, E=None):
         c = self._clear(E)
         c = c[..., None] if np.ndim(c) else c
-        if self.frame == "polar":
+        if self.frame == "whirl":
+            _, d1, d2 = self._whirl(X, V)
+            z = np.stack([tf.speed(X[..., 0], X[..., 1]) / self.clearance, d1, d2], axis=-1)
+        elif self.frame == "polar":
             eps = tf.speed(X[..., 0], X[..., 1])[..., None] / c  # |X| / c
             vf = self.to_frame(X, V) / (c * self.omega)
             z = np.concatenate([eps, vf], axis=-1)
@@ -171,7 +198,9 @@ class Scaling:
         return z
 
     def _raw_targets(self, X, V, F, E=None):
-        return self.to_frame(X, F) / self.gain(X, V, E)[..., None]
+        g = self.gain(X, V, E)[..., None]
+        # frame 'whirl': no drive (u = 0), no film force: any target fits, 0 is the neutral one
+        return np.divide(self.to_frame(X, F), g, out=np.zeros(np.shape(F)), where=g != 0.0)
 
     def inputs(self, X, V, E=None) -> np.ndarray:
         return tf.standardise(self._raw_inputs(X, V, E), self.in_mean, self.in_std)
@@ -207,5 +236,5 @@ class Scaling:
         return np.concatenate([[KIND_CODES[self.kind], self.clearance, self.omega, self.force_scale, self.power],
                                np.concatenate([self.in_mean, np.zeros(pad)]),
                                np.concatenate([self.in_std, np.ones(pad)]), self.out_mean, self.out_std,
-                               [1.0 if self.frame == "polar" else 0.0, float(len(self.extras)),
+                               [FRAME_CODES[self.frame], float(len(self.extras)),
                                 1.0 if self.sleeve_gain else 0.0]])

@@ -327,6 +327,9 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
     L.seed_everything(seed, workers=True)
     dm.setup()
     assert dm.scaling is not None  # set by setup()
+    if model_cfg.get("structure", "plain") == "damping" and dm.scaling.frame == "whirl":
+        raise ValueError("model.structure='damping' needs velocity inputs; scaling.frame='whirl' gives the network "
+                         "the drive's direction instead: use structure 'plain' with it")
     model = ForceMLP(width=model_cfg["width"], depth=model_cfg["depth"], activation=model_cfg["activation"],
                      optimizer=model_cfg.get("optimizer", "adam"), lr=model_cfg["lr"],
                      weight_decay=model_cfg.get("weight_decay", 0.0), scheduler=model_cfg.get("scheduler", "cosine"),

@@ -61,6 +61,25 @@ def from_polar(er1, er2, g1, g2):
     return g1 * er1 + g2 * er2, g1 * er2 - g2 * er1
 
 
+def whirl_direction(eps, vr, vt):
+    """The film's drive u = (eps - 2 v_t, 2 v_r) (velocities in units of c omega, v_t along e_t), as
+    (|u|, u1/|u|, u2/|u|); the direction is (1, 0) where u = 0.  Branch-free.
+
+    In the journal's frame the Reynolds equation's right-hand side is
+    eps (omega - 2 dphi/dt) (wedge) plus 2 deps/dt (squeeze), i.e. omega times u, over pressure
+    fields that depend on eps alone; the film force (Gumbel or Swift-Stieber) is therefore
+    positively homogeneous of degree 1 in u: F(eps, k u) = k F(eps, u) for k >= 0.  A whirl at
+    half the shaft speed (v_t = eps / 2, v_r = 0) gives u = 0 and no film force.  With the
+    frame ``whirl`` a network learns F / |u| as a function of eps and the direction of u alone.
+    """
+    a = eps - 2.0 * vt
+    b = 2.0 * vr
+    m = np.sqrt(a * a + b * b)
+    zero = m == 0.0
+    safe = m + zero
+    return m, a / safe + zero, b / safe
+
+
 def standardise(raw, mean, std):
     return (raw - mean) / std
 
@@ -78,5 +97,6 @@ velocity_factor_nb = njit(inline="always")(velocity_factor)
 radial_axis_nb = njit(inline="always")(radial_axis)
 to_polar_nb = njit(inline="always")(to_polar)
 from_polar_nb = njit(inline="always")(from_polar)
+whirl_direction_nb = njit(inline="always")(whirl_direction)
 standardise_nb = njit(inline="always")(standardise)
 unstandardise_nb = njit(inline="always")(unstandardise)
