@@ -83,6 +83,7 @@ def main(cfg: DictConfig) -> None:
         e = err[err.model == name]
         out["kc_max_rel_err"][name] = {"direct": float(e[e.kind == "direct"].rel_err.max()),
                                        "cross": float(e[e.kind == "cross"].rel_err.max()),
+                                       "scale": float(e.scale_rel_err.max()),
                                        "by_coefficient": {k: float(g.rel_err.max()) for k, g in e.groupby("coefficient")}}
     x0 = stab.operating_point(ref, study.loads_for_eccentricities(ref, [ch.step_study_eps])[0])["X"]
     steps = study.step_table(ref, x0, ch.step_study_steps)
@@ -128,6 +129,7 @@ def main(cfg: DictConfig) -> None:
     for name in surrogates:
         metrics[f"kc_max_rel_err_direct_{name}"] = out["kc_max_rel_err"][name]["direct"]
         metrics[f"kc_max_rel_err_cross_{name}"] = out["kc_max_rel_err"][name]["cross"]
+        metrics[f"kc_max_scale_err_{name}"] = out["kc_max_rel_err"][name]["scale"]
         metrics[f"whirl_threshold_rel_err_{name}"] = float(out["whirl_threshold_rel_err"][name])
     metrics["whirl_threshold_rpm_reference"] = float(thr["reference"]["speed_rpm"])
     out["metrics"] = metrics

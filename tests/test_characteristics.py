@@ -275,3 +275,23 @@ def test_published_flows_respect_the_couette_inflow_bound():
         ratios = [q / (math.pi * (1 + eps)) for eps, _, _, _, q, _ in rows]
         assert all(r <= 1.0 for r in ratios), (l_over_d, ratios)
         assert all(b <= a + 1e-3 for a, b in zip(ratios, ratios[1:])), (l_over_d, ratios)  # falls with eps
+
+
+def test_coefficient_errors_floor_and_share_of_the_matrix():
+    """rel_err floors the denominator at a tenth of the matrix scale; scale_rel_err divides by the scale itself."""
+    import pandas as pd
+
+    from fluidfilm.characteristics import study
+
+    ref = dict(model="reference", load_N=10.0, eps=0.3, Kxx=10.0, Kxy=-1.0, Kyx=0.5, Kyy=8.0,
+               Cxx=20.0, Cxy=2.0, Cyx=2.0, Cyy=16.0)
+    sur = dict(ref, model="s", Kxx=11.0, Kyx=0.7, Cyy=15.2)
+    err = study.coefficient_errors(pd.DataFrame([ref, sur]), "reference").set_index("coefficient")
+    assert err.loc["Kxx", "rel_err"] == pytest.approx(0.1) and err.loc["Kxx", "scale_rel_err"] == pytest.approx(0.1)
+    # Kyx: 0.2 off a reference of 0.5, floor 0.1 x 10 = 1: 20 % floored, 40 % plain, 2 % of the matrix
+    assert err.loc["Kyx", "rel_err"] == pytest.approx(0.2)
+    assert err.loc["Kyx", "plain_rel_err"] == pytest.approx(0.4)
+    assert err.loc["Kyx", "scale_rel_err"] == pytest.approx(0.02)
+    assert err.loc["Cyy", "scale_rel_err"] == pytest.approx(0.8 / 20.0)
+    assert err.loc["Kxy", "rel_err"] == 0.0
+    assert (err.scale_rel_err <= err.rel_err + 1e-15).all()

@@ -124,7 +124,7 @@ def test_pipeline_writes_every_headline_number(quick_reproduce):
     for name in ("best", "best_s1", "best_s2"):
         assert 0 <= metrics[f"orbit_state_rel_err_median_{name}"] <= metrics[f"orbit_state_rel_err_p99_{name}"]
     assert (workdir / "reports" / "figures" / "error_map.png").stat().st_size > 10_000
-    assert metrics["surrogate_goals"] == 11 and 0 <= metrics["surrogate_goals_met"] <= 11
+    assert metrics["surrogate_goals"] == 14 and 0 <= metrics["surrogate_goals_met"] <= 14
     assert 0 <= metrics["satisfactory_cases_best_min_over_seeds"] <= 7
     assert "## The best surrogate against its goals" in md
 

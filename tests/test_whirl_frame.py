@@ -63,6 +63,21 @@ def test_whirl_scaling_needs_physics_and_no_extras():
         Scaling.fit("physics", X, V, F, C, OM, B.force_scale, frame="journal")
 
 
+def test_whirl_frame_refuses_a_supply_pressure():
+    """With a supply pressure the film force is not homogeneous in its drive (force at u = 0): refused."""
+    sc = Scaling("physics", C, OM, B.force_scale, 1.5, np.zeros(3), np.ones(3), np.zeros(2), np.ones(2), "whirl")
+    net = [(np.ones((4, 3)), np.zeros(4)), (np.ones((2, 4)), np.zeros(2))]
+    with pytest.raises(ValueError, match="supply_pressure=20000"):
+        SurrogateForceModel(paper_bearing(supply_pressure=2e4), [net], [sc], "tanh")
+    # and the premise: with the supply end pressurised the reference is no longer homogeneous in u
+    # (1.7 % here, against 0.1 % without supply pressure in the test above)
+    s = ReynoldsSolver(paper_bearing(supply_pressure=2e4), 30, 30, cavitation="gumbel")
+    x, v = _state(0.5, 0.3, 0.1, 0.1)
+    _, v2 = _state(0.5, 0.3, 0.2, (0.5 - 2 * (0.5 - 0.2)) / 2)  # drive doubled
+    F, F2 = s.forces(x, v), s.forces(x, v2)
+    assert np.hypot(*(F2 - 2 * F)) > 0.01 * np.hypot(*(2 * F))
+
+
 def test_damping_structure_refuses_the_whirl_frame():
     rng = np.random.default_rng(0)
     sc = Scaling("physics", C, OM, B.force_scale, 1.5, np.zeros(3), np.ones(3), np.zeros(2), np.ones(2), "whirl")

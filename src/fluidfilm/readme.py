@@ -182,9 +182,10 @@ def render_characteristics(reports: Path) -> str:
     for name, e in ch["kc_max_rel_err"].items():
         t = ch["whirl_threshold_rel_err"].get(name)
         rows.append([name, _num(100 * e["direct"], ".2f", " %"), _num(100 * e["cross"], ".2f", " %"),
+                     _num(100 * e["scale"], ".2f", " %") if "scale" in e else "-",
                      "n/a" if t is None else f"{100 * t:.2f} %"])
     lines.append(_table(["model", "K/C max error, direct terms", "K/C max error, cross terms",
-                         "whirl threshold error"], rows))
+                         "K/C max error, share of the matrix", "whirl threshold error"], rows))
     return "\n".join(lines)
 
 

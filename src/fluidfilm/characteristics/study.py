@@ -105,7 +105,10 @@ def coefficient_errors(table: pd.DataFrame, reference: str) -> pd.DataFrame:
     reference coefficient of the same matrix (stiffness or damping) at that
     load; the floor keeps a cross term passing through zero from turning a
     tiny absolute error into an unbounded ratio (where |K_ref| > 0.1 scale it
-    is the plain relative error).  ``plain_rel_err`` is the unfloored ratio.
+    is the plain relative error).  ``plain_rel_err`` is the unfloored ratio;
+    ``scale_rel_err`` = |K - K_ref| / scale, the error as a share of the
+    matrix (what a rotor model feels: a 20 % error of a cross term that is a
+    tenth of the direct ones is 2 % of the matrix).
     """
     ref = table[table.model == reference].set_index("load_N")
     rows = []
@@ -119,7 +122,8 @@ def coefficient_errors(table: pd.DataFrame, reference: str) -> pd.DataFrame:
             rows.append({"model": r.model, "load_N": r.load_N, "eps_ref": q.eps, "coefficient": k,
                          "kind": "direct" if k in DIRECT else "cross", "value": r[k], "reference": q[k],
                          "rel_err": diff / max(abs(q[k]), 0.1 * scale),
-                         "plain_rel_err": diff / abs(q[k]) if q[k] != 0 else float("inf")})
+                         "plain_rel_err": diff / abs(q[k]) if q[k] != 0 else float("inf"),
+                         "scale_rel_err": diff / scale})
     return pd.DataFrame(rows)
 
 

@@ -336,6 +336,9 @@ class SurrogateForceModel:
             raise ValueError("all networks of a split model must take the same extra inputs")
         if self._n_extra and structure == "damping":
             raise ValueError("the damping structure takes no extra inputs")
+        if any(sc.frame == "whirl" for sc in scalings) and getattr(bearing, "supply_pressure", 0.0) != 0.0:
+            raise ValueError(f"frame 'whirl' assumes no supply pressure (the film force is then homogeneous in its "
+                             f"drive); this bearing has supply_pressure={bearing.supply_pressure!r} Pa")
         if structure == "damping" and any(sc.frame == "whirl" for sc in scalings):
             raise ValueError("the damping structure needs velocity inputs; frame 'whirl' gives the network the "
                              "drive's direction instead (use structure 'plain' with it)")

@@ -32,7 +32,9 @@ Two frames for the inputs and outputs:
   function on a cylinder; |u| multiplies the force scale.  At rest u =
   (eps, 0): the static load, the stiffness and the damping are values and
   first derivatives of G near one smooth direction, instead of a corner of a
-  velocity range the network spends most of its weights on.
+  velocity range the network spends most of its weights on.  It holds for a
+  film without supply pressure (the workspace's default); the force model
+  and the training refuse a bearing with one.
 
 Extra inputs (``extras``, e.g. ``("S",)`` the sleeve displacement of an
 active bearing) follow the state inputs and are standardised like them.

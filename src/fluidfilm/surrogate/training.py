@@ -200,6 +200,10 @@ class ForceDataModule(L.LightningDataModule):
             return
         df, meta = (self._table, self._meta) if self._table is not None else load_dataset(self.dataset_dir)
         self.bearing = dataset_bearing(meta)
+        if self.frame == "whirl" and getattr(self.bearing, "supply_pressure", 0.0) != 0.0:
+            raise ValueError(f"scaling.frame='whirl' assumes no supply pressure (the film force is then homogeneous "
+                             f"in its drive); this dataset's bearing has supply_pressure="
+                             f"{self.bearing.supply_pressure!r} Pa: use frame 'polar'")
         df = df[(df["eps"] >= self.eps_low) & (df["eps"] < self.eps_high)]
         if len(df) == 0:
             raise ValueError(f"no samples with eps in [{self.eps_low}, {self.eps_high})")
