@@ -36,13 +36,12 @@ def test_reference_film_is_homogeneous_in_its_drive(cavitation):
         assert np.hypot(*s.forces(x, v_half)) < 5e-3 * np.hypot(*F0)
         for vr, vt in [(0.2, 0.1), (-0.3, 0.6), (0.05, -0.4)]:
             x, v = _state(eps, angle, vr, vt)
-            a, b = eps - 2 * vt, 2 * vr
+            a = eps - 2 * vt
             for k in (0.5, 2.0):
                 # the state whose drive is k u: v_r' = k v_r, v_t' = (eps - k a) / 2
                 _, vk = _state(eps, angle, k * vr, (eps - k * a) / 2)
                 np.testing.assert_allclose(s.forces(x, vk), k * s.forces(x, v), rtol=2e-3,
                                            atol=2e-3 * np.hypot(*F0))
-            assert b == 2 * vr  # (u's second component is the squeeze alone)
 
 
 def test_whirl_direction_is_the_unit_drive_and_neutral_at_zero():
@@ -61,6 +60,27 @@ def test_whirl_scaling_needs_physics_and_no_extras():
         Scaling.fit("standard", X, V, F, C, OM, B.force_scale, frame="whirl")
     with pytest.raises(ValueError, match="frame"):
         Scaling.fit("physics", X, V, F, C, OM, B.force_scale, frame="journal")
+    # built directly (or loaded from a model file) as well: the kernel would drop |u| for an affine kind
+    for kind, extras in (("minmax", ()), ("physics", ("S",))):
+        n = 3 + len(extras)
+        with pytest.raises(ValueError, match="whirl"):
+            Scaling(kind, C, OM, B.force_scale, 1.5, np.zeros(n), np.ones(n), np.zeros(2), np.ones(2), "whirl", extras)
+
+
+def test_whirl_jacobian_refuses_a_vanished_drive_and_the_centre():
+    """Where u vanishes (to rounding) or at eps = 0 the derivative does not exist: an error, not noise or NaN."""
+    from fluidfilm.characteristics.jacobian import surrogate_jacobian
+    rng = np.random.default_rng(1)
+    sc = Scaling("physics", C, OM, B.force_scale, 1.5, np.zeros(3), np.ones(3), np.zeros(2), np.ones(2), "whirl")
+    m = SurrogateForceModel(B, [[(rng.normal(size=(8, 3)), rng.normal(size=8)), (rng.normal(size=(2, 8)),
+                                                                                  rng.normal(size=2))]], [sc], "tanh")
+    x, v_half = _state(0.5, 1.1, 0.0, 0.25)  # |u| ~ 1e-16 after the rotation, not exactly 0
+    with pytest.raises(ValueError, match="drive vanishes"):
+        surrogate_jacobian(m, x, v_half)
+    with pytest.raises(ValueError, match="centre"):
+        surrogate_jacobian(m, np.zeros(2), np.array([0.01, 0.0]))
+    F, J = surrogate_jacobian(m, x, np.zeros(2))  # at rest away from the centre: fine
+    assert np.all(np.isfinite(J))
 
 
 def test_whirl_frame_refuses_a_supply_pressure():

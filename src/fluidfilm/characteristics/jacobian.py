@@ -100,16 +100,20 @@ def _region(model, r, x1, x2, v1, v2):
     polar = s[19] >= 1.0
     drive = None
     if polar:
+        if x1[0] == 0.0 and x2[0] == 0.0:
+            # the journal's frame has no direction at the centre: the force is defined there, its derivative not
+            raise ValueError("a polar- or whirl-frame surrogate has no derivative at the bearing centre (eps = 0)")
         rr = _sqrt(_mul(x1, x1) + _mul(x2, x2))
         er1, er2 = _div(x1, rr), _div(x2, rr)
         cw = c * omega
         z = [rr / c, (_mul(v1, er1) + _mul(v2, er2)) / cw, (_mul(v1, er2) - _mul(v2, er1)) / cw]
         if s[19] == 2.0:  # frame 'whirl': the drive u = (eps - 2 v_t, 2 v_r), its direction in, |u| out
             ua, ub = z[0] - 2.0 * z[2], 2.0 * z[1]
-            drive = _sqrt(_mul(ua, ua) + _mul(ub, ub))
-            if drive[0] == 0.0:
+            # |u| ~ 1e-16 is a vanished drive up to rounding: its direction is noise there
+            if math.hypot(ua[0], ub[0]) <= 1e-12 * max(z[0][0], 1.0):
                 raise ValueError("the force of a 'whirl'-frame surrogate has no derivative where its drive vanishes "
                                  "(a whirl at half the shaft speed, or the centred journal at rest)")
+            drive = _sqrt(_mul(ua, ua) + _mul(ub, ub))
             z = [z[0], _div(ua, drive), _div(ub, drive)]
     elif physics:
         z = [x1 / c, x2 / c, v1 / (c * omega), v2 / (c * omega)]

@@ -88,6 +88,13 @@ class Scaling:
 
     MAX_INPUTS = 5
 
+    def __post_init__(self):
+        # the kernel applies |u| with the physics gain only: an affine whirl scaling would silently drop it
+        if self.frame == "whirl" and (self.kind in AFFINE or tuple(self.extras)):
+            raise ValueError(f"frame 'whirl' needs a physics scaling kind without extra inputs, got kind "
+                             f"{self.kind!r}, extras {tuple(self.extras)}: the drive u is in clearance units and "
+                             "the homogeneity holds for a cylindrical film")
+
     # ------------------------------------------------------------------ fit
     @classmethod
     def fit(cls, kind: str, X: np.ndarray, V: np.ndarray, F: np.ndarray, clearance: float, omega: float,
@@ -102,10 +109,6 @@ class Scaling:
             raise ValueError(f"extra inputs {extras} with scaling kind {kind!r} need the sleeve input S and "
                              f"sleeve_gain = dc/dS > 0 (got {sleeve_gain!r}): the physics scalings need the "
                              "clearance of each sample")
-        if frame == "whirl" and (kind in AFFINE or extras):
-            raise ValueError(f"frame 'whirl' needs a physics scaling kind without extra inputs, got kind {kind!r}, "
-                             f"extras {extras}: the drive u is in clearance units and the homogeneity holds for a "
-                             "cylindrical film")
         n = (4 if frame == "cartesian" else 3) + len(extras)
         if n > cls.MAX_INPUTS:
             raise ValueError(f"{n} network inputs; the compiled kernel takes at most {cls.MAX_INPUTS}")
