@@ -35,7 +35,7 @@ from .. import io
 from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
 from ..models import ValidityDomain
 from ..states import as_state_pairs
-from .scaling import Scaling
+from .scaling import Scaling, check_whirl_use, network_inputs
 from .transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
                          standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb, whirl_direction_nb)
 
@@ -336,12 +336,8 @@ class SurrogateForceModel:
             raise ValueError("all networks of a split model must take the same extra inputs")
         if self._n_extra and structure == "damping":
             raise ValueError("the damping structure takes no extra inputs")
-        if any(sc.frame == "whirl" for sc in scalings) and getattr(bearing, "supply_pressure", 0.0) != 0.0:
-            raise ValueError(f"frame 'whirl' assumes no supply pressure (the film force is then homogeneous in its "
-                             f"drive); this bearing has supply_pressure={bearing.supply_pressure!r} Pa")
-        if structure == "damping" and any(sc.frame == "whirl" for sc in scalings):
-            raise ValueError("the damping structure needs velocity inputs; frame 'whirl' gives the network the "
-                             "drive's direction instead (use structure 'plain' with it)")
+        for sc in scalings:
+            check_whirl_use(sc.frame, structure, bearing)
         if self._n_extra and not isinstance(bearing, ConicalBearing):
             raise ValueError(f"extra inputs {scalings[0].extras} need an active (conical) bearing")
         # one flat weight array for all regions: each region's table offsets shifted to its block
@@ -489,7 +485,7 @@ class SurrogateFileError(ValueError):
 def _check_network(npz: Path, meta: dict, arrays) -> None:
     structure = meta.get("structure", "plain")
     for r, scal in enumerate(meta["scalings"]):
-        n_in = (4 if scal.get("frame", "cartesian") == "cartesian" else 3) + len(scal.get("extras", ()))
+        n_in = network_inputs(scal.get("frame", "cartesian"), len(scal.get("extras", ())))
         chains = [("", meta["n_layers"][r], n_in, 2)]
         if structure == "damping":  # the static load S sees the position inputs only (all but the velocities)
             chains = [("", meta["n_layers"][r], n_in - 2, 2), ("d", meta["n_layers_damping"][r], n_in, 4)]

@@ -63,6 +63,27 @@ KIND_CODES = {"standard": 0.0, "physics": 1.0, "physics_v": 2.0, "minmax": 0.0}
 AFFINE = ("standard", "minmax")
 
 
+def network_inputs(frame: str, n_extras: int = 0) -> int:
+    """Inputs of a network in ``frame``: (X1, X2, V1, V2) in the cartesian frame, three in the journal's
+    (eps and two velocity or drive-direction components), then the extra inputs."""
+    return (4 if frame == "cartesian" else 3) + int(n_extras)
+
+
+def check_whirl_use(frame: str, structure: str, bearing) -> None:
+    """The frame 'whirl' rests on the film's homogeneity in its drive and gives the network no velocities:
+    refused for a bearing with supply pressure (no homogeneity) and for the damping structure (it needs
+    velocity inputs).  One check for training and for building a force model."""
+    if frame != "whirl":
+        return
+    supply = getattr(bearing, "supply_pressure", 0.0)
+    if supply != 0.0:
+        raise ValueError(f"frame 'whirl' assumes no supply pressure (the film force is then homogeneous in its "
+                         f"drive); this bearing has supply_pressure={supply!r} Pa: use frame 'polar'")
+    if structure == "damping":
+        raise ValueError("the damping structure needs velocity inputs; frame 'whirl' gives the network the "
+                         "drive's direction instead (use structure 'plain' with it)")
+
+
 def _centre_half_range(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(max + min)/2 and (max - min)/2 per column: (a - centre)/half maps [min, max] onto [-1, 1]."""
     lo, hi = a.min(axis=0), a.max(axis=0)
@@ -109,7 +130,7 @@ class Scaling:
             raise ValueError(f"extra inputs {extras} with scaling kind {kind!r} need the sleeve input S and "
                              f"sleeve_gain = dc/dS > 0 (got {sleeve_gain!r}): the physics scalings need the "
                              "clearance of each sample")
-        n = (4 if frame == "cartesian" else 3) + len(extras)
+        n = network_inputs(frame, len(extras))
         if n > cls.MAX_INPUTS:
             raise ValueError(f"{n} network inputs; the compiled kernel takes at most {cls.MAX_INPUTS}")
         s = cls(kind, float(clearance), float(omega), float(force_scale), float(power),
@@ -161,7 +182,7 @@ class Scaling:
 
     @property
     def n_inputs(self) -> int:
-        return (4 if self.frame == "cartesian" else 3) + len(self.extras)
+        return network_inputs(self.frame, len(self.extras))
 
     def _axes(self, X):
         """Unit vectors along (e_r) and across (e_t) the line of centres; e_r = +X2 at the centre."""

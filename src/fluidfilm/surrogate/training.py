@@ -29,7 +29,7 @@ from torch import nn
 
 from ..bearing import ConicalBearing
 from ..data.schema import EXTRA_INPUTS, dataset_bearing, load_dataset
-from .scaling import Scaling
+from .scaling import Scaling, check_whirl_use
 
 _ACT = {"tanh": nn.Tanh, "relu": nn.ReLU, "silu": nn.SiLU, "sigmoid": nn.Sigmoid}
 
@@ -200,10 +200,7 @@ class ForceDataModule(L.LightningDataModule):
             return
         df, meta = (self._table, self._meta) if self._table is not None else load_dataset(self.dataset_dir)
         self.bearing = dataset_bearing(meta)
-        if self.frame == "whirl" and getattr(self.bearing, "supply_pressure", 0.0) != 0.0:
-            raise ValueError(f"scaling.frame='whirl' assumes no supply pressure (the film force is then homogeneous "
-                             f"in its drive); this dataset's bearing has supply_pressure="
-                             f"{self.bearing.supply_pressure!r} Pa: use frame 'polar'")
+        check_whirl_use(self.frame, "plain", self.bearing)  # before any training: the frame's premise
         df = df[(df["eps"] >= self.eps_low) & (df["eps"] < self.eps_high)]
         if len(df) == 0:
             raise ValueError(f"no samples with eps in [{self.eps_low}, {self.eps_high})")
@@ -331,9 +328,7 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
     L.seed_everything(seed, workers=True)
     dm.setup()
     assert dm.scaling is not None  # set by setup()
-    if model_cfg.get("structure", "plain") == "damping" and dm.scaling.frame == "whirl":
-        raise ValueError("model.structure='damping' needs velocity inputs; scaling.frame='whirl' gives the network "
-                         "the drive's direction instead: use structure 'plain' with it")
+    check_whirl_use(dm.scaling.frame, model_cfg.get("structure", "plain"), dm.bearing)
     model = ForceMLP(width=model_cfg["width"], depth=model_cfg["depth"], activation=model_cfg["activation"],
                      optimizer=model_cfg.get("optimizer", "adam"), lr=model_cfg["lr"],
                      weight_decay=model_cfg.get("weight_decay", 0.0), scheduler=model_cfg.get("scheduler", "cosine"),
