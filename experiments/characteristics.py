@@ -56,6 +56,16 @@ def main(cfg: DictConfig) -> None:
                             "side_flow_ratio_max_err_pct": float(fed.qs_ratio_err_pct.abs().max()),
                             "phi_max_err_deg_no_feed": float(rb[(rb.feed == "none") & (rb.eps <= 0.9)]
                                                              .phi_err_deg.abs().max())}
+    lt = study.lund_thomsen_table(ch.lund_thomsen_grid)
+    io.write_csv(tables / "lund_thomsen.csv", lt)
+    kc_cols = [c for c in lt.columns if c.endswith("_err_pct")]
+    out["lund_thomsen"] = {"grid": lt.grid.iloc[0], "rows": len(lt),
+                           "rows_two_typings": int(lt.two_typings.sum()),
+                           "eps_max_err": float(lt.eps_err.abs().max()),
+                           "phi_max_err_deg": float(lt.phi_err_deg.abs().max()),
+                           "kc_max_err_pct": float(lt[kc_cols].max().max()),
+                           "kc_max_err_pct_by_coefficient": {c[:-8]: float(lt[c].max()) for c in kc_cols},
+                           "kc_max_err_pct_two_typings": float(lt[lt.two_typings][kc_cols].max().max())}
     sbt = study.short_bearing_table(ch.short_bearing.l_over_d, ch.short_bearing.grid, ch.short_bearing.eps)
     io.write_csv(tables / "short_bearing.csv", sbt)
     out["short_bearing"] = {
@@ -75,16 +85,19 @@ def main(cfg: DictConfig) -> None:
     h = {"default": ch.h_rel_reference}  # surrogates: exact Jacobian (no step)
     kc = study.coefficient_table(models, loads, h)
     io.write_csv(tables / "coefficients.csv", kc)
-    err = study.coefficient_errors(kc, "reference")
+    # Errors against both references. The headline is the grid-converged one: the paper's 30 x 30 grid is
+    # itself up to ~7 % (direct) / ~23 % (cross) off it above eps 0.7, and a surrogate, which learned that
+    # grid's forces, need not share its derivative error (docs/characteristics.md, "Which reference").
+    err = pd.concat([study.coefficient_errors(kc, "reference_converged").assign(against="reference_converged"),
+                     study.coefficient_errors(kc, "reference").assign(against="reference")], ignore_index=True)
     io.write_csv(tables / "coefficient_errors.csv", err)
     io.save_figure(study.plot_coefficients(kc), figs / "characteristics_coefficients.png", dpi=120)
-    out["kc_max_rel_err"] = {}
-    for name in ["reference_converged", *surrogates]:
-        e = err[err.model == name]
-        out["kc_max_rel_err"][name] = {"direct": float(e[e.kind == "direct"].rel_err.max()),
-                                       "cross": float(e[e.kind == "cross"].rel_err.max()),
-                                       "scale": float(e.scale_rel_err.max()),
-                                       "by_coefficient": {k: float(g.rel_err.max()) for k, g in e.groupby("coefficient")}}
+    out["kc_against"] = {"kc_max_rel_err": "reference_converged", "kc_max_rel_err_paper_grid": "reference"}
+    for key, against, names in (("kc_max_rel_err", "reference_converged", ["reference", *surrogates]),
+                                ("kc_max_rel_err_paper_grid", "reference", ["reference_converged", *surrogates])):
+        out[key] = {}
+        for name in names:
+            out[key][name] = study.coefficient_error_summary(err[(err.against == against) & (err.model == name)])
     x0 = stab.operating_point(ref, study.loads_for_eccentricities(ref, [ch.step_study_eps])[0])["X"]
     steps = study.step_table(ref, x0, ch.step_study_steps)
     steps_sur = {n: study.step_table(m, x0, ch.step_study_steps) for n, m in surrogates.items()}
@@ -118,20 +131,30 @@ def main(cfg: DictConfig) -> None:
     io.save_figure(study.plot_stability_map(kc, rotor_line, checks), figs / "characteristics_stability_map.png",
                    dpi=120)
     io.write_csv(tables / "thresholds.csv", pd.DataFrame([{"model": n, **t} for n, t in thr.items()]))
-    th_ref = thr["reference"]["speed_rad_s"]
     out["threshold"] = {n: {k: (v if isinstance(v, str) else float(v)) for k, v in t.items()} for n, t in thr.items()}
-    out["whirl_threshold_rel_err"] = {n: abs(t["speed_rad_s"] / th_ref - 1) for n, t in thr.items() if n != "reference"}
+    for key, against in (("whirl_threshold_rel_err", "reference_converged"),
+                         ("whirl_threshold_rel_err_paper_grid", "reference")):
+        th_ref = thr[against]["speed_rad_s"]
+        out[key] = {n: abs(t["speed_rad_s"] / th_ref - 1) for n, t in thr.items() if n != against}
     out["nonlinear_checks"] = checks
     out["bracket_holds"] = bool(checks[0]["ratio"] < 1 < checks[-1]["ratio"] or checks[-1]["contact"])
     out["rotor_mass_per_bearing_kg"] = mass
     out["timing_ms_per_coefficient_set"] = dict(zip(timing.model, timing.time_per_set_ms))
     metrics = {}
-    for name in surrogates:
-        metrics[f"kc_max_rel_err_direct_{name}"] = out["kc_max_rel_err"][name]["direct"]
-        metrics[f"kc_max_rel_err_cross_{name}"] = out["kc_max_rel_err"][name]["cross"]
-        metrics[f"kc_max_scale_err_{name}"] = out["kc_max_rel_err"][name]["scale"]
+    for name in ["reference", *surrogates]:  # "reference": the paper's grid against the converged one
+        for key, tail in (("kc_max_rel_err", ""), ("kc_max_rel_err_paper_grid", "_vs_paper_grid")):
+            if name in out[key]:
+                metrics[f"kc_max_rel_err_direct_{name}{tail}"] = out[key][name]["direct"]
+                metrics[f"kc_max_rel_err_cross_{name}{tail}"] = out[key][name]["cross"]
+                metrics[f"kc_max_scale_err_{name}{tail}"] = out[key][name]["scale"]
         metrics[f"whirl_threshold_rel_err_{name}"] = float(out["whirl_threshold_rel_err"][name])
+        if name != "reference":
+            metrics[f"whirl_threshold_rel_err_{name}_vs_paper_grid"] = float(
+                out["whirl_threshold_rel_err_paper_grid"][name])
+    metrics["lund_thomsen_kc_max_err_pct"] = out["lund_thomsen"]["kc_max_err_pct"]
+    metrics["lund_thomsen_phi_max_err_deg"] = out["lund_thomsen"]["phi_max_err_deg"]
     metrics["whirl_threshold_rpm_reference"] = float(thr["reference"]["speed_rpm"])
+    metrics["whirl_threshold_rpm_reference_converged"] = float(thr["reference_converged"]["speed_rpm"])
     out["metrics"] = metrics
     io.write_json(Path(cfg.out_json), _finite_or_none(out))
     with tracking.run(cfg.tracking, "characteristics", OmegaConf.to_container(cfg, resolve=True)):

@@ -88,7 +88,12 @@ def test_pipeline_writes_every_headline_number(quick_reproduce):
     # the characteristics stage: surrogate K/C and whirl-threshold errors, the nonlinear bracket
     for key in ("kc_max_rel_err_direct_best", "kc_max_rel_err_cross_best", "whirl_threshold_rel_err_best"):
         assert key in metrics
+    for key in ("kc_max_rel_err_direct_best_vs_paper_grid", "kc_max_rel_err_cross_reference",
+                "whirl_threshold_rel_err_best_vs_paper_grid", "lund_thomsen_kc_max_err_pct"):
+        assert key in metrics
     ch = json.loads((workdir / "reports" / "characteristics.json").read_text())
+    assert ch["kc_against"]["kc_max_rel_err"] == "reference_converged"
+    assert ch["lund_thomsen"]["rows"] == 21 and ch["lund_thomsen"]["rows_two_typings"] == 5
     assert ch["bracket_holds"]
     assert ch["raimondi_boyd"]["S_max_err_pct"] < 2.0
     assert (workdir / "reports" / "figures" / "characteristics_stability_map.png").stat().st_size > 10_000

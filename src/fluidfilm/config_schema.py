@@ -310,6 +310,7 @@ class CharacteristicsSchema:
     step_study_steps: list[float] = MISSING
     static: StaticSchema = field(default_factory=StaticSchema)
     raimondi_boyd_grid: list[int] = MISSING
+    lund_thomsen_grid: list[int] = MISSING
     short_bearing: ShortBearingSchema = field(default_factory=ShortBearingSchema)
     threshold: ThresholdSchema = field(default_factory=ThresholdSchema)
     nonlinear: NonlinearSchema = field(default_factory=NonlinearSchema)

@@ -19,6 +19,7 @@ from . import coefficients as coef
 from . import shortbearing as sb
 from . import stability as stab
 from . import static
+from . import published as pub
 from .published import RAIMONDI_BOYD, short_bearing_kc
 
 DIRECT = ("Kxx", "Kyy", "Cxx", "Cyy")
@@ -56,6 +57,59 @@ def raimondi_boyd_table(grid, d: float = 0.04, clearance: float = 120e-6) -> pd.
                              "flow_err_pct": 100 * (r["flow_variable"] / qv - 1),
                              "qs_ratio_pub": qs, "qs_ratio": r["side_flow_ratio"],
                              "qs_ratio_err_pct": 100 * (r["side_flow_ratio"] / qs - 1)})
+    return pd.DataFrame(rows)
+
+
+def lund_thomsen_bearing(l_over_d: float, grid, d: float = 0.1, clearance: float = 100e-6):
+    """Lund & Thomsen's two-axial-groove bearing on our grooved solver: grooves of 20 deg centred at +-90 deg
+    from the load line (+X2), at zero gauge pressure, Swift-Stieber.  (The dimensionless results depend only
+    on L/D; the size, speed and viscosity are arbitrary.)"""
+    from ..reynolds.feed import GroovedReynoldsSolver
+
+    b = JournalBearing(length=l_over_d * d, diameter=d, clearance=clearance, speed_rpm=3000.0, viscosity=0.02)
+    return GroovedReynoldsSolver(b, int(grid[0]), int(grid[1]), cavitation="swift-stieber", groove_angle=math.pi / 2,
+                                 n_grooves=2, groove_width=math.radians(pub.LUND_THOMSEN_GROOVE_WIDTH_DEG))
+
+
+def lund_thomsen_table(grid, l_over_d=None, only_two_typings: bool = False, h_rel: float = 1e-4) -> pd.DataFrame:
+    """Our equilibrium and eight coefficients beside Lund & Thomsen's (1978) at their Sommerfeld numbers.
+
+    Their x is along the load (our X2), y horizontal (our X1), so Kxy(L&T) = K[1, 0] here, etc.
+    Per coefficient: ``<name>_err_pct`` = the part of |ours - published| beyond half a unit of the
+    printed last digit, relative to max(|published|, 0.1 x the largest published term of that matrix)
+    (the floor of ``coefficient_errors``: a term through zero is judged on the matrix's scale).
+    ``l_over_d``: the tables to use (default both); ``only_two_typings``: only the rows both public
+    typings share (``published.LUND_THOMSEN_TWO_TYPINGS``).
+    """
+    rows = []
+    for ld, table in pub.LUND_THOMSEN_1978.items():
+        if l_over_d is not None and ld not in l_over_d:
+            continue
+        solver = lund_thomsen_bearing(ld, grid)
+        b = solver.bearing
+        for values in table:
+            p = dict(zip(pub.LUND_THOMSEN_COLUMNS, values))
+            if only_two_typings and (ld, p["S"]) not in pub.LUND_THOMSEN_TWO_TYPINGS:
+                continue
+            load = b.viscosity * b.speed_rpm / 60.0 * b.length * b.diameter * (b.radius / b.clearance) ** 2 / p["S"]
+            eq = static.equilibrium(solver, (0.0, load))
+            kc = coef.reference_coefficients(solver, eq["X"], h_rel)
+            k = kc["K"] * b.clearance / load
+            c = kc["C"] * b.clearance * b.omega / load
+            ours = {"Kxx": k[1, 1], "Kxy": k[1, 0], "Kyx": k[0, 1], "Kyy": k[0, 0],
+                    "Bxx": c[1, 1], "Bxy": c[1, 0], "Byy": c[0, 0]}
+            row = {"l_over_d": ld, "S": p["S"], "two_typings": (ld, p["S"]) in pub.LUND_THOMSEN_TWO_TYPINGS,
+                   "grid": f"{solver.n_theta}x{solver.n_z}", "eps_pub": p["eps"], "eps": eq["eps"],
+                   "eps_err": eq["eps"] - p["eps"], "phi_pub": p["phi"], "phi": eq["attitude_deg"],
+                   "phi_err_deg": eq["attitude_deg"] - p["phi"]}
+            scale = {"K": max(abs(p[n]) for n in ("Kxx", "Kxy", "Kyx", "Kyy")),
+                     "B": max(abs(p[n]) for n in ("Bxx", "Bxy", "Byy"))}
+            for name, value in ours.items():
+                excess = max(abs(value - p[name]) - pub.LUND_THOMSEN_PRINT_HALF_UNIT, 0.0)
+                row[f"{name}_pub"] = p[name]
+                row[name] = value
+                row[f"{name}_err_pct"] = 100.0 * excess / max(abs(p[name]), 0.1 * scale[name[0]])
+            rows.append(row)
     return pd.DataFrame(rows)
 
 
@@ -125,6 +179,20 @@ def coefficient_errors(table: pd.DataFrame, reference: str) -> pd.DataFrame:
                          "plain_rel_err": diff / abs(q[k]) if q[k] != 0 else float("inf"),
                          "scale_rel_err": diff / scale})
     return pd.DataFrame(rows)
+
+
+def coefficient_error_summary(errors: pd.DataFrame) -> dict:
+    """Largest errors of one model's rows of ``coefficient_errors``: direct and cross terms (``rel_err``),
+    share of the matrix (``scale``), per coefficient and per equilibrium (keyed by the reference's eps, 2 d.p.)."""
+    if errors.empty:
+        raise ValueError("no coefficient errors to summarise (no rows for this model and reference)")
+
+    def worst(e):
+        return {"direct": float(e[e.kind == "direct"].rel_err.max()), "cross": float(e[e.kind == "cross"].rel_err.max())}
+
+    return {**worst(errors), "scale": float(errors.scale_rel_err.max()),
+            "by_coefficient": {k: float(g.rel_err.max()) for k, g in errors.groupby("coefficient")},
+            "by_eps": {f"{eps:.2f}": worst(g) for eps, g in errors.groupby("eps_ref")}}
 
 
 def loads_for_eccentricities(model, eps_values) -> list[float]:
