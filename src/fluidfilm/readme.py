@@ -155,6 +155,30 @@ def render_raimondi_boyd_no_feed(reports: Path) -> str:
                       "feed == 'none'")
 
 
+def _lund_thomsen(reports: Path, query=None) -> str:
+    import pandas as pd
+
+    path = reports / "characteristics" / "lund_thomsen.csv"
+    if not path.exists():
+        raise FileNotFoundError(f"{path} is missing: run `make reproduce`")
+    df = pd.read_csv(path)
+    if query is not None:
+        df = df.query(query)
+    names = ("Kxx", "Kxy", "Kyx", "Kyy", "Bxx", "Bxy", "Byy")
+    rows = [[f"{r.l_over_d:g}", f"{r.S:g}", f"{r.eps:.3f} / {r.eps_pub:g}", f"{r.phi:.2f} / {r.phi_pub:g}"]
+            + [f"{r[n]:.3f} / {r[n + '_pub']:g}" for n in names]
+            + [f"{max(r[n + '_err_pct'] for n in names):.2f} %"] for _, r in df.iterrows()]
+    return _table(["L/D", "S", "eps", "attitude °", *names, "largest error"], rows)
+
+
+def render_lund_thomsen(reports: Path) -> str:
+    return _lund_thomsen(reports)
+
+
+def render_lund_thomsen_short(reports: Path) -> str:
+    return _lund_thomsen(reports, "two_typings or l_over_d == 1.0")
+
+
 def render_characteristics(reports: Path) -> str:
     ch = _load(reports, "characteristics.json")
     rb, sb, lt = ch["raimondi_boyd"], ch["short_bearing"], ch["lund_thomsen"]
@@ -394,6 +418,8 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "ensemble": render_ensemble,
     "raimondi_boyd": render_raimondi_boyd,
     "raimondi_boyd_no_feed": render_raimondi_boyd_no_feed,
+    "lund_thomsen": render_lund_thomsen,
+    "lund_thomsen_short": render_lund_thomsen_short,
     "reproduce_timing": render_reproduce_timing,
     "headline": render_headline,
     "grading_study": render_grading_study,
