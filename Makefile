@@ -10,6 +10,7 @@
 #                                  ($(QUICK_DIR)); the workspace's own outputs are not touched
 #   make mlflow                    serve the workspace's MLflow runs on http://127.0.0.1:$(MLFLOW_PORT)
 #   make lint / test-slow / bench
+#   make ross-peer                 ROSS (external peer, its own .venv-ross) vs ours: benchmarks/bench_ross_peer.py
 PYTHON      ?= python3
 VENV        := .venv
 PY          := $(VENV)/bin/python
@@ -76,3 +77,15 @@ dvc-cache: setup
 
 clean-venv:
 	rm -rf $(VENV)
+
+# Optional external peer: ROSS (ross-rotordynamics 2.3.0, the newest that installs on Python 3.11;
+# plotly 6+ breaks its import) in its own environment, against our solver on Lund & Thomsen's bearing;
+# writes reports/benchmarks/ross_peer.json (.venv-ross is built once; its .installed stamp marks it done).
+ROSS_VENV       ?= .venv-ross
+ROSS_BASE_PY    ?= python3.11
+.PHONY: ross-peer
+ross-peer: setup
+	test -f $(ROSS_VENV)/.installed || { $(ROSS_BASE_PY) -m venv $(ROSS_VENV) && \
+	  $(ROSS_VENV)/bin/pip install --quiet --disable-pip-version-check ross-rotordynamics==2.3.0 "plotly<6" && \
+	  touch $(ROSS_VENV)/.installed; }
+	ROSS_PYTHON=$(ROSS_VENV)/bin/python $(PY) benchmarks/bench_ross_peer.py

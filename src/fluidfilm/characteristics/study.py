@@ -102,15 +102,21 @@ def lund_thomsen_table(grid, l_over_d=None, only_two_typings: bool = False, h_re
                    "grid": f"{solver.n_theta}x{solver.n_z}", "eps_pub": p["eps"], "eps": eq["eps"],
                    "eps_err": eq["eps"] - p["eps"], "phi_pub": p["phi"], "phi": eq["attitude_deg"],
                    "phi_err_deg": eq["attitude_deg"] - p["phi"]}
-            scale = {"K": max(abs(p[n]) for n in ("Kxx", "Kxy", "Kyx", "Kyy")),
-                     "B": max(abs(p[n]) for n in ("Bxx", "Bxy", "Byy"))}
             for name, value in ours.items():
-                excess = max(abs(value - p[name]) - pub.LUND_THOMSEN_PRINT_HALF_UNIT, 0.0)
                 row[f"{name}_pub"] = p[name]
                 row[name] = value
-                row[f"{name}_err_pct"] = 100.0 * excess / max(abs(p[name]), 0.1 * scale[name[0]])
+                row[f"{name}_err_pct"] = lund_thomsen_err_pct(value, p, name)
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def lund_thomsen_err_pct(value: float, published: dict, name: str) -> float:
+    """Error [%] of one coefficient ``name`` (Kxx ... Byy) against a Lund & Thomsen row ``published`` (a dict
+    of ``LUND_THOMSEN_COLUMNS``): |value - published| beyond half a printed unit, relative to
+    max(|published|, 0.1 x the largest published term of the same matrix, K or B)."""
+    scale = max(abs(published[n]) for n in pub.LUND_THOMSEN_COLUMNS[3:] if n[0] == name[0])
+    excess = max(abs(value - published[name]) - pub.LUND_THOMSEN_PRINT_HALF_UNIT, 0.0)
+    return 100.0 * excess / max(abs(published[name]), 0.1 * scale)
 
 
 def short_bearing_table(l_over_d: float, grid, eps_values, d: float = 0.04, clearance: float = 120e-6):
