@@ -80,12 +80,15 @@ clean-venv:
 
 # Optional external peer: ROSS (ross-rotordynamics 2.3.0, the newest that installs on Python 3.11;
 # plotly 6+ breaks its import) in its own environment, against our solver on Lund & Thomsen's bearing;
-# writes reports/benchmarks/ross_peer.json (.venv-ross is built once; its .installed stamp marks it done).
+# writes reports/benchmarks/ross_peer.json. .venv-ross is built from benchmarks/ross_peer_constraints.txt
+# (the versions it was measured with) and rebuilt when that file changes (its .installed stamp is a copy).
 ROSS_VENV       ?= .venv-ross
 ROSS_BASE_PY    ?= python3.11
+ROSS_PINS       := benchmarks/ross_peer_constraints.txt
 .PHONY: ross-peer
 ross-peer: setup
-	test -f $(ROSS_VENV)/.installed || { $(ROSS_BASE_PY) -m venv $(ROSS_VENV) && \
-	  $(ROSS_VENV)/bin/pip install --quiet --disable-pip-version-check ross-rotordynamics==2.3.0 "plotly<6" && \
-	  touch $(ROSS_VENV)/.installed; }
+	@command -v $(ROSS_BASE_PY) >/dev/null || { echo "make ross-peer: $(ROSS_BASE_PY) not found (ROSS 2.3 needs Python 3.11; set ROSS_BASE_PY=/path/to/python3.11)" >&2; exit 1; }
+	cmp -s $(ROSS_PINS) $(ROSS_VENV)/.installed || { rm -rf $(ROSS_VENV) && $(ROSS_BASE_PY) -m venv $(ROSS_VENV) && \
+	  $(ROSS_VENV)/bin/pip install --quiet --disable-pip-version-check -r $(ROSS_PINS) && \
+	  cp $(ROSS_PINS) $(ROSS_VENV)/.installed; }
 	ROSS_PYTHON=$(ROSS_VENV)/bin/python $(PY) benchmarks/bench_ross_peer.py

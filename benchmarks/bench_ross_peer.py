@@ -2,10 +2,11 @@
 Lund & Thomsen's (1978) two-axial-groove bearing, L/D = 0.5: dynamic coefficients and time per set.
 
     make ross-peer                      (creates .venv-ross with ROSS, then runs this)
-    ROSS_PYTHON=/path/to/python python benchmarks/bench_ross_peer.py [--quick] [--ross-mesh 11x3 30x10]
+    ROSS_PYTHON=/path/to/python .venv/bin/python benchmarks/bench_ross_peer.py [--quick] [--ross-mesh 11x3 30x10]
 
 Our side (this venv): ``study.lund_thomsen_table`` on grids 72x31 and 288x61 (grooved Swift-Stieber
-solver, central differences), timed with ``median_seconds``: the coefficient set alone at the
+solver, central differences), and the 72x31 grid with Gumbel cavitation (ROSS 2.3's condition: the
+like-for-like row), timed with ``median_seconds``: the coefficient set alone at the
 equilibrium, and equilibrium + coefficients.  ROSS side: ``benchmarks/ross_peer_ross_side.py`` run with
 the interpreter in ROSS_PYTHON (default .venv-ross/bin/python); ROSS computes the equilibrium and the
 coefficients in PlainJournal's constructor, so its time is that whole call (and, separately, its
@@ -34,15 +35,12 @@ NAMES = ("Kxx", "Kxy", "Kyx", "Kyy", "Bxx", "Bxy", "Byy")
 ROSS_SIDE = Path(__file__).with_name("ross_peer_ross_side.py")
 
 
-def ours(grid, rows, repeats: int) -> dict:
-    """Per S: equilibrium, coefficients (study.lund_thomsen_table) and the two timings [s]."""
-    table = study.lund_thomsen_table(grid, l_over_d=[0.5], only_two_typings=True)
-    solver = study.lund_thomsen_bearing(0.5, grid)
-    b = solver.bearing
+def ours(grid, rows, repeats: int, cavitation: str = "swift-stieber") -> dict:
+    """Per S: equilibrium and coefficients (``study.lund_thomsen_point``) and the two timings [s]."""
+    solver = study.lund_thomsen_bearing(0.5, grid, cavitation=cavitation)
     out = {}
     for p in rows:
-        r = table[(table.S - p["S"]).abs() < 1e-9].iloc[0]
-        load = b.viscosity * b.speed_rpm / 60.0 * b.length * b.diameter * (b.radius / b.clearance) ** 2 / p["S"]
+        load = study.load_at_sommerfeld(solver.bearing, p["S"])
         x0 = static.equilibrium(solver, (0.0, load))["X"]
 
         def eq_and_coef(load=load):
@@ -50,9 +48,10 @@ def ours(grid, rows, repeats: int) -> dict:
 
         t_coef = median_seconds(functools.partial(coef.reference_coefficients, solver, x0), repeats)
         t_both = median_seconds(eq_and_coef, repeats)
-        out[p["S"]] = {"eps": float(r.eps), "phi": float(r.phi), **{n: float(r[n]) for n in NAMES},
-                       "coef_s": t_coef, "eq_coef_s": t_both, "grid": str(r.grid)}
-        print(f"ours {r.grid} S={p['S']}: coef {1e3 * t_coef:.1f} ms, eq+coef {1e3 * t_both:.1f} ms", flush=True)
+        out[p["S"]] = {**study.lund_thomsen_point(solver, p["S"]), "coef_s": t_coef, "eq_coef_s": t_both,
+                       "grid": f"{solver.n_theta}x{solver.n_z}", "cavitation": cavitation}
+        print(f"ours {grid} {cavitation} S={p['S']}: coef {1e3 * t_coef:.1f} ms, eq+coef {1e3 * t_both:.1f} ms",
+              flush=True)
     return out
 
 
@@ -64,8 +63,10 @@ def ross(python: str, meshes, rows, repeats: int, method: str) -> dict:
     if proc.returncode != 0:
         tail = "\n".join(line for line in proc.stderr.splitlines() if "REFPROP" not in line)[-3000:]
         sys.exit(f"ROSS side failed (exit {proc.returncode}):\n{tail}")
-    line = [s for s in proc.stdout.splitlines() if s.startswith("{")][-1]
-    return json.loads(line)
+    lines = [s for s in proc.stdout.splitlines() if s.startswith("{")]
+    if not lines:
+        sys.exit(f"ROSS side exited 0 without its JSON line; its stdout ended with: {proc.stdout[-500:]!r}")
+    return json.loads(lines[-1])
 
 
 def main() -> None:
@@ -91,12 +92,15 @@ def main() -> None:
     models = {}
     for g in grids:
         models[f"ours {g}"] = ours(tuple(int(v) for v in g.split("x")), rows, repeats)
+    # the like-for-like row: ROSS 2.3 clips the linear pressure at zero (Gumbel), so our grooved solver with the
+    # same condition should land on its equilibrium; its coefficients show what the cavitation condition does
+    models[f"ours {grids[0]} Gumbel"] = ours(tuple(int(v) for v in grids[0].split("x")), rows, repeats, "gumbel")
     for res in r["results"]:
         models.setdefault(f"ROSS {res['mesh']}", {})[res["S"]] = {
             **{k: res[k] for k in ("eps", "phi", *NAMES)}, "coef_s": res["coef_seconds"],
             "eq_coef_s": res["seconds"], "timing": res["timing"], "nfev": res["nfev_equilibrium"]}
 
-    base = [f"ours {g}" for g in grids]
+    base = [f"ours {g}" for g in grids]  # the Swift-Stieber rows: what the ratios are taken against
     header = ["S", "model", "eps", "phi [deg]", *NAMES, "worst err %", "coef set [ms]", "eq + coef [ms]",
               *[f"x {m} (eq + coef)" for m in base]]
     table, summary = [], {}
@@ -125,8 +129,10 @@ def main() -> None:
     ross_times = "; ".join(f"{m}: {v['timing']}" for m in models if m.startswith("ROSS")
                            for v in list(models[m].values())[:1])
     notes = (f"Lund & Thomsen (1978) two-axial-groove bearing, L/D = 0.5, the five rows both public typings share "
-             f"(x along the load, y horizontal; K = k c/W, B = b c omega/W). Ours: grooved Swift-Stieber solver, "
-             f"central differences (9 force evaluations); times are medians of {repeats}. ROSS "
+             f"(x along the load, y horizontal; K = k c/W, B = b c omega/W). Ours: grooved Swift-Stieber solver "
+             f"(Lund & Thomsen's condition; the 'Gumbel' row clips at zero like ROSS 2.3, the like-for-like "
+             f"comparison), central differences (9 force evaluations); times are medians of {repeats}; the 'x ours' "
+             f"columns are against our Swift-Stieber rows. ROSS "
              f"{r['ross_version']} PlainJournal (n_pad=2, pad_arc_length=160, circular, preload 0, "
              f"method='{r['method']}', isoviscous lubricant dict, flooded), mesh = elements_circumferential x "
              f"elements_axial per pad; its pressure is the linear (Sommerfeld) solution clipped at zero "

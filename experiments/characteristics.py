@@ -93,6 +93,7 @@ def main(cfg: DictConfig) -> None:
     io.write_csv(tables / "coefficient_errors.csv", err)
     io.save_figure(study.plot_coefficients(kc), figs / "characteristics_coefficients.png", dpi=120)
     out["kc_against"] = {"kc_max_rel_err": "reference_converged", "kc_max_rel_err_paper_grid": "reference"}
+    out["grids"] = {"reference": list(ch.reference_grid), "reference_converged": list(ch.converged_grid)}
     for key, against, names in (("kc_max_rel_err", "reference_converged", ["reference", *surrogates]),
                                 ("kc_max_rel_err_paper_grid", "reference", ["reference_converged", *surrogates])):
         out[key] = {}

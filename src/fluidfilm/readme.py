@@ -165,8 +165,8 @@ def _lund_thomsen(reports: Path, query=None) -> str:
     if query is not None:
         df = df.query(query)
     names = ("Kxx", "Kxy", "Kyx", "Kyy", "Bxx", "Bxy", "Byy")
-    rows = [[f"{r.l_over_d:g}", f"{r.S:g}", f"{r.eps:.3f} / {r.eps_pub:g}", f"{r.phi:.2f} / {r.phi_pub:g}"]
-            + [f"{r[n]:.3f} / {r[n + '_pub']:g}" for n in names]
+    rows = [[f"{r.l_over_d:g}", f"{r.S:g}", f"{r.eps:.3f} / {r.eps_pub:.3f}", f"{r.phi:.2f} / {r.phi_pub:.2f}"]
+            + [f"{r[n]:.3f} / {r[n + '_pub']:.2f}" for n in names]
             + [f"{max(r[n + '_err_pct'] for n in names):.2f} %"] for _, r in df.iterrows()]
     return _table(["L/D", "S", "eps", "attitude °", *names, "largest error"], rows)
 
@@ -183,6 +183,9 @@ def render_characteristics(reports: Path) -> str:
     ch = _load(reports, "characteristics.json")
     rb, sb, lt = ch["raimondi_boyd"], ch["short_bearing"], ch["lund_thomsen"]
     thr = ch["threshold"]["reference"]
+    from .report import grid_label
+
+    coarse, fine = (grid_label(ch, k) for k in ("reference", "reference_converged"))
     lines = [
         "Validation of the reference model (limits in brackets):", "",
         _table(["check", "worst measured"], [
@@ -193,22 +196,22 @@ def render_characteristics(reports: Path) -> str:
             ["same bearing, film bounded by cavitation all round (no feed line): attitude",
              f"{rb['phi_max_err_deg_no_feed']:.1f}° (the feed assumption, not the solver)"],
             [f"Lund & Thomsen 1978, two-axial-groove bearing, L/D = 0.5 and 1, {lt['rows']} rows, "
-             f"{lt['grid']} grid: eps (0.01), attitude (1°), 8 coefficients beyond the print's rounding (3 %)",
+             f"{lt['grid']} grid: eps (0.01), attitude (1°), the 7 printed coefficients beyond the print's rounding (3 %)",
              f"{lt['eps_max_err']:.4f}, {lt['phi_max_err_deg']:.2f}°, {lt['kc_max_err_pct']:.2f} %"],
             [f"short bearing (Ocvirk, Gümbel), L/D = {sb['l_over_d']:g}: load, attitude, 8 coefficients, critical "
              "mass (1 %)", f"{sb['load_max_err_pct']:.2f} %, {sb['attitude_max_err_deg']:.3f}°, "
              f"{sb['kc_max_err_scale_pct']:.2f} %, {sb['critical_mass_max_err_pct']:.2f} %"],
         ]),
         f"Onset of oil whirl of the paper's rotor ({ch['rotor_mass_per_bearing_kg']:.2f} kg per bearing, reference "
-        f"30x30): **{thr['speed_rpm']:.0f} rpm** (whirl frequency ratio {thr['whirl_ratio']:.3f}); the nonlinear "
+        f"{coarse}): **{thr['speed_rpm']:.0f} rpm** (whirl frequency ratio {thr['whirl_ratio']:.3f}); the nonlinear "
         "model " + ("confirms it" if ch["bracket_holds"] else "does **not** confirm it") + ": "
         + "; ".join(f"{c['factor']:.2f}x ({c['speed_rpm']:.0f} rpm): {'grows' if c['ratio'] > 1 else 'decays'} "
                     f"(amplitude last/first {c['ratio']:.2g}{', contact' if c['contact'] else ''})"
                     for c in ch["nonlinear_checks"]) + ".", "",
-        "Surrogates and the paper's 30x30 grid (row `reference`) against the grid-converged reference "
-        f"(120x120, {ch['threshold']['reference_converged']['speed_rpm']:.0f} rpm), eps 0.1-0.9 along the "
+        f"Surrogates and the paper's {coarse} grid (row `reference`) against the grid-converged reference "
+        f"({fine}, {ch['threshold']['reference_converged']['speed_rpm']:.0f} rpm), eps 0.1-0.9 along the "
         "equilibrium locus; error relative to max(|K_ref|, 0.1 x matrix scale); in brackets the same against "
-        "the 30x30 grid (why two references: docs/characteristics.md, \"Which reference\"):", "",
+        f"the {coarse} grid (why two references: docs/characteristics.md, \"Which reference\"):", "",
     ]
     rows = []
     paper = ch.get("kc_max_rel_err_paper_grid", {})
@@ -230,13 +233,14 @@ def render_characteristics(reports: Path) -> str:
         pb = paper.get("best", {}).get("by_eps", {})
         ref = ch["kc_max_rel_err"].get("reference", {}).get("by_eps", {})
         lines += ["", "Best model per equilibrium (largest direct / cross error; against the converged grid, in "
-                  "brackets against the 30x30 grid; last column the 30x30 grid itself against the converged one):", ""]
+                  f"brackets against the {coarse} grid; last column the {coarse} grid itself against the converged "
+                  "one):", ""]
         rows = []
         for eps, e in best["by_eps"].items():
             p, r = pb.get(eps, {}), ref.get(eps, {})
             rows.append([eps, both(e["direct"], p.get("direct")), both(e["cross"], p.get("cross")),
                          f"{_num(100 * r['direct'], '.2f', ' %')} / {_num(100 * r['cross'], '.2f', ' %')}" if r else "-"])
-        lines.append(_table(["eps", "best: direct", "best: cross", "30x30 grid: direct / cross"], rows))
+        lines.append(_table(["eps", "best: direct", "best: cross", f"{coarse} grid: direct / cross"], rows))
     return "\n".join(lines)
 
 

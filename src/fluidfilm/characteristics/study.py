@@ -60,21 +60,29 @@ def raimondi_boyd_table(grid, d: float = 0.04, clearance: float = 120e-6) -> pd.
     return pd.DataFrame(rows)
 
 
-def lund_thomsen_bearing(l_over_d: float, grid, d: float = 0.1, clearance: float = 100e-6):
+def lund_thomsen_bearing(l_over_d: float, grid, d: float = 0.1, clearance: float = 100e-6,
+                         cavitation: str = "swift-stieber"):
     """Lund & Thomsen's two-axial-groove bearing on our grooved solver: grooves of 20 deg centred at +-90 deg
-    from the load line (+X2), at zero gauge pressure, Swift-Stieber.  (The dimensionless results depend only
-    on L/D; the size, speed and viscosity are arbitrary.)"""
+    from the load line (+X2), at zero gauge pressure, Swift-Stieber (their condition; ``cavitation="gumbel"``
+    for a like-for-like peer that clips at zero).  (The dimensionless results depend only on L/D; the size,
+    speed and viscosity are arbitrary.)"""
     from ..reynolds.feed import GroovedReynoldsSolver
 
     b = JournalBearing(length=l_over_d * d, diameter=d, clearance=clearance, speed_rpm=3000.0, viscosity=0.02)
-    return GroovedReynoldsSolver(b, int(grid[0]), int(grid[1]), cavitation="swift-stieber", groove_angle=math.pi / 2,
+    return GroovedReynoldsSolver(b, int(grid[0]), int(grid[1]), cavitation=cavitation, groove_angle=math.pi / 2,
                                  n_grooves=2, groove_width=math.radians(pub.LUND_THOMSEN_GROOVE_WIDTH_DEG))
 
 
-def lund_thomsen_table(grid, l_over_d=None, only_two_typings: bool = False, h_rel: float = 1e-4) -> pd.DataFrame:
-    """Our equilibrium and eight coefficients beside Lund & Thomsen's (1978) at their Sommerfeld numbers.
+def load_at_sommerfeld(bearing, sommerfeld: float) -> float:
+    """The load W [N] that puts ``bearing`` at the Sommerfeld number S = mu N L D (R/c)^2 / W (N in rev/s)."""
+    if not (math.isfinite(sommerfeld) and sommerfeld > 0.0):
+        raise ValueError(f"Sommerfeld number must be finite and > 0, got {sommerfeld!r}")
+    return bearing.sommerfeld(1.0) / float(sommerfeld)
 
-    Their x is along the load (our X2), y horizontal (our X1), so Kxy(L&T) = K[1, 0] here, etc.
+
+def lund_thomsen_table(grid, l_over_d=None, only_two_typings: bool = False, h_rel: float = 1e-4) -> pd.DataFrame:
+    """Our equilibrium and seven printed coefficients beside Lund & Thomsen's (1978) at their Sommerfeld
+    numbers (``lund_thomsen_point``; they print Byx = Bxy once).
     Per coefficient: ``<name>_err_pct`` = the part of |ours - published| beyond half a unit of the
     printed last digit, relative to max(|published|, 0.1 x the largest published term of that matrix)
     (the floor of ``coefficient_errors``: a term through zero is judged on the matrix's scale).
@@ -86,28 +94,35 @@ def lund_thomsen_table(grid, l_over_d=None, only_two_typings: bool = False, h_re
         if l_over_d is not None and ld not in l_over_d:
             continue
         solver = lund_thomsen_bearing(ld, grid)
-        b = solver.bearing
         for values in table:
             p = dict(zip(pub.LUND_THOMSEN_COLUMNS, values))
             if only_two_typings and (ld, p["S"]) not in pub.LUND_THOMSEN_TWO_TYPINGS:
                 continue
-            load = b.viscosity * b.speed_rpm / 60.0 * b.length * b.diameter * (b.radius / b.clearance) ** 2 / p["S"]
-            eq = static.equilibrium(solver, (0.0, load))
-            kc = coef.reference_coefficients(solver, eq["X"], h_rel)
-            k = kc["K"] * b.clearance / load
-            c = kc["C"] * b.clearance * b.omega / load
-            ours = {"Kxx": k[1, 1], "Kxy": k[1, 0], "Kyx": k[0, 1], "Kyy": k[0, 0],
-                    "Bxx": c[1, 1], "Bxy": c[1, 0], "Byy": c[0, 0]}
+            ours = lund_thomsen_point(solver, p["S"], h_rel)
             row = {"l_over_d": ld, "S": p["S"], "two_typings": (ld, p["S"]) in pub.LUND_THOMSEN_TWO_TYPINGS,
-                   "grid": f"{solver.n_theta}x{solver.n_z}", "eps_pub": p["eps"], "eps": eq["eps"],
-                   "eps_err": eq["eps"] - p["eps"], "phi_pub": p["phi"], "phi": eq["attitude_deg"],
-                   "phi_err_deg": eq["attitude_deg"] - p["phi"]}
+                   "grid": f"{solver.n_theta}x{solver.n_z}", "eps_pub": p["eps"], "eps": ours.pop("eps"),
+                   "phi_pub": p["phi"], "phi": ours.pop("phi")}
+            row.update(eps_err=row["eps"] - p["eps"], phi_err_deg=row["phi"] - p["phi"])
             for name, value in ours.items():
                 row[f"{name}_pub"] = p[name]
                 row[name] = value
                 row[f"{name}_err_pct"] = lund_thomsen_err_pct(value, p, name)
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def lund_thomsen_point(solver, sommerfeld: float, h_rel: float = 1e-4) -> dict:
+    """Equilibrium (eps, attitude phi [deg]) and the seven printed coefficients of a bearing model at a
+    Sommerfeld number, load along +X2, in Lund & Thomsen's frame and units: x along the load (our X2), y
+    horizontal (our X1), so Kxy(L&T) = K[1, 0] here; K = k c / W, B = b c omega / W."""
+    b = solver.bearing
+    load = load_at_sommerfeld(b, sommerfeld)
+    eq = static.equilibrium(solver, (0.0, load))
+    kc = coef.reference_coefficients(solver, eq["X"], h_rel)
+    k = kc["K"] * b.clearance / load
+    c = kc["C"] * b.clearance * b.omega / load
+    return {"eps": eq["eps"], "phi": eq["attitude_deg"], "Kxx": k[1, 1], "Kxy": k[1, 0], "Kyx": k[0, 1],
+            "Kyy": k[0, 0], "Bxx": c[1, 1], "Bxy": c[1, 0], "Byy": c[0, 0]}
 
 
 def lund_thomsen_err_pct(value: float, published: dict, name: str) -> float:
