@@ -31,7 +31,7 @@ from fluidfilm.characteristics import coefficients as coef
 from fluidfilm.characteristics import published as pub
 from fluidfilm.characteristics import static, study
 
-NAMES = ("Kxx", "Kxy", "Kyx", "Kyy", "Bxx", "Bxy", "Byy")
+NAMES = pub.LUND_THOMSEN_COEFFICIENTS
 ROSS_SIDE = Path(__file__).with_name("ross_peer_ross_side.py")
 
 

@@ -164,7 +164,8 @@ def _lund_thomsen(reports: Path, query=None) -> str:
     df = pd.read_csv(path)
     if query is not None:
         df = df.query(query)
-    names = ("Kxx", "Kxy", "Kyx", "Kyy", "Bxx", "Bxy", "Byy")
+    from .characteristics.published import LUND_THOMSEN_COEFFICIENTS as names
+
     rows = [[f"{r.l_over_d:g}", f"{r.S:g}", f"{r.eps:.3f} / {r.eps_pub:.3f}", f"{r.phi:.2f} / {r.phi_pub:.2f}"]
             + [f"{r[n]:.3f} / {r[n + '_pub']:.2f}" for n in names]
             + [f"{max(r[n + '_err_pct'] for n in names):.2f} %"] for _, r in df.iterrows()]

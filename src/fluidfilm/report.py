@@ -413,9 +413,8 @@ def controller_rows(ctl: Mapping[str, dict]) -> list[str]:
 
 
 def grid_label(ch: dict, model: str) -> str:
-    """'30x30' for the characteristics study's grid of ``model`` (reference / reference_converged); files
-    written before the study recorded its grids get the full profile's."""
-    grid = ch.get("grids", {}).get(model, {"reference": [30, 30], "reference_converged": [120, 120]}[model])
+    """'30x30': the characteristics study's grid of ``model`` (reference / reference_converged)."""
+    grid = ch["grids"][model]
     return f"{grid[0]}x{grid[1]}"
 
 

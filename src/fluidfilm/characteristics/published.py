@@ -114,6 +114,7 @@ def short_bearing_kc(eps: float) -> dict:
 
 # L/D -> rows (S, eps, phi_deg, Kxx, Kxy, Kyx, Kyy, Bxx, Bxy, Byy); x along the load (LUND_THOMSEN_1978 doc)
 LUND_THOMSEN_COLUMNS = ("S", "eps", "phi", "Kxx", "Kxy", "Kyx", "Kyy", "Bxx", "Bxy", "Byy")
+LUND_THOMSEN_COEFFICIENTS = LUND_THOMSEN_COLUMNS[3:]  # the seven printed (Byx = Bxy)
 LUND_THOMSEN_1978 = {
     0.5: [
         (6.430, 0.071, 81.89, 1.55, 14.41, -6.60, 1.88, 28.75, 1.89, 13.31),

@@ -129,7 +129,7 @@ def lund_thomsen_err_pct(value: float, published: dict, name: str) -> float:
     """Error [%] of one coefficient ``name`` (Kxx ... Byy) against a Lund & Thomsen row ``published`` (a dict
     of ``LUND_THOMSEN_COLUMNS``): |value - published| beyond half a printed unit, relative to
     max(|published|, 0.1 x the largest published term of the same matrix, K or B)."""
-    scale = max(abs(published[n]) for n in pub.LUND_THOMSEN_COLUMNS[3:] if n[0] == name[0])
+    scale = max(abs(published[n]) for n in pub.LUND_THOMSEN_COEFFICIENTS if n[0] == name[0])
     excess = max(abs(value - published[name]) - pub.LUND_THOMSEN_PRINT_HALF_UNIT, 0.0)
     return 100.0 * excess / max(abs(published[name]), 0.1 * scale)
 
