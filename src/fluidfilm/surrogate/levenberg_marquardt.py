@@ -8,9 +8,10 @@ full batch and in float64:
   Jacobian of its outputs with respect to all weights, vectorised over
   samples (row 2n + k is output k of sample n);
 - ``normal_equations``: J^T J (352 x 352), J^T e and the sum of squared
-  errors accumulated over chunks of samples, so memory stays bounded
-  (a chunk of 8192 samples is a 16384 x 352 float64 Jacobian, 46 MB) while
-  every product is one BLAS call;
+  errors accumulated over chunks of samples from the Jacobian's structure,
+  without forming it, so memory stays bounded (a chunk of 8192 samples
+  holds an 8192 x 250 float64 block, 16 MB) while every product is one
+  BLAS call;
 - ``levenberg_marquardt``: the generic damped Gauss-Newton loop with
   MATLAB's mu schedule (mu 1e-3, times 0.1 on success, times 10 on failure,
   stop at mu > 1e10), taking any ``normal_equations``/``sse`` callables, so
@@ -27,6 +28,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg import cho_factor, cho_solve
 
 
 def n_weights(n_in: int, n_hidden: int, n_out: int) -> int:
@@ -91,14 +93,25 @@ def _shared_index(n_in: int, n_hidden: int) -> np.ndarray:
 def normal_equations(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: int, chunk: int = 8192):
     """(J^T J, J^T e, sum e^2) over all samples, e = prediction - target, accumulated chunk by chunk.
 
-    Uses the Jacobian's block structure instead of forming J: the hidden
-    layer's weights (W1, b1: "shared") enter every output, each output's own
-    weights (W2[k], b2[k]) only that output.  So J^T J is
-    [sum_k G_k^T G_k, G_k^T E; E^T G_k, E^T E (per k, zero between outputs)]
-    with G_k = (W2[k] (1 - h^2)) (x) [z, 1] and E = [h, 1]; the big block is
-    one symmetric rank-k update (BLAS syrk) on the outputs' rows stacked.
-    About a third of the work of J^T J from the full Jacobian, same numbers
-    (tests compare both).
+    Uses the Jacobian's structure instead of forming J.  The hidden layer's
+    weights (W1, b1: "shared") enter every output, each output's own weights
+    (W2[k], b2[k]) only that output.  With d = 1 - h^2, zt = [z, 1] and
+    E = [h, 1], the Jacobian row of output k and sample n on shared weight
+    (j, i) is W2[k, j] d_j zt_i, so with U = d (x) zt (one row per sample,
+    not per sample and output) and M = W2^T W2:
+
+    - shared block   sum_k G_k^T G_k = (U^T U) * (M (x) 1): an element-wise
+      product after U^T U;
+    - shared x own   G_k^T E = W2[k, j] (U^T E) row by row;
+    - own x own      E^T E per output, zero between outputs;
+    - J^T e          U^T (d r) with r = e W2, and E^T e.
+
+    U^T U, U^T E and E^T E come from one symmetric rank-k update (BLAS syrk)
+    on [U, E]: one row per sample (not per sample and output) and 301
+    columns.  That is about half the time of a syrk on the outputs'
+    Jacobian rows stacked (30 vs 67 ms for 8400 samples, one core) and a
+    small part of J^T J from the full Jacobian (``normal_equations_dense``,
+    which the tests compare to 1e-15).
     """
     from scipy.linalg.blas import dsyrk
 
@@ -106,51 +119,50 @@ def normal_equations(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: 
     n_out = Y.shape[1]
     W1, b1, W2, b2 = unpack(theta, n_in, n_hidden, n_out)
     P = theta.shape[0]
-    ns = n_hidden * (n_in + 1)
+    m = n_in + 1
+    ns = n_hidden * m
     sidx = _shared_index(n_in, n_hidden)
     own0 = n_hidden * n_in + n_hidden
-    S = np.zeros((ns, ns))
-    SO = np.zeros((n_out, ns, n_hidden + 1))
-    OO = np.zeros((n_hidden + 1, n_hidden + 1))
-    Je_s = np.zeros(ns)
-    Je_o = np.zeros((n_out, n_hidden + 1))
+    nv = ns + n_hidden + 1
+    V = np.zeros((nv, nv))  # [U, E]^T [U, E]: U^T U, U^T E and E^T E in one product
+    Je_s = np.zeros((n_hidden, m))
+    Je_o = np.zeros((n_hidden + 1, n_out))
     sse = 0.0
+    VT = np.empty((nv, min(chunk, n_tot)))
     for s in range(0, n_tot, chunk):
         z = Z[s:s + chunk]
         n = len(z)
-        H = np.tanh(z @ W1.T + b1)
-        E = np.empty((n, n_hidden + 1))
-        E[:, :-1] = H
-        E[:, -1] = 1.0
+        # [U, E]^T laid out (column; sample) in C order: its transpose is the Fortran-ordered matrix
+        # syrk reads without a copy
+        vt = VT[:, :n]
+        H = vt[ns:ns + n_hidden].T
+        np.tanh(z @ W1.T + b1, out=H)
+        vt[-1] = 1.0
+        E = vt[ns:].T
         e = H @ W2.T + b2 - Y[s:s + chunk]  # (n, out)
         sse += float((e * e).sum())
         D = 1.0 - H * H
-        zt = np.empty((n, n_in + 1))
+        zt = np.empty((n, m))
         zt[:, :-1] = z
         zt[:, -1] = 1.0
-        # G^T laid out (shared weight, output k and sample) in C order: its transpose is the
-        # Fortran-ordered matrix syrk reads without a copy
-        GT = np.empty((n_hidden, n_in + 1, n_out, n))
-        for k in range(n_out):
-            np.multiply((D * W2[k]).T[:, None, :], zt.T[None, :, :], out=GT[:, :, k, :])
-        GT = GT.reshape(ns, n_out * n)
-        S += dsyrk(1.0, GT.T, trans=1, lower=0)  # upper triangle of G^T G
-        Je_s += GT @ e.T.ravel()
-        for k in range(n_out):
-            SO[k] += GT[:, k * n:(k + 1) * n] @ E
-            Je_o[k] += E.T @ e[:, k]
-        OO += E.T @ E
-    S = np.triu(S) + np.triu(S, 1).T
+        np.multiply(D.T[:, None, :], zt.T[None, :, :], out=vt[:ns].reshape(n_hidden, m, n))
+        V += dsyrk(1.0, vt.T, trans=1, lower=0)  # upper triangle
+        Je_s += (D * (e @ W2)).T @ zt
+        Je_o += E.T @ e
+    V = np.triu(V) + np.triu(V, 1).T
+    A, UE, OO = V[:ns, :ns], V[:ns, ns:], V[ns:, ns:]
+    wj = np.repeat(np.arange(n_hidden), m)  # neuron of each shared weight (j, i)
     JtJ = np.zeros((P, P))
     Jte = np.zeros(P)
-    JtJ[np.ix_(sidx, sidx)] = S
-    Jte[sidx] = Je_s
+    JtJ[np.ix_(sidx, sidx)] = A * (W2.T @ W2)[np.ix_(wj, wj)]
+    Jte[sidx] = Je_s.ravel()
     for k in range(n_out):
         ok = np.r_[own0 + k * n_hidden: own0 + (k + 1) * n_hidden, own0 + n_out * n_hidden + k]
+        SO = UE * W2[k, wj][:, None]
         JtJ[np.ix_(ok, ok)] = OO
-        JtJ[np.ix_(sidx, ok)] = SO[k]
-        JtJ[np.ix_(ok, sidx)] = SO[k].T
-        Jte[ok] = Je_o[k]
+        JtJ[np.ix_(sidx, ok)] = SO
+        JtJ[np.ix_(ok, sidx)] = SO.T
+        Jte[ok] = Je_o[:, k]
     return JtJ, Jte, sse
 
 
@@ -258,8 +270,8 @@ def levenberg_marquardt(theta0: np.ndarray, normal_eq: Callable, sse_fn: Callabl
         while mu <= s.mu_max:
             try:
                 # Cholesky: J^T J + mu I is symmetric positive definite for mu > 0
-                L = np.linalg.cholesky(JtJ + mu * eye)
-                step = -np.linalg.solve(L.T, np.linalg.solve(L, Jte))
+                step = -cho_solve(cho_factor(JtJ + mu * eye, lower=True, check_finite=False), Jte,
+                                  check_finite=False)
             except np.linalg.LinAlgError:
                 mu *= s.mu_inc
                 continue
