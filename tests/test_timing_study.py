@@ -66,3 +66,28 @@ def test_seeds_needed_follows_the_square_root_law():
 def test_bad_times_are_refused_naming_them(single, split, match):
     with pytest.raises(ValueError, match=match):
         reduction_ci(single, split)
+
+
+def test_an_interrupted_study_resumes_at_the_next_seed_with_the_finished_seeds_unchanged(quick_data, tmp_path):
+    """Seeds finished before an interruption come back from the cache as they were; only new seeds train;
+    another subsample size (or protocol, code, data) is another cache key and trains afresh."""
+    from pathlib import Path
+
+    import yaml
+
+    from fluidfilm.surrogate.timing_study import study
+    from fluidfilm.surrogate.training import read_dataset
+
+    frame, meta = read_dataset(quick_data[0])
+    protocol = yaml.safe_load((Path(__file__).parents[1] / "conf" / "protocol" / "paper.yaml").read_text())
+    protocol["max_epochs"] = 15
+    args = dict(frame=frame, meta=meta, protocol=protocol, boundaries=[0.5, 0.7], n_samples=900, target_hw=0.0,
+                n_jobs=1, n_resamples=100, budget_s=math.inf, cache_dir=tmp_path)
+    first = study(seeds_min=2, seeds_max=2, **args)          # "interrupted" after two seeds
+    again = study(seeds_min=2, seeds_max=3, **args)
+    assert first["resumed_seeds"] == 0 and again["resumed_seeds"] == 2
+    assert [r["seed"] for r in again["runs"]] == [0, 1, 2]
+    assert again["runs"][:2] == first["runs"]                 # times and errors as measured the first time
+    assert len(list(tmp_path.glob("*/seed_*.json"))) == 3
+    other = study(seeds_min=1, seeds_max=1, **(args | {"n_samples": 1200}))
+    assert other["resumed_seeds"] == 0 and len(list(tmp_path.glob("*/seed_*.json"))) == 4

@@ -73,6 +73,14 @@ def render_headline(reports: Path) -> str:
          _num(g("train_time_reduction_pct"), ".0f", " %")
          + (f" ± {g('train_time_reduction_ci95'):.0f} (95 % CI, {g('train_time_seeds')} seeds)"
             if g("train_time_reduction_ci95") is not None else "")],
+    ]
+    ci = reports / "train_time_ci.json"
+    if ci.exists():  # the same study run to its +-10-point target: `make train-time-ci`, outside the pipeline
+        t = json.loads(ci.read_text())
+        rows.append(["training time reduction, the same study run to the ±10-point target (`make train-time-ci`)",
+                     "26 %", f"{t['train_time_reduction_pct']:.0f} % ± {t['train_time_reduction_ci95']:.0f} "
+                     f"(95 % CI, {t['train_time_seeds']} seeds)"])
+    rows += [
         ["speed-up per trajectory, split vs our reference", "12x", _num(g("speedup_trajectory_split"), ".1f", "x")],
         ["speed-up per force, split vs our reference", "12x", _num(g("speedup_force_eval_split"), ".1f", "x")],
         ["cases satisfactory, single", "e only", _num(g("satisfactory_cases_single"), "d", " of 7")],
@@ -361,7 +369,13 @@ def render_train_time(reports: Path) -> str:
         lines += [f"Ranking check at {rc['train_time_samples_per_seed']:,} samples per seed ({rc['train_time_seeds']} "
                   f"seeds): reduction {rc['train_time_reduction_pct']:.1f} %, faster {rc['ranking']['faster']}, more "
                   f"accurate {rc['ranking']['more_accurate']}: the ranking is "
-                  f"{'the same' if rc['same_ranking'] else '**not** the same'}.", ""]
+                  f"{'the same' if rc['same_ranking'] else '**not** the same'}"
+                  + (f"; the two reductions' 95 % intervals ({tt['train_time_reduction_ci95_low']:.0f} to "
+                     f"{tt['train_time_reduction_ci95_high']:.0f} % and {rc['train_time_reduction_ci95_low']:.0f} to "
+                     f"{rc['train_time_reduction_ci95_high']:.0f} %) "
+                     + ("overlap: the two sizes do not measurably differ" if rc["consistent"] else
+                        "do **not** overlap: the subsample size changes the answer")
+                     if "consistent" in rc else "") + ".", ""]
     rows = []
     for r in tt["runs"]:
         eq = r.get("time_to_equal_accuracy_split_s")
@@ -374,6 +388,56 @@ def render_train_time(reports: Path) -> str:
     lines.append(_table(["seed", "single", "split (sum of 3)", "reduction", "split to the single's accuracy",
                          "val. rel. RMSE single / split", "stop reasons"], rows))
     return "\n".join(lines)
+
+
+def render_train_time_ci(reports: Path) -> str:
+    """The training-time study run until its interval reaches the target (``make train-time-ci``)."""
+    t = _load(reports, "train_time_ci.json")
+    reached = t["train_time_reduction_ci95"] <= t["train_time_reduction_ci95_target"]
+    single, split = ([r[k]["train_time_s"] for r in t["runs"]] for k in ("single", "split"))
+    equal = [r["reduction_at_equal_accuracy_pct"] for r in t["runs"] if r["reduction_at_equal_accuracy_pct"] is not None]
+    rows = [
+        ["seeds (single and split on the same rows)", f"{t['train_time_seeds']}"],
+        ["samples per seed", f"{t['train_time_samples_per_seed']:,}"],
+        ["every network stopped by the validation rule", "yes" if t["train_time_converged"] else "**no**"],
+        ["reduction of the mean training time, split vs single",
+         f"**{t['train_time_reduction_pct']:.1f} %**, 95 % CI {t['train_time_reduction_ci95_low']:.1f} to "
+         f"{t['train_time_reduction_ci95_high']:.1f} % (half-width {t['train_time_reduction_ci95']:.1f} points, "
+         f"target {t['train_time_reduction_ci95_target']:.0f}: {'reached' if reached else '**not reached**'})"],
+        ["mean of the per-seed reductions", f"{t['train_time_reduction_pct_mean_of_seeds']:.1f} % ± "
+         f"{t['train_time_reduction_pct_mean_of_seeds_ci95']:.1f}"],
+        ["mean time to the stopping rule, single / split (sum of 3)",
+         f"{sum(single) / len(single):.1f} s / {sum(split) / len(split):.1f} s"],
+        ["median time, single / split; split's 3 networks in parallel",
+         f"{t['train_time_single_s']:.1f} s / {t['train_time_split_s']:.1f} s; {t['train_time_split_parallel_s']:.1f} s"],
+        ["median validation rel. RMS force error, single / split",
+         f"{t['val_rel_rmse_single_median']:.3f} / {t['val_rel_rmse_split_median']:.3f}"],
+        ["split reaches the single's final validation error (seeds; mean reduction to that point)",
+         f"{len(equal)} of {t['train_time_seeds']}" + (f"; {sum(equal) / len(equal):.0f} %" if equal else "")],
+        ["study wall time (2 processes)", f"{t['study_wall_s'] / 60:.0f} min"],
+        ["machine" + (", date" if "date" in t else ""), t["machine"] + (f", {t['date']}" if "date" in t else "")],
+    ]
+    return _table(["`make train-time-ci` (reports/train_time_ci.json)", "measured"], rows)
+
+
+def render_train_time_full_scale(reports: Path) -> str:
+    """Single vs split trained once each on the whole dataset (``make train-time-full-scale``)."""
+    t = _load(reports, "train_time_full_scale.json")
+    f = t["full_scale"]
+    r = f["runs"][0]
+    rows = []
+    for which in ("single", "split"):
+        nets = r[which]["networks"]
+        rows.append([which, f"{r[which]['train_time_s'] / 60:.1f} min",
+                     ", ".join(str(n["epochs"]) for n in nets), ", ".join(n["stop_reason"] for n in nets),
+                     f"{r[which]['val_rel_rmse']:.3f}", f"{r[which]['test_rel_rmse']:.3f}"])
+    p = f["protocol"]
+    return (f"Protocol `{p['name']}` (batch {p.get('batch_size')}, the paper protocol's division and stopping rule), "
+            f"all {f['train_time_samples_per_seed']:,} samples, one seed, {t['machine']}, {t['date']}: reduction "
+            f"**{f['train_time_reduction_pct']:.0f} %** (one run per structure, so no interval); faster: "
+            f"{f['ranking']['faster']}, more accurate: {f['ranking']['more_accurate']}.\n\n"
+            + _table(["structure", "time to the stopping rule", "epochs per network", "stop reasons",
+                      "val. rel. RMSE", "test rel. RMSE"], rows))
 
 
 def render_paper_bands(reports: Path) -> str:
@@ -415,6 +479,8 @@ def render_controller_training(reports: Path) -> str:
 
 RENDERERS: dict[str, Callable[[Path], str]] = {
     "train_time": render_train_time,
+    "train_time_ci": render_train_time_ci,
+    "train_time_full_scale": render_train_time_full_scale,
     "paper_bands": render_paper_bands,
     "batch_speed": render_batch_speed,
     "controller_training": render_controller_training,

@@ -115,6 +115,7 @@ def headline_metrics(inp: ReportInputs) -> dict:
         "train_time_split_parallel_s": tt["train_time_split_parallel_s"],
         "train_time_reduction_at_equal_accuracy_pct": tt["reduction_at_equal_accuracy_pct_mean"],
         "train_time_ranking_same_at_2x": tt.get("ranking_check", {}).get("same_ranking"),
+        "train_time_2x_consistent": tt.get("ranking_check", {}).get("consistent"),
         "speedup_trajectory_single": comp["speedup_trajectory_single"],
         "speedup_trajectory_split": comp["speedup_trajectory_split"],
         "speedup_trajectory_best": comp["speedup_trajectory_best"],
@@ -380,7 +381,9 @@ def ranking_line(tt: Mapping) -> str:
             f"{rc['train_time_samples_per_seed']:,} samples per seed, {rc['train_time_seeds']} seeds: reduction "
             f"{rc['train_time_reduction_pct']:.0f} % (95 % CI +-{rc['train_time_reduction_ci95']:.0f}), faster: "
             f"{rc['ranking']['faster']}, more accurate: {rc['ranking']['more_accurate']}; same ranking as the "
-            f"study: {rc['same_ranking']}")
+            f"study: {rc['same_ranking']}"
+            + (f"; the two 95 % intervals {'overlap' if rc['consistent'] else 'do not overlap'}"
+               if "consistent" in rc else ""))
 
 
 def sparse_line(comp: Mapping) -> str:

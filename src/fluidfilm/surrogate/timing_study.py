@@ -13,18 +13,27 @@ structures on the same rows to the validation stopping rule, and the study repor
 - how many seeds the interval's target half-width would need, from the 1/sqrt(n) law.
 
 Seeds are added (in batches of ``n_jobs`` parallel processes) until the headline half-width reaches
-the target, ``seeds_max`` or the time budget.
+the target, ``seeds_max`` or the time budget.  With a ``cache_dir`` every finished seed is kept there
+(one JSON file, written atomically), so an interrupted study resumes at the next seed; the files are
+keyed by everything a seed's result depends on (the dataset's content, the protocol, the split, the
+subsample size, the training code and the machine), so a change of any of them trains afresh.
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import time
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 
 import numpy as np
 from joblib import Parallel, delayed
 from scipy.stats import bootstrap
 
+from .. import io
+from ..benchmarking import machine
+from . import levenberg_marquardt, protocol as protocol_module, scaling
 from .protocol import band_sq_errors, subsample, time_to_accuracy, train_protocol_model
 
 
@@ -105,11 +114,44 @@ def seeds_needed(n_seeds: int, half_width: float, target: float) -> int | None:
     return max(n_seeds, int(math.ceil(n_seeds * (half_width / target) ** 2)))
 
 
+def seed_cache_key(meta: Mapping, n_rows: int, protocol: Mapping, boundaries: Sequence[float],
+                   n_samples: int) -> str:
+    """What one seed's result depends on, hashed: the dataset's content (its parts' checksums), the
+    protocol, the split, the subsample size, the training code and the machine (times are measured)."""
+    code = hashlib.sha256()
+    for module in (levenberg_marquardt, protocol_module, scaling):
+        code.update(Path(str(module.__file__)).read_bytes())
+    what = {"parts": meta.get("parts"), "config_hash": meta.get("config_hash"), "n_rows": int(n_rows),
+            "protocol": dict(protocol), "boundaries": [float(b) for b in boundaries], "n_samples": int(n_samples),
+            "code": code.hexdigest(), "machine": machine()}
+    return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def _train_or_load(cache: Path | None, sub, meta, protocol, boundaries, s) -> dict:
+    """One seed's row: from the cache when this seed finished before, else trained (and then cached)."""
+    path = None if cache is None else cache / f"seed_{s}.json"
+    if path is not None and path.exists():
+        return json.loads(path.read_text()) | {"resumed": True}
+    row = run_seed(sub, meta, protocol, boundaries, s)
+    if path is not None:
+        io.write_json(path, row)
+    return row
+
+
 def study(frame, meta, protocol: dict, boundaries: Sequence[float], n_samples: int, seeds_min: int, seeds_max: int,
-          target_hw: float, n_jobs: int, n_resamples: int, budget_s: float, seed_offset: int = 0) -> dict:
-    """Train both structures on per-seed subsamples until the headline interval is narrow enough."""
+          target_hw: float, n_jobs: int, n_resamples: int, budget_s: float, seed_offset: int = 0,
+          cache_dir: str | Path | None = None) -> dict:
+    """Train both structures on per-seed subsamples until the headline interval is narrow enough.
+
+    ``budget_s`` counts the time of this call only: seeds resumed from ``cache_dir`` cost nothing, and
+    a resumed study goes on with the next seeds (the same ones the interrupted study would have
+    trained) with its budget counted afresh."""
     if not (1 <= seeds_min <= seeds_max):
         raise ValueError(f"need 1 <= seeds_min <= seeds_max, got seeds_min={seeds_min}, seeds_max={seeds_max}")
+    cache = None
+    if cache_dir is not None:
+        cache = Path(cache_dir) / seed_cache_key(meta, len(frame), protocol, boundaries, n_samples)
+        cache.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     rows: list[dict] = []
     next_seed = seed_offset
@@ -118,10 +160,11 @@ def study(frame, meta, protocol: dict, boundaries: Sequence[float], n_samples: i
         seeds = list(range(next_seed, next_seed + batch))
         next_seed += batch
         subs = [frame.iloc[subsample(len(frame), n_samples, s)].reset_index(drop=True) for s in seeds]
-        for r in Parallel(n_jobs=n_jobs, return_as="generator")(delayed(run_seed)(sub, meta, protocol, boundaries, s)
-                                                                for sub, s in zip(subs, seeds)):
+        for r in Parallel(n_jobs=n_jobs, return_as="generator")(
+                delayed(_train_or_load)(cache, sub, meta, protocol, boundaries, s) for sub, s in zip(subs, seeds)):
             rows.append(r)
-            print(f"  seed {r['seed']}: single {r['single']['train_time_s']:.1f} s "
+            print(f"  seed {r['seed']}{' (resumed)' if r.get('resumed') else ''}: "
+                  f"single {r['single']['train_time_s']:.1f} s "
                   f"{r['single']['stop_reasons']}, split {r['split']['train_time_s']:.1f} s "
                   f"{r['split']['stop_reasons']}, reduction {r['reduction_pct']:.1f} %, to equal accuracy "
                   f"{r['time_to_equal_accuracy_split_s']}", flush=True)
@@ -137,7 +180,9 @@ def study(frame, meta, protocol: dict, boundaries: Sequence[float], n_samples: i
     m_lo, m_hi, m_hw = mean_ci(per_seed, n_resamples)
     tte_ok = [r["reduction_at_equal_accuracy_pct"] for r in rows if r["reduction_at_equal_accuracy_pct"] is not None]
     wall = time.perf_counter() - t0
+    resumed = sum(bool(r.pop("resumed", False)) for r in rows)
     needed = seeds_needed(len(rows), hw, target_hw)
+    wall_per_seed = wall / (len(rows) - resumed) if len(rows) > resumed else math.nan
     return {
         "train_time_reduction_pct": red,
         "train_time_reduction_ci95": hw,
@@ -146,7 +191,8 @@ def study(frame, meta, protocol: dict, boundaries: Sequence[float], n_samples: i
         "train_time_reduction_estimator": "reduction of the mean time over seeds, paired bootstrap",
         "train_time_reduction_ci95_target": float(target_hw),
         "train_time_seeds_needed_for_target": needed,
-        "train_time_study_s_needed_for_target": (None if needed is None else wall * needed / len(rows)),
+        "train_time_study_s_needed_for_target": (None if needed is None or math.isnan(wall_per_seed)
+                                                 else wall_per_seed * needed),
         "train_time_reduction_pct_mean_of_seeds": float(np.mean(per_seed)),
         "train_time_reduction_pct_mean_of_seeds_ci95": m_hw,
         "train_time_reduction_pct_per_seed": per_seed,
@@ -169,6 +215,7 @@ def study(frame, meta, protocol: dict, boundaries: Sequence[float], n_samples: i
         "reduction_at_equal_accuracy_pct_mean": float(np.mean(tte_ok)) if tte_ok else None,
         "equal_accuracy_reached_seeds": len(tte_ok),
         "study_wall_s": wall,
+        "resumed_seeds": resumed,
         "runs": rows,
     }
 
