@@ -12,7 +12,7 @@
 #   make lint / test-slow / bench
 #   make ross-peer                 ROSS (external peer, its own .venv-ross) vs ours: benchmarks/bench_ross_peer.py
 #   make train-time-ci             the training-time study run until its 95 % interval is +-10 points
-#                                  (about an hour here): reports/train_time_ci.json
+#                                  (hours here: docs/paper_experiment.md): reports/train_time_ci.json
 #   make train-time-full-scale     one run per structure on all 4.5 M samples (Adam, same stopping rule):
 #                                  reports/train_time_full_scale.json
 PYTHON      ?= python3
@@ -94,7 +94,7 @@ ROSS_PINS       := benchmarks/ross_peer_constraints.txt
 # interval's half-width reaches the target. Interrupted, it resumes at the next seed (cache/train_time_ci).
 .PHONY: train-time-ci
 train-time-ci: setup
-	$(PY) experiments/train_time.py seeds_max=400 budget_s=10800 ranking_check.enabled=false \
+	$(PY) experiments/train_time.py seeds_max=1000 budget_s=36000 ranking_check.enabled=false \
 	    cache_dir=cache/train_time_ci out=reports/train_time_ci.json
 	$(PY) -m fluidfilm.readme
 
