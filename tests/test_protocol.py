@@ -185,6 +185,16 @@ def test_paper_network_fits_a_smooth_function_and_stops_by_validation():
     assert adam["test_mse"] < 0.05
 
 
+def test_adam_progress_lines_say_the_epoch_and_the_best_epoch_and_none_means_silent(capsys):
+    data = _toy_data(400)
+    res = train_network_adam(data, n_hidden=8, seed=0, max_epochs=30, batch_size=128, progress_every_s=0.0)
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if "adam: epoch" in ln]
+    assert len(lines) == res["epochs"]  # a zero interval: a line after every epoch
+    assert lines[-1].startswith(f"    adam: epoch {res['epochs']},") and f"at epoch {res['best_epoch']};" in lines[-1]
+    train_network_adam(data, n_hidden=8, seed=0, max_epochs=3, batch_size=128, progress_every_s=None)
+    assert "adam: epoch" not in capsys.readouterr().out
+
+
 def test_time_to_accuracy_takes_the_first_epoch_at_the_target():
     rep = {"networks": [{"history": {"wall_s": [1.0, 2.0, 3.0], "val_sq_N2": [9.0, 4.0, 1.0]}},
                         {"history": {"wall_s": [0.5, 1.0], "val_sq_N2": [3.0, 2.0]}}]}

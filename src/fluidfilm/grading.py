@@ -31,6 +31,7 @@ import numpy as np
 import pandas as pd
 
 from . import io
+from .data.schema import relative_force_errors
 from .data.spec import DatasetConfigError, DatasetSpec, config_hash
 
 #: grading keys (``grading.<key>=...``) and where each acts; None keeps the dataset config's value
@@ -129,9 +130,7 @@ def cached_dataset(bearing, reference: Mapping, spec: DatasetSpec, cache_dir, *,
         return path, meta, False
 
 
-def relative_errors(predicted: np.ndarray, truth: np.ndarray, floor_N: float) -> np.ndarray:
-    """|F_model - F| / max(|F|, floor) per state (the held-out measure of the whole workspace)."""
-    return np.hypot(*(predicted - truth).T) / np.maximum(np.hypot(*truth.T), floor_N)
+relative_errors = relative_force_errors  # |F_model - F| / max(|F|, floor) per state
 
 
 def error_quantiles(rel: np.ndarray, what: str = "the model") -> dict:

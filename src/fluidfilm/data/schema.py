@@ -126,6 +126,12 @@ def dataset_bearing(meta: dict) -> JournalBearing | ConicalBearing:
     return bearing_from_dict(meta["bearing"])
 
 
+def relative_force_errors(predicted: np.ndarray, truth: np.ndarray, floor_N: float) -> np.ndarray:
+    """|F_model - F| / max(|F|, floor) per state: the held-out measure of the whole workspace (the floor keeps
+    states with almost no film force from dominating)."""
+    return np.hypot(*(predicted - truth).T) / np.maximum(np.hypot(*truth.T), floor_N)
+
+
 def training_domain(meta: dict) -> list[list[float]]:
     """[eps_low, eps_high, v_max] of each velocity section of the dataset's layout."""
     return [[s["eps_low"], s["eps_high"], s["v_max"]] for s in meta["spec"]["velocity_sections"]]

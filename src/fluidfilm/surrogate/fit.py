@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.schema import dataset_bearing, load_dataset, load_test_set, training_domain
+from ..data.schema import dataset_bearing, load_dataset, load_test_set, relative_force_errors, training_domain
 from .inference import SurrogateForceModel
 from .training import ForceDataModule, train_network
 
@@ -89,7 +89,7 @@ def held_out_errors(model, testset_dir, floor_N: float = 0.1) -> dict:
             model.set_sleeve(keep)
         else:
             P = model.forces(X, V)
-    rel = np.hypot(*(P - F).T) / np.maximum(np.hypot(*F.T), floor_N)
+    rel = relative_force_errors(P, F, floor_N)
     out = {"test_rel_err_median": float(np.median(rel)), "test_rel_err_p99": float(np.quantile(rel, 0.99))}
     eps = df["eps"].to_numpy()
     for lo, hi in EPS_BANDS:

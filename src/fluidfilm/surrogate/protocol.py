@@ -40,6 +40,7 @@ import numpy as np
 import pandas as pd
 
 from ..bearing import bearing_from_dict
+from ..data.schema import relative_force_errors
 from .fit import regions
 from .inference import SurrogateForceModel
 from .levenberg_marquardt import (LMSettings, init_nguyen_widrow, levenberg_marquardt, mlp_forward, mlp_sse,
@@ -181,8 +182,10 @@ def train_network_lm(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_f
 
 def train_network_adam(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_fail: int = 6,
                        max_epochs: int = 1000, lr: float = 3e-3, batch_size: int = 512, max_time_s: float = math.inf,
-                       threads: int | None = None) -> dict:
-    """Mini-batch Adam (learning rate halved after 2 epochs without improvement), same stopping rule."""
+                       threads: int | None = None, progress_every_s: float | None = 30.0) -> dict:
+    """Mini-batch Adam (learning rate halved after 2 epochs without improvement), same stopping rule.
+
+    A progress line every ``progress_every_s`` seconds of training (None: silent)."""
     import torch
 
     if threads:
@@ -212,6 +215,7 @@ def train_network_adam(data: NetworkData, n_hidden: int = 50, seed: int = 0, max
 
     stop.update(0, float(((predict(z_va) - y_va_np) ** 2).mean()), weights())
     reason, epoch = "max_epochs", 0
+    last_line = 0.0
     t0 = time.perf_counter()
     for epoch in range(1, int(max_epochs) + 1):
         order = torch.randperm(len(z_tr), generator=gen)
@@ -232,6 +236,11 @@ def train_network_adam(data: NetworkData, n_hidden: int = 50, seed: int = 0, max
         hist["val_sq_N2"].append(_physical_sq(data.scaling, pred, data.F["val"]))
         hist["train_mse"].append(total / len(z_tr))
         r = stop.update(epoch, mse, weights())
+        if progress_every_s is not None and (r or wall - last_line >= progress_every_s):
+            # a full-scale network takes many minutes: say where it is (the stopping rule has no ETA)
+            last_line = wall
+            print(f"    adam: epoch {epoch}, {wall:.0f} s, validation mse {mse:.4g} (best {stop.best:.4g} at epoch "
+                  f"{stop.best_epoch}; {stop.fails} of {max_fail} epochs without improvement)", flush=True)
         if r:
             reason = r
             break
@@ -410,7 +419,7 @@ def band_test_errors(model, testset: pd.DataFrame, bands=((0.0, 0.5), (0.5, 0.7)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         P = model.forces(X, V)
-    rel = np.hypot(*(P - F).T) / np.maximum(np.hypot(*F.T), floor_N)
+    rel = relative_force_errors(P, F, floor_N)
     eps = testset["eps"].to_numpy()
     out = {}
     for lo, hi in bands:

@@ -127,6 +127,10 @@ def seed_cache_key(meta: Mapping, n_rows: int, protocol: Mapping, boundaries: Se
     return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
+def _seconds_or_never(t: float | None) -> str:
+    return "never" if t is None else f"{t:.1f} s"
+
+
 def _train_or_load(cache: Path | None, sub, meta, protocol, boundaries, s) -> dict:
     """One seed's row: from the cache when this seed finished before, else trained (and then cached)."""
     path = None if cache is None else cache / f"seed_{s}.json"
@@ -166,8 +170,8 @@ def study(frame, meta, protocol: dict, boundaries: Sequence[float], n_samples: i
             print(f"  seed {r['seed']}{' (resumed)' if r.get('resumed') else ''}: "
                   f"single {r['single']['train_time_s']:.1f} s "
                   f"{r['single']['stop_reasons']}, split {r['split']['train_time_s']:.1f} s "
-                  f"{r['split']['stop_reasons']}, reduction {r['reduction_pct']:.1f} %, to equal accuracy "
-                  f"{r['time_to_equal_accuracy_split_s']}", flush=True)
+                  f"{r['split']['stop_reasons']}, reduction {r['reduction_pct']:.1f} %, split to the single's "
+                  f"accuracy {_seconds_or_never(r['time_to_equal_accuracy_split_s'])}", flush=True)
         single_t = [r["single"]["train_time_s"] for r in rows]
         split_t = [r["split"]["train_time_s"] for r in rows]
         red, lo, hi, hw = reduction_ci(single_t, split_t, n_resamples)
