@@ -251,6 +251,17 @@ def render_characteristics(reports: Path) -> str:
                      both(ch["whirl_threshold_rel_err"].get(name), thr_paper.get(name))])
     lines.append(_table(["model", "K/C max error, direct terms", "K/C max error, cross terms",
                          "K/C max error, share of the matrix", "whirl threshold error"], rows))
+    unusable = [name for name, e in ch["kc_max_rel_err"].items() if (e["direct"] or 0) > 1.0]
+    if unusable:
+        m = _load(reports, "metrics.json")
+        medians = []
+        for name in unusable:
+            median = m.get(f"test_rel_err_median_{name}")
+            medians.append(f"{name} {'n/a' if median is None else _num(100 * median, '.0f', ' %')}")
+        lines += ["", "Errors above 100 % mean no usable stiffness or damping: the median held-out force error of "
+                  f"those networks is {', '.join(medians)}, and a derivative amplifies a force error, so their "
+                  "equilibria and coefficients are dominated by the networks' error and change by orders of "
+                  "magnitude from one training to the next. They are printed as measured, not as a ranking."]
     best = ch["kc_max_rel_err"].get("best")
     if best and "by_eps" in best:
         pb = paper.get("best", {}).get("by_eps", {})
