@@ -396,16 +396,21 @@ def render_train_time(reports: Path) -> str:
         + f", more accurate: {tt['ranking']['more_accurate']}.", ""]
     rc = tt.get("ranking_check")
     if rc:
-        lines += [f"Ranking check at {rc['train_time_samples_per_seed']:,} samples per seed ({rc['train_time_seeds']} "
-                  f"seeds): reduction {rc['train_time_reduction_pct']:.1f} %, faster {rc['ranking']['faster']}, more "
-                  f"accurate {rc['ranking']['more_accurate']}: the ranking is "
-                  f"{'the same' if rc['same_ranking'] else '**not** the same'}"
-                  + (f"; the two reductions' 95 % intervals ({tt['train_time_reduction_ci95_low']:.0f} to "
-                     f"{tt['train_time_reduction_ci95_high']:.0f} % and {rc['train_time_reduction_ci95_low']:.0f} to "
-                     f"{rc['train_time_reduction_ci95_high']:.0f} %) "
-                     + ("overlap: the two sizes do not measurably differ" if rc["consistent"] else
-                        "do **not** overlap: the subsample size changes the answer")
-                     if "consistent" in rc else "") + ".", ""]
+        head = (f"Ranking check at {rc['train_time_samples_per_seed']:,} samples per seed ({rc['train_time_seeds']} "
+                f"seeds): reduction {rc['train_time_reduction_pct']:.1f} %, 95 % interval "
+                f"{rc['train_time_reduction_ci95_low']:.0f} to {rc['train_time_reduction_ci95_high']:.0f} %")
+        if "consistent" not in rc:
+            text = (f"{head}; faster {rc['ranking']['faster']}, more accurate {rc['ranking']['more_accurate']}: "
+                    f"the ranking is {'the same' if rc['same_ranking'] else '**not** the same'}.")
+        elif rc["consistent"]:
+            # overlapping intervals: a flip of the point estimates' ranking is inside the noise
+            text = (f"{head}. It overlaps the study's interval: the two sizes do not measurably differ. By the point "
+                    f"estimates alone, faster {rc['ranking']['faster']}, more accurate {rc['ranking']['more_accurate']}"
+                    + (": the study's ranking." if rc["same_ranking"] else ": not the study's ranking, but inside the noise."))
+        else:
+            text = (f"{head}. It does **not** overlap the study's interval: the subsample size changes the answer "
+                    f"(faster {rc['ranking']['faster']}, more accurate {rc['ranking']['more_accurate']}).")
+        lines += [text, ""]
     rows = []
     for r in tt["runs"]:
         eq = r.get("time_to_equal_accuracy_split_s")
