@@ -20,7 +20,7 @@ import argparse
 import json
 import re
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[a-z_0-9]+) -->\n)(?P<body>.*?)(<!-- end generated -->)", re.S)
@@ -365,6 +365,12 @@ def render_characteristics_timing(reports: Path) -> str:
     return _table(["model", "time per coefficient set", "vs reference 30x30"], rows)
 
 
+def _paper_26_in(study: Mapping) -> str:
+    """Whether the paper's 26 % reduction lies in a study's 95 % interval: "inside" or "**outside**"."""
+    return ("inside" if study["train_time_reduction_ci95_low"] <= 26.0 <= study["train_time_reduction_ci95_high"]
+            else "**outside**")
+
+
 def render_train_time(reports: Path) -> str:
     tt = _load(reports, "train_time.json")
     lines = [
@@ -381,8 +387,7 @@ def render_train_time(reports: Path) -> str:
         + (f"The target half-width ({tt['train_time_reduction_ci95_target']:.0f} points) is reached: seeds were added two "
            "at a time until it was, and such sequential stopping favours a narrow interval slightly. "
            if tt["train_time_reduction_ci95"] <= tt["train_time_reduction_ci95_target"] else "")
-        + ("The paper's 26 % is " + ("inside" if tt["train_time_reduction_ci95_low"] <= 26.0
-                                     <= tt["train_time_reduction_ci95_high"] else "**outside**") + " this interval. ")
+        + f"The paper's 26 % is {_paper_26_in(tt)} this interval. "
         + (f"A half-width of {tt['train_time_reduction_ci95_target']:.0f} points would need about "
            f"{tt['train_time_seeds_needed_for_target']} seeds (about "
            f"{tt['train_time_study_s_needed_for_target'] / 60:.0f} min of this study on this machine). "
@@ -465,7 +470,7 @@ def render_train_time_ci(reports: Path) -> str:
         ["machine" + (", date" if "date" in t else ""), t["machine"] + (f", {t['date']}" if "date" in t else "")],
     ]
     lo, hi = t["train_time_reduction_ci95_low"], t["train_time_reduction_ci95_high"]
-    verdict = (f"The paper's 26 % is {'inside' if lo <= 26.0 <= hi else '**outside**'} this interval; "
+    verdict = (f"The paper's 26 % is {_paper_26_in(t)} this interval; "
                + ("it contains 0, so with the paper's protocol at this size neither structure trains measurably "
                   "faster." if lo < 0 < hi else f"the split model trains {'faster' if lo > 0 else 'slower'}."))
     return _table(["`make train-time-ci` (reports/train_time_ci.json)", "measured"], rows) + "\n" + verdict + "\n"
