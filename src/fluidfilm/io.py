@@ -15,21 +15,41 @@ from pathlib import Path
 
 @contextlib.contextmanager
 def atomic_path(path, suffix: str | None = None):
-    """Yield a temporary path next to ``path``; on success it replaces ``path``."""
+    """Yield a temporary path next to ``path``; on success it replaces ``path``.
+
+    The temporary file is created inside the guarded block, so an exception
+    (Ctrl-C included) from its creation on removes it.  A Ctrl-C can still land
+    in the few bytecodes where ``contextlib`` hands the path to the ``with``
+    body; callers that own a directory sweep its ``.<name>.*`` leftovers (see
+    ``remove_temporaries``).
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or path.suffix, dir=path.parent)
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; outputs are ordinary files
+    tmp = None
     try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or path.suffix, dir=path.parent)
+        os.close(fd)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; outputs are ordinary files
         yield Path(tmp)
         os.replace(tmp, path)
     except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+        if tmp is not None:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
         raise
+
+
+def remove_temporaries(directory, pattern: str) -> int:
+    """Delete the temporary files ``atomic_path`` left in ``directory`` (names matching ``pattern``, e.g.
+    ``.part-*``); return how many.  Only for directories one writer owns."""
+    n = 0
+    for tmp in Path(directory).glob(pattern):
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+            n += 1
+    return n
 
 
 def file_sha256(path) -> str:

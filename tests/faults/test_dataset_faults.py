@@ -84,6 +84,45 @@ def test_new_config_is_built_aside_and_the_old_dataset_survives_an_interruption(
     assert meta["config_hash"] == whole["config_hash"] != json.loads(before["_metadata.json"])["config_hash"]
 
 
+def test_ctrl_c_while_a_part_file_is_set_up_leaves_no_temporary(tmp_path, monkeypatch):
+    """The interrupt lands after the temporary file exists but before it is handed to the writer
+    (here: in the permission fix-up), the window that once left ``.part-*.parquet`` behind."""
+    from fluidfilm import io
+
+    def interrupted(*args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(io.os, "chmod", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        with io.atomic_path(tmp_path / "part-00000.parquet"):
+            pass
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_temporary_that_escapes_the_writer_is_swept_when_the_run_is_interrupted(tmp_path, monkeypatch):
+    """An interrupt between ``atomic_path`` yielding and the ``with`` body starting cannot be caught by
+    the writer; the dataset run removes its directory's temporaries before it re-raises, and resumes."""
+    out = tmp_path / "dataset"
+    real, calls = gen._write_part, []
+
+    def leaks_then_dies_on_the_third_part(path, cols):
+        calls.append(path.name)
+        if len(calls) == 3:
+            (path.parent / f".{path.name}.abc123.parquet").write_bytes(b"half")  # what the window leaves
+            raise KeyboardInterrupt
+        return real(path, cols)
+
+    monkeypatch.setattr(gen, "_write_part", leaks_then_dies_on_the_third_part)
+    with pytest.raises(KeyboardInterrupt):
+        _make(out)
+    assert not list(out.glob(".part-*")) and not (out / "_metadata.json").exists()
+    assert len(list(out.glob("part-*.parquet"))) == 2
+    monkeypatch.setattr(gen, "_write_part", real)
+    meta = _make(out)
+    assert meta["chunks_computed_this_run"] == meta["n_chunks"] - 2
+    verify_dataset(out)
+
+
 # --------------------------------------------------------------------------- item 5
 def _flip_byte(path, where=0.5):
     data = bytearray(path.read_bytes())

@@ -164,8 +164,7 @@ def _swap_in(work: Path, out: Path) -> None:
 def _prepare_dir(out: Path, digest: str) -> dict:
     """Create ``out``; drop temporary leftovers; drop parts made under another config; return the state."""
     out.mkdir(parents=True, exist_ok=True)
-    for tmp in out.glob(".part-*"):
-        tmp.unlink()
+    io.remove_temporaries(out, ".part-*")
     state = _read_state(out)
     if state is None or state.get("hash") != digest:
         for f in list(out.glob("part-*.parquet")) + [out / "_metadata.json"]:
@@ -256,7 +255,13 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
     t0 = time.perf_counter()
     spent_before = float(state["seconds_spent"])
     if pending:
-        _run_jobs(pending, work, scheduler, n_workers, progress, state, t0, spent_before)
+        try:
+            _run_jobs(pending, work, scheduler, n_workers, progress, state, t0, spent_before)
+        except BaseException:
+            # an interrupt that lands as a part's temporary file is handed over escapes atomic_path's own
+            # cleanup; this directory has one writer, so its temporaries can go (complete parts or none)
+            io.remove_temporaries(work, ".part-*")
+            raise
     elapsed = time.perf_counter() - t0
     this_run = {"seconds_this_run": elapsed, "chunks_computed_this_run": len(pending),
                 "damaged_parts_recomputed": damaged}
