@@ -61,6 +61,7 @@ bench: setup
 	$(PY) benchmarks/bench_solver.py
 	$(PY) benchmarks/bench_rotor.py
 	$(PY) benchmarks/bench_conical.py
+	$(PY) benchmarks/bench_training_step.py
 
 mlflow: setup
 	$(PY) -m fluidfilm.pipeline serve --port $(MLFLOW_PORT)

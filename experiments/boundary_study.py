@@ -36,7 +36,7 @@ def main(cfg: DictConfig) -> None:
     out = {}
     for name, split in c["splits"].items():
         model, rep = fit_surrogate(cfg.dataset_dir, c["model"], split, c["scaling"], c["trainer"], None,
-                                   seed=cfg.seed, name=name)
+                                   seed=cfg.seed, name=name, workers=cfg.trainer.workers)
         jumps = [boundary_jump(model, b) for b in split["boundaries"]]
         res = {"median_relative_jump_at_boundary": max(j[0] for j in jumps),
                "max_jump_at_boundary_N": max(j[1] for j in jumps),

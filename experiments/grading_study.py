@@ -17,12 +17,12 @@ from omegaconf import DictConfig, OmegaConf
 from fluidfilm import io, sweeps, tracking
 from fluidfilm.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.config_check import check_config
-from fluidfilm.data import DatasetSpec, config_hash, load_test_set
+from fluidfilm.data import DatasetSpec, load_test_set
 from fluidfilm.data.spec import check_reference
 from fluidfilm.grading import (SWEEP_ID_ENV, Judges, OrbitBenchmark, StiffnessBenchmark, apply_grading, cached_dataset,
                                flat_metrics)
 from fluidfilm.reynolds import ReynoldsSolver
-from fluidfilm.surrogate.fit import fit_surrogate
+from fluidfilm.surrogate.fit import fit_surrogate, training_digest
 
 
 @hydra.main(config_path="../conf", config_name="grading_study", version_base="1.3")
@@ -49,10 +49,11 @@ def main(cfg: DictConfig) -> dict:
     with tracking.run(cfg.tracking, f"grading {name}", c, tags={"study": cfg.title}):
         path, meta, reused = cached_dataset(bearing, reference_policy, spec, cfg.cache_dir, scheduler=cfg.dask.scheduler,
                                             n_workers=cfg.dask.n_workers, progress=cfg.progress)
-        digest = config_hash(c["model"], c["split"], c["scaling"], c["trainer"], c["seed"], path.name)
+        digest = training_digest(c["model"], c["split"], c["scaling"], c["trainer"], c["seed"], path.name)
         model, report = fit_surrogate(path, c["model"], c["split"], c["scaling"], c["trainer"], None, seed=cfg.seed,
                                       name=name, ckpt_root=Path(cfg.checkpoint_dir) / digest,
-                                      val_fraction=cfg.trainer.val_fraction, batch_size=cfg.trainer.batch_size)
+                                      val_fraction=cfg.trainer.val_fraction, batch_size=cfg.trainer.batch_size,
+                                      workers=cfg.trainer.workers)
         result = {
             "job": name, "swept": swept, "sweep_id": os.environ.get(SWEEP_ID_ENV), "grading": c["grading"],
             "dataset": {"n_samples": int(meta["n_samples"]), "generation_s": float(meta["generation_seconds_total"]),

@@ -18,9 +18,8 @@ from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
 from fluidfilm import GradedReynoldsModel, io, sweeps, tracking
-from fluidfilm.data import config_hash
 from fluidfilm.speed import sample_states, time_per_force_eval
-from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors
+from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors, training_digest
 from fluidfilm.surrogate.training import read_dataset
 from fluidfilm.config_check import check_config
 
@@ -96,7 +95,7 @@ def main(cfg: DictConfig) -> dict:
                            hc.overrides.task, choices, multirun, None if keys is None else keys.split(","))
     sweeps.guard_tracked(Path(cfg.out_dir) / name, Path(__file__).resolve().parents[1], multirun)
     c = OmegaConf.to_container(cfg, resolve=True)
-    digest = config_hash(c["model"], c["split"], c["scaling"], c["trainer"], c["seed"], c["dataset_dir"])
+    digest = training_digest(c["model"], c["split"], c["scaling"], c["trainer"], c["seed"], c["dataset_dir"])
     ckpt_root = Path(cfg.checkpoint_dir) / name / digest
     with tracking.run(cfg.tracking, name, c, tags={"model_name": name}) as parent:
         logger_for = None if parent is None else tracking.child_logger_factory(parent, cfg.tracking, name)
@@ -109,7 +108,8 @@ def main(cfg: DictConfig) -> dict:
             model, report = fit_surrogate(cfg.dataset_dir, c["model"], c["split"], c["scaling"], c["trainer"],
                                           cfg.trainer.target_val_rel_rmse, seed=cfg.seed, name=name,
                                           ckpt_root=ckpt_root, logger_for=logger_for,
-                                          val_fraction=cfg.trainer.val_fraction, batch_size=cfg.trainer.batch_size)
+                                          val_fraction=cfg.trainer.val_fraction, batch_size=cfg.trainer.batch_size,
+                                          workers=cfg.trainer.workers)
         metrics = held_out_errors(model, cfg.testset_dir, cfg.error_floor_N) | band
         x, v = sample_states(model.bearing.clearance)
         reference = GradedReynoldsModel(model.bearing)

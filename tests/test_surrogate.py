@@ -138,6 +138,39 @@ def test_training_resumes_from_its_checkpoint(quick_data, tmp_path):
     assert second["train_time_s"] > first["train_time_s"]
 
 
+def test_split_networks_trained_side_by_side_equal_those_trained_one_after_the_other(quick_data):
+    """Each network of a split model trains with one torch thread wherever it runs, so training them in
+    worker processes (``workers=2``) gives bit for bit the weights of training them in turn here."""
+    dataset, _ = quick_data
+    kw = dict(seed=3, batch_size=128, val_fraction=0.2, target=None)
+    split, trainer = {"boundaries": [0.4, 0.7]}, dict(max_epochs=3, progress_bar=False)
+    threads = torch.get_num_threads()
+    m1, r1 = fit_surrogate(dataset, TINY, split, {"kind": "physics"}, trainer, workers=1, **kw)
+    assert torch.get_num_threads() == threads  # the one-thread rule does not leak into the caller
+    m2, r2 = fit_surrogate(dataset, TINY, split, {"kind": "physics"}, trainer, workers=2, **kw)
+    assert (r1["workers"], r2["workers"]) == (1, 2)
+    for a, b in zip(m1.networks, m2.networks, strict=True):
+        for (wa, ba), (wb, bb) in zip(a, b, strict=True):
+            np.testing.assert_array_equal(wa, wb)
+            np.testing.assert_array_equal(ba, bb)
+    assert [n["n_train"] for n in r1["networks"]] == [n["n_train"] for n in r2["networks"]]
+    assert [n["eps_low"] for n in r2["networks"]] == [lo for lo, _ in regions([0.4, 0.7])]
+
+
+def test_checkpoint_name_ignores_the_worker_count():
+    from fluidfilm.surrogate.fit import training_digest
+
+    parts = (TINY, {"boundaries": [0.5]}, {"kind": "physics"})
+    assert training_digest(*parts, QUICK | {"workers": 1}, 0) == training_digest(*parts, QUICK | {"workers": 8}, 0)
+    assert training_digest(*parts, QUICK | {"workers": 1}, 0) != training_digest(*parts, QUICK | {"max_epochs": 9}, 0)
+
+
+@pytest.mark.parametrize("workers", [0, -1])
+def test_bad_worker_count_is_named(quick_data, workers):
+    with pytest.raises(ValueError, match=f"workers must be >= 1 or null.*{workers}"):
+        fit_surrogate(quick_data[0], TINY, {"boundaries": [0.5]}, {"kind": "physics"}, QUICK, None, workers=workers)
+
+
 @pytest.mark.parametrize("kwargs, match", [
     (dict(boundaries=[0.7, 0.5]), "boundaries must increase"),
     (dict(boundaries=[0.5, 0.7], blend_width=0.3), "blend_width"),

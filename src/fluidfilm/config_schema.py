@@ -149,6 +149,7 @@ class TrainerSchema:
     target_val_rel_rmse: Optional[float] = MISSING
     accelerator: str = MISSING
     progress_bar: bool = MISSING
+    workers: Optional[int] = MISSING
 
 
 @dataclass

@@ -177,6 +177,31 @@ def render_raimondi_boyd_no_feed(reports: Path) -> str:
                       "feed == 'none'")
 
 
+def render_short_bearing(reports: Path) -> str:
+    """Our solver at L/D = 0.01 against the short-bearing closed forms, per eccentricity, with the
+    largest errors under the table (``reports/characteristics/short_bearing.csv``)."""
+    import numpy as np
+    import pandas as pd
+
+    path = reports / "characteristics" / "short_bearing.csv"
+    if not path.exists():
+        raise FileNotFoundError(f"{path} is missing: run `make reproduce`")
+    df = pd.read_csv(path)
+    coeffs = [f"{k}{ij}" for k in "KC" for ij in ("xx", "xy", "yx", "yy")]
+    direct = [f"{k}{ij}" for k in "KC" for ij in ("xx", "yy")]
+    scale_err = df[[f"{c}_err_scale_pct" for c in coeffs]].abs().max(axis=1)
+    direct_err = df[[f"{c}_err_pct" for c in direct]].abs().max(axis=1)
+    rows = [[f"{r.eps:g}", f"{r.load_err_pct:.2g}", f"{r.attitude_err_deg:.2g}", f"{scale_err[i]:.2g}",
+             f"{direct_err[i]:.2g}", f"{r.Mcrit_closed:.4g} / {r.Mcrit:.4g}",
+             f"{r.Mcrit_err_pct:.2g}" if np.isfinite(r.Mcrit_err_pct) else "nan"] for i, r in df.iterrows()]
+    finite = df[np.isfinite(df.Mcrit_closed)]
+    tail = (f"\nLargest errors: load {df.load_err_pct.abs().max():.2g} %, attitude {df.attitude_err_deg.abs().max():.2g} "
+            f"deg, coefficients {scale_err.max():.2g} % of the matrix scale and critical mass "
+            f"{finite.Mcrit_err_pct.abs().max():.2g} % (where it is finite).\n")
+    return _table(["eps", "load err %", "attitude err deg", "max K/C err % (of matrix scale)", "max direct-term err %",
+                   "M_crit closed / ours", "M_crit err %"], rows) + tail
+
+
 def _lund_thomsen(reports: Path, query=None) -> str:
     import pandas as pd
 
@@ -399,23 +424,10 @@ def render_train_time(reports: Path) -> str:
         + (" (by the point estimate only: the interval contains 0, so neither structure is measurably faster)"
            if tt["train_time_reduction_ci95_low"] < 0 < tt["train_time_reduction_ci95_high"] else "")
         + f", more accurate: {tt['ranking']['more_accurate']}.", ""]
-    rc = tt.get("ranking_check")
-    if rc:
-        head = (f"Ranking check at {rc['train_time_samples_per_seed']:,} samples per seed ({rc['train_time_seeds']} "
-                f"seeds): reduction {rc['train_time_reduction_pct']:.1f} %, 95 % interval "
-                f"{rc['train_time_reduction_ci95_low']:.0f} to {rc['train_time_reduction_ci95_high']:.0f} %")
-        if "consistent" not in rc:
-            text = (f"{head}; faster {rc['ranking']['faster']}, more accurate {rc['ranking']['more_accurate']}: "
-                    f"the ranking is {'the same' if rc['same_ranking'] else '**not** the same'}.")
-        elif rc["consistent"]:
-            # overlapping intervals: a flip of the point estimates' ranking is inside the noise
-            text = (f"{head}. It overlaps the study's interval: the two sizes do not measurably differ. By the point "
-                    f"estimates alone, faster {rc['ranking']['faster']}, more accurate {rc['ranking']['more_accurate']}"
-                    + (": the study's ranking." if rc["same_ranking"] else ": not the study's ranking, but inside the noise."))
-        else:
-            text = (f"{head}. It does **not** overlap the study's interval: the subsample size changes the answer "
-                    f"(faster {rc['ranking']['faster']}, more accurate {rc['ranking']['more_accurate']}).")
-        lines += [text, ""]
+    if tt.get("ranking_check"):
+        from .report import ranking_line
+
+        lines += [f"Ranking check at {ranking_line(tt)}", ""]
     rows = []
     for r in tt["runs"]:
         eq = r.get("time_to_equal_accuracy_split_s")
@@ -555,6 +567,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "raimondi_boyd_no_feed": render_raimondi_boyd_no_feed,
     "lund_thomsen": render_lund_thomsen,
     "lund_thomsen_short": render_lund_thomsen_short,
+    "short_bearing": render_short_bearing,
     "reproduce_timing": render_reproduce_timing,
     "headline": render_headline,
     "grading_study": render_grading_study,

@@ -7,6 +7,7 @@ before parallel jobs touch it, which ``ensure_experiment`` does.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import sys
 from collections.abc import Mapping
@@ -205,30 +206,65 @@ def log_artifacts(directory, artifact_path: str | None = None) -> None:
         mlflow.log_artifacts(str(directory), artifact_path=artifact_path)
 
 
+class _InterruptibleLoggers:
+    """Built on first use, so that importing this module does not import Lightning."""
+
+    cls = None
+
+    @classmethod
+    def get(cls):
+        if cls.cls is None:
+            from lightning.pytorch.loggers import MLFlowLogger
+
+            class InterruptibleMLFlowLogger(MLFlowLogger):
+                """Lightning ends its logger's run inside its own Ctrl-C handler, before ours: the SQLite locks
+                the interrupt left held are released first (``_release_interrupted_transactions``), and the run
+                ends KILLED, as the job's run does, rather than FAILED."""
+
+                def finalize(self, status: str = "success") -> None:
+                    exc = sys.exc_info()[1]
+                    if isinstance(exc, KeyboardInterrupt):
+                        _release_interrupted_transactions(exc)
+                        status = "KILLED"
+                    super().finalize(status)
+
+            cls.cls = InterruptibleMLFlowLogger
+        return cls.cls
+
+
+@dataclasses.dataclass(frozen=True)
+class ChildRun:
+    """One network's MLflow child run, made in the job's process: a plain, picklable record, so the network
+    can train in another process and log there (``logger()``)."""
+
+    uri: str
+    experiment: str
+    run_id: str
+
+    def logger(self):
+        """Lightning's MLflow logger of this run."""
+        return _InterruptibleLoggers.get()(experiment_name=self.experiment, tracking_uri=self.uri, run_id=self.run_id)
+
+    def end_if_running(self, status: str = "KILLED") -> None:
+        """End the run if its process was stopped before Lightning could (a worker terminated on Ctrl-C)."""
+        import mlflow
+
+        client = mlflow.tracking.MlflowClient(self.uri)
+        if client.get_run(self.run_id).info.status == "RUNNING":
+            client.set_terminated(self.run_id, status)
+
+
 def child_logger_factory(parent, tracking: Mapping, name: str):
-    """``r -> MLFlowLogger`` of a child run "<name>/network<r>" under the run ``parent`` (Lightning's logger)."""
+    """``r -> ChildRun``: a child run "<name>/network<r>" under the run ``parent``; its ``logger()`` is
+    Lightning's logger of it."""
     import mlflow
-    from lightning.pytorch.loggers import MLFlowLogger
 
     client = mlflow.tracking.MlflowClient(tracking["uri"])
 
-    class InterruptibleMLFlowLogger(MLFlowLogger):
-        """Lightning ends its logger's run inside its own Ctrl-C handler, before ours: the SQLite locks the
-        interrupt left held are released first (``_release_interrupted_transactions``), and the run ends
-        KILLED, as the job's run does, rather than FAILED."""
-
-        def finalize(self, status: str = "success") -> None:
-            exc = sys.exc_info()[1]
-            if isinstance(exc, KeyboardInterrupt):
-                _release_interrupted_transactions(exc)
-                status = "KILLED"
-            super().finalize(status)
-
-    def logger_for(r):
+    def logger_for(r) -> ChildRun:
         child = client.create_run(parent.info.experiment_id, run_name=f"{name}/network{r}",
                                   tags={"mlflow.parentRunId": parent.info.run_id})
-        return InterruptibleMLFlowLogger(experiment_name=tracking["experiment"], tracking_uri=tracking["uri"],
-                                         run_id=child.info.run_id)
+        return ChildRun(tracking["uri"], tracking["experiment"], child.info.run_id)
 
     return logger_for
 

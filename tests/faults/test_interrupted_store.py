@@ -78,7 +78,7 @@ def test_ctrl_c_during_an_mlflow_read_inside_lightning_ends_the_network_run_kill
     cfg = {"uri": uri, "experiment": "interrupts"}
     with pytest.raises(KeyboardInterrupt):
         with tracking.run(cfg, "job") as parent:
-            logger = tracking.child_logger_factory(parent, cfg, "job")(0)
+            logger = tracking.child_logger_factory(parent, cfg, "job")(0).logger()
             child_id = logger.run_id
             try:
                 _interrupted_read(tmp_path / "mlflow.db", "experiments")

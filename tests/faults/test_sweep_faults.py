@@ -114,3 +114,44 @@ def test_submitit_route_two_job_sweep_lands_as_one_parent_with_two_children(data
     assert list((tmp_path / "multirun" / ".submitit").iterdir())  # submitit's own job records
     for n in jobs:
         assert (tmp_path / "models" / n / "card.md").exists()
+
+
+def test_ctrl_c_of_a_split_training_in_worker_processes_is_one_line_and_resumes_to_the_same_weights(data, tmp_path):
+    """The split model's networks train in worker processes (``trainer.workers=2``); Ctrl-C reaches the
+    job, which stops the workers, ends every MLflow run KILLED and says so in one line; the same command
+    then resumes each network from its checkpoint and ends with the weights of a run never interrupted."""
+    import numpy as np
+
+    def args(root):
+        return [*_args(data, root, "split=paper", "trainer.max_epochs=12", "trainer.workers=2"), "name=split"]
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    stopped = tmp_path / "stopped"
+    proc = subprocess.Popen([sys.executable, "experiments/train_surrogate.py", *args(stopped)], cwd=ROOT, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
+    deadline = time.time() + 300
+    while time.time() < deadline and len(list((stopped / "ckpt").rglob("last.ckpt"))) < 2:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err[-3000:]
+    assert "Traceback" not in err
+    last = [line for line in err.splitlines() if line.strip()][-1]
+    assert last.startswith("interrupted: surrogate training") and "run the same command again" in last
+    client = mlflow.tracking.MlflowClient(f"sqlite:///{stopped / 'mlflow.db'}")
+    runs = client.search_runs([client.get_experiment_by_name("faults").experiment_id])
+    job = [r for r in runs if "mlflow.parentRunId" not in r.data.tags]
+    networks = [r for r in runs if "mlflow.parentRunId" in r.data.tags]
+    assert [r.info.status for r in job] == ["KILLED"] and len(networks) == 3
+    # a network that finished before the interrupt is FINISHED; the others, running or not yet started, KILLED
+    statuses = [r.info.status for r in networks]
+    assert set(statuses) <= {"KILLED", "FINISHED"} and "KILLED" in statuses
+    assert not (stopped / "models").exists()
+    resumed = run_entry("train_surrogate", *args(stopped))
+    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    whole = run_entry("train_surrogate", *args(tmp_path / "whole"))
+    assert whole.returncode == 0, whole.stderr[-3000:]
+    a, b = (np.load(root / "models" / "split" / "surrogate.npz") for root in (stopped, tmp_path / "whole"))
+    assert sorted(a.files) == sorted(b.files)
+    for key in a.files:
+        np.testing.assert_array_equal(a[key], b[key], err_msg=key)

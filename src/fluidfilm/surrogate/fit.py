@@ -1,13 +1,17 @@
 """Fit a single or split surrogate on the dataset and judge it on the held-out test set."""
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
 
 from ..data.schema import dataset_bearing, load_dataset, load_test_set, relative_force_errors, training_domain
+from ..data.spec import config_hash
 from .inference import SurrogateForceModel
 from .training import ForceDataModule, train_network
 
@@ -22,28 +26,90 @@ def regions(boundaries, blend_width: float = 0.0) -> list[tuple[float, float]]:
             for k, (lo, hi) in enumerate(zip(b[:-1], b[1:]))]
 
 
+def training_digest(model_cfg: Mapping, split_cfg: Mapping, scaling_cfg: Mapping, trainer_cfg: Mapping, *rest) -> str:
+    """The hash that names a training's checkpoints: everything that shapes the weights, not ``workers``
+    (how many networks train at once), so a rerun with another count resumes the same checkpoints."""
+    trainer = {k: v for k, v in trainer_cfg.items() if k != "workers"}
+    return config_hash(model_cfg, split_cfg, scaling_cfg, trainer, *rest)
+
+
+def _train_region(job: dict) -> dict:
+    """Fit one region's network, here or in a worker process; returns what the model needs (the Lightning
+    module stays in the process that trained it)."""
+    import torch
+
+    threads = torch.get_num_threads()
+    if job["threads"]:
+        torch.set_num_threads(job["threads"])
+    try:
+        dm = ForceDataModule(job["dataset_dir"], table=job["table"], meta=job["meta"], **job["data"])
+        run = job["run"]
+        res = train_network(dm, job["model_cfg"], job["trainer_cfg"], job["target"], ckpt_dir=job["ckpt_dir"],
+                            logger=None if run is None else run.logger(), seed=job["seed"], what=job["what"])
+    finally:
+        torch.set_num_threads(threads)
+    return {k: res[k] for k in ("layers", "scaling", "time_to_target_s", "train_time_s", "epochs", "epoch_at_target",
+                                "val_rel_rmse", "n_train", "n_val")}
+
+
 def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_cfg: Mapping,
                   trainer_cfg: Mapping, target: float | None, seed: int = 0, name: str = "surrogate",
                   ckpt_root=None, logger_for: Callable[[int], object] | None = None,
-                  val_fraction: float = 0.1, batch_size: int = 4096) -> tuple[SurrogateForceModel, dict]:
+                  val_fraction: float = 0.1, batch_size: int = 4096,
+                  workers: int | None = None) -> tuple[SurrogateForceModel, dict]:
     """Train one network per eccentricity region (one region: the single model).
 
+    The networks of a split model train side by side, ``workers`` at a time (None: one per core), each in
+    its own process with one torch thread.  One thread per network always, however many train at once,
+    so the weights do not depend on ``workers`` nor on the machine's core count; a single network uses
+    torch's default threads.  ``logger_for(r)`` gives network r's MLflow child run
+    (``tracking.child_logger_factory``).
+
     Returns the force model and a report with per-network and total
-    training times (to the target validation error, and in all).
+    training times (to the target validation error, and in all) and the wall time of the training.
     """
     frame, meta = load_dataset(dataset_dir)
     bearing = dataset_bearing(meta)
     boundaries = list(split_cfg.get("boundaries", []))
     blend = float(split_cfg.get("blend_width", 0.0))
+    bounds = regions(boundaries, blend)
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1 or null (one per core), got {workers!r}")
+    n_workers = min(len(bounds), int(workers) if workers is not None else (os.cpu_count() or 1))
+    jobs = []
+    for r, (lo, hi) in enumerate(bounds):
+        # a worker gets only its region's rows (the data module selects the same rows from the whole table)
+        table = frame if n_workers == 1 else frame[(frame["eps"] >= lo) & (frame["eps"] < hi)]
+        jobs.append({"dataset_dir": dataset_dir, "table": table, "meta": meta,
+                     "data": {"scaling": scaling_cfg["kind"], "power": scaling_cfg.get("power", 1.5),
+                              "frame": scaling_cfg.get("frame", "cartesian"), "eps_low": lo, "eps_high": hi,
+                              "val_fraction": val_fraction, "batch_size": batch_size, "seed": seed},
+                     "model_cfg": dict(model_cfg), "trainer_cfg": dict(trainer_cfg), "target": target,
+                     "ckpt_dir": None if ckpt_root is None else Path(ckpt_root) / f"region{r}",
+                     "run": logger_for(r) if logger_for else None, "seed": seed + r,
+                     "threads": 1 if len(bounds) > 1 else None,
+                     "what": "training" if len(bounds) == 1 else
+                     f"network {r} (eps {lo:.2f}-{hi:.2f})" if math.isfinite(hi) else f"network {r} (eps >= {lo:.2f})"})
+    t0 = time.perf_counter()
+    if n_workers == 1:
+        results = [_train_region(job) for job in jobs]
+    else:
+        from joblib import Parallel, delayed
+
+        order = sorted(range(len(jobs)), key=lambda r: -len(jobs[r]["table"]))  # largest first: a short tail
+        try:
+            done = Parallel(n_jobs=n_workers, backend="loky")(delayed(_train_region)(jobs[r]) for r in order)
+        except BaseException as exc:
+            # joblib stops the workers; a network's run they left open ends here, as Lightning would end it
+            for job in jobs:
+                if job["run"] is not None and hasattr(job["run"], "end_if_running"):
+                    with contextlib.suppress(Exception):
+                        job["run"].end_if_running("KILLED" if isinstance(exc, KeyboardInterrupt) else "FAILED")
+            raise
+        results = [dict(zip(order, done))[r] for r in range(len(jobs))]
+    wall = time.perf_counter() - t0
     nets, scalings, per_net = [], [], []
-    for r, (lo, hi) in enumerate(regions(boundaries, blend)):
-        dm = ForceDataModule(dataset_dir, scaling=scaling_cfg["kind"], power=scaling_cfg.get("power", 1.5),
-                             frame=scaling_cfg.get("frame", "cartesian"),
-                             eps_low=lo, eps_high=hi, val_fraction=val_fraction, batch_size=batch_size, seed=seed,
-                             table=frame, meta=meta)
-        res = train_network(dm, dict(model_cfg), dict(trainer_cfg), target,
-                            ckpt_dir=None if ckpt_root is None else Path(ckpt_root) / f"region{r}",
-                            logger=logger_for(r) if logger_for else None, seed=seed + r)
+    for (lo, hi), res in zip(bounds, results):
         nets.append(res["layers"])
         scalings.append(res["scaling"])
         per_net.append({k: res[k] for k in ("time_to_target_s", "train_time_s", "epochs", "epoch_at_target",
@@ -53,6 +119,8 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
     report = {
         "networks": per_net,
         "train_time_s": float(sum(p["train_time_s"] for p in per_net)),
+        "train_wall_s": wall,  # with networks side by side, less than their sum
+        "workers": n_workers,
         "time_to_target_s": float(sum(p["time_to_target_s"] for p in per_net)) if reached else None,
         "reached_target": reached,
         "target_val_rel_rmse": target,
