@@ -33,10 +33,33 @@ def training_digest(model_cfg: Mapping, split_cfg: Mapping, scaling_cfg: Mapping
     return config_hash(model_cfg, split_cfg, scaling_cfg, trainer, *rest)
 
 
+_WATCHING_PARENT = False
+
+
+def _exit_with_parent(parent_pid: int) -> None:
+    """In a worker: end this process when the job's process is gone (killed, so it could not stop us), rather
+    than train on for minutes beside a rerun.  Checked once a second by a daemon thread."""
+    global _WATCHING_PARENT
+    if _WATCHING_PARENT:
+        return
+    import threading
+
+    def watch():
+        while os.getppid() == parent_pid:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="fluidfilm-parent-watch", daemon=True).start()
+    _WATCHING_PARENT = True
+
+
 def _train_region(job: dict) -> dict:
     """Fit one region's network, here or in a worker process; returns what the model needs (the Lightning
     module stays in the process that trained it)."""
     import torch
+
+    if job["parent_pid"] != os.getpid():
+        _exit_with_parent(job["parent_pid"])
 
     threads = torch.get_num_threads()
     if job["threads"]:
@@ -87,7 +110,7 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
                      "model_cfg": dict(model_cfg), "trainer_cfg": dict(trainer_cfg), "target": target,
                      "ckpt_dir": None if ckpt_root is None else Path(ckpt_root) / f"region{r}",
                      "run": logger_for(r) if logger_for else None, "seed": seed + r,
-                     "threads": 1 if len(bounds) > 1 else None,
+                     "threads": 1 if len(bounds) > 1 else None, "parent_pid": os.getpid(),
                      "what": "training" if len(bounds) == 1 else
                      f"network {r} (eps {lo:.2f}-{hi:.2f})" if math.isfinite(hi) else f"network {r} (eps >= {lo:.2f})"})
     t0 = time.perf_counter()
