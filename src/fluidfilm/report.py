@@ -250,7 +250,7 @@ def surrogate_goals(metrics: Mapping) -> list[dict]:
     return rows
 
 
-STUDY_HEADER = ["job", "samples", "generation s", "training s", "held-out median %", "held-out p99 %",
+STUDY_HEADER = ["job", "samples", "generation s", "training s (sum of networks)", "held-out median %", "held-out p99 %",
                 "orbit-state median %", "orbit-state p99 %", "Fig. 4 cases", "K/C error direct / cross %", "us per force"]
 
 
