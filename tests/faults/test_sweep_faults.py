@@ -78,22 +78,27 @@ def test_sweep_refuses_to_write_a_dvc_tracked_output(data, tmp_path):
     assert (sorted(p.name for p in target.iterdir()) if target.exists() else None) == before
 
 
-def test_ctrl_c_in_a_sweep_is_one_line_and_the_runs_end_killed(data, tmp_path):
-    args = _args(data, tmp_path, "trainer.max_epochs=500")
+def _ctrl_c_training(argv, ckpt_dir, checkpoints: int, settle_s: float = 0.0) -> None:
+    """Start ``train_surrogate.py argv``, Ctrl-C it once ``checkpoints`` epoch checkpoints exist, and check
+    that it ends as an interrupted run must: exit 130, no traceback, one last line saying how to resume."""
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
-    proc = subprocess.Popen([sys.executable, "experiments/train_surrogate.py", "-m", "seed=0,1", *args], cwd=ROOT,
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=interruptible)
+    proc = subprocess.Popen([sys.executable, "experiments/train_surrogate.py", *argv], cwd=ROOT, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
     deadline = time.time() + 300
-    while time.time() < deadline and not list((tmp_path / "ckpt").rglob("last.ckpt")):
+    while time.time() < deadline and len(list(Path(ckpt_dir).rglob("last.ckpt"))) < checkpoints:
         time.sleep(0.05)
-    time.sleep(0.5)
+    time.sleep(settle_s)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err[-3000:]
     assert "Traceback" not in err
     last = [line for line in err.splitlines() if line.strip()][-1]
     assert last.startswith("interrupted: surrogate training") and "run the same command again" in last
+
+
+def test_ctrl_c_in_a_sweep_is_one_line_and_the_runs_end_killed(data, tmp_path):
+    args = _args(data, tmp_path, "trainer.max_epochs=500")
+    _ctrl_c_training(["-m", "seed=0,1", *args], tmp_path / "ckpt", checkpoints=1, settle_s=0.5)
     parent, jobs = _runs(tmp_path)
     assert parent.info.status == "KILLED"
     assert [r.info.status for r in jobs.values()] == ["KILLED"]
@@ -126,19 +131,8 @@ def test_ctrl_c_of_a_split_training_in_worker_processes_is_one_line_and_resumes_
     def args(root):
         return [*_args(data, root, "split=paper", "trainer.max_epochs=12", "trainer.workers=2"), "name=split"]
 
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     stopped = tmp_path / "stopped"
-    proc = subprocess.Popen([sys.executable, "experiments/train_surrogate.py", *args(stopped)], cwd=ROOT, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
-    deadline = time.time() + 300
-    while time.time() < deadline and len(list((stopped / "ckpt").rglob("last.ckpt"))) < 2:
-        time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=120)
-    assert proc.returncode == 130, err[-3000:]
-    assert "Traceback" not in err
-    last = [line for line in err.splitlines() if line.strip()][-1]
-    assert last.startswith("interrupted: surrogate training") and "run the same command again" in last
+    _ctrl_c_training(args(stopped), stopped / "ckpt", checkpoints=2)
     client = mlflow.tracking.MlflowClient(f"sqlite:///{stopped / 'mlflow.db'}")
     runs = client.search_runs([client.get_experiment_by_name("faults").experiment_id])
     job = [r for r in runs if "mlflow.parentRunId" not in r.data.tags]
