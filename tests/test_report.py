@@ -75,7 +75,7 @@ def test_generation_time_prefers_the_total_over_resumed_runs():
 
 def test_sparse_and_ranking_lines_when_not_measured():
     assert report.sparse_line({}) == "not measured"
-    assert report.ranking_line({}) == "not run"
+    assert report.ranking_line({}) == "not run."
 
 
 def test_characteristics_section_reads_the_study():

@@ -13,14 +13,24 @@ import tempfile
 from pathlib import Path
 
 
+def _process_umask() -> int:
+    mask = os.umask(0)  # the only way to read it is to set it: done once, at import, not per file
+    os.umask(mask)
+    return mask
+
+
+_UMASK = _process_umask()
+
+
 @contextlib.contextmanager
 def atomic_path(path, suffix: str | None = None):
     """Yield a temporary path next to ``path``; on success it replaces ``path``.
 
     The temporary file is created inside the guarded block, so an exception
-    (Ctrl-C included) from its creation on removes it.  A Ctrl-C can still land
-    in the few bytecodes where ``contextlib`` hands the path to the ``with``
-    body; callers that own a directory sweep its ``.<name>.*`` leftovers (see
+    (Ctrl-C included) once its name is known removes it.  A Ctrl-C can still
+    land in the bytecodes between ``mkstemp`` returning and its name being
+    stored, or where ``contextlib`` hands the path to the ``with`` body;
+    callers that own a directory sweep its ``.<name>.*`` leftovers (see
     ``remove_temporaries``).
     """
     path = Path(path)
@@ -29,9 +39,7 @@ def atomic_path(path, suffix: str | None = None):
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or path.suffix, dir=path.parent)
         os.close(fd)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; outputs are ordinary files
+        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; outputs are ordinary files
         yield Path(tmp)
         os.replace(tmp, path)
     except BaseException:

@@ -250,7 +250,7 @@ def surrogate_goals(metrics: Mapping) -> list[dict]:
     return rows
 
 
-STUDY_HEADER = ["job", "samples", "generation s", "training s (sum of networks)", "held-out median %", "held-out p99 %",
+STUDY_HEADER = ["job", "samples", "generation s", "training s (sum of networks; split: 1 thread each)", "held-out median %", "held-out p99 %",
                 "orbit-state median %", "orbit-state p99 %", "Fig. 4 cases", "K/C error direct / cross %", "us per force"]
 
 
@@ -375,10 +375,10 @@ def seed_rows(tt: Mapping) -> str:
 
 
 def ranking_line(tt: Mapping) -> str:
-    """The ranking check at twice the study's size, led by its interval, or "not run"."""
+    """The ranking check at twice the study's size, led by its interval, or "not run."."""
     rc = tt.get("ranking_check")
     if not rc:
-        return "not run"
+        return "not run."
     head = (f"{rc['train_time_samples_per_seed']:,} samples per seed ({rc['train_time_seeds']} seeds): reduction "
             f"{rc['train_time_reduction_pct']:.1f} %, 95 % interval {rc['train_time_reduction_ci95_low']:.0f} to "
             f"{rc['train_time_reduction_ci95_high']:.0f} %")

@@ -88,3 +88,35 @@ def test_ctrl_c_during_an_mlflow_read_inside_lightning_ends_the_network_run_kill
     client = mlflow.tracking.MlflowClient(uri)
     assert client.get_run(child_id).info.status == "KILLED"
     assert client.get_run(parent.info.run_id).info.status == "KILLED"
+
+
+def test_an_interrupted_split_training_leaves_no_network_run_running(tmp_path, monkeypatch):
+    """Every network's child run is made before training starts; a Ctrl-C in the first network (here, in
+    this process: ``workers=1``) ends them all KILLED, not only the one that was training."""
+    from fluidfilm.data import DatasetSpec, generate_dataset
+    from fluidfilm import paper_bearing
+    from fluidfilm.surrogate import fit
+
+    from .conftest import REFERENCE, quick_cfg
+
+    generate_dataset(paper_bearing(), REFERENCE, DatasetSpec.from_cfg(quick_cfg()), tmp_path / "ds",
+                     scheduler="inline", progress=False)
+    uri = f"sqlite:///{tmp_path / 'mlflow.db'}"
+    cfg = {"uri": uri, "experiment": "interrupts"}
+    calls = []
+
+    def interrupted(job):
+        calls.append(job["what"])
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fit, "_train_region", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        with tracking.run(cfg, "job") as parent:
+            fit.fit_surrogate(tmp_path / "ds", {"width": 4, "depth": 1, "activation": "tanh", "lr": 1e-2},
+                              {"boundaries": [0.4, 0.7]}, {"kind": "physics"}, {"max_epochs": 1}, None,
+                              logger_for=tracking.child_logger_factory(parent, cfg, "job"), workers=1)
+    client = mlflow.tracking.MlflowClient(uri)
+    runs = client.search_runs([client.get_experiment_by_name("interrupts").experiment_id])
+    assert len(calls) == 1 and len(runs) == 4  # the job and its three networks
+    assert [r.info.status for r in runs] == ["KILLED"] * 4
+

@@ -78,17 +78,22 @@ def test_sweep_refuses_to_write_a_dvc_tracked_output(data, tmp_path):
     assert (sorted(p.name for p in target.iterdir()) if target.exists() else None) == before
 
 
-def _ctrl_c_training(argv, ckpt_dir, checkpoints: int, settle_s: float = 0.0) -> None:
+def _ctrl_c_training(argv, ckpt_dir, checkpoints: int, settle_s: float = 0.0, group: bool = False) -> None:
     """Start ``train_surrogate.py argv``, Ctrl-C it once ``checkpoints`` epoch checkpoints exist, and check
-    that it ends as an interrupted run must: exit 130, no traceback, one last line saying how to resume."""
+    that it ends as an interrupted run must: exit 130, no traceback, one last line saying how to resume.
+    ``group``: the SIGINT goes to the whole process group, workers included, as a terminal's Ctrl-C does."""
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     proc = subprocess.Popen([sys.executable, "experiments/train_surrogate.py", *argv], cwd=ROOT, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=interruptible)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=interruptible,
+                            start_new_session=group)
     deadline = time.time() + 300
     while time.time() < deadline and len(list(Path(ckpt_dir).rglob("last.ckpt"))) < checkpoints:
         time.sleep(0.05)
     time.sleep(settle_s)
-    proc.send_signal(signal.SIGINT)
+    if group:
+        os.killpg(proc.pid, signal.SIGINT)
+    else:
+        proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err[-3000:]
     assert "Traceback" not in err
@@ -132,7 +137,7 @@ def test_ctrl_c_of_a_split_training_in_worker_processes_is_one_line_and_resumes_
         return [*_args(data, root, "split=paper", "trainer.max_epochs=12", "trainer.workers=2"), "name=split"]
 
     stopped = tmp_path / "stopped"
-    _ctrl_c_training(args(stopped), stopped / "ckpt", checkpoints=2)
+    _ctrl_c_training(args(stopped), stopped / "ckpt", checkpoints=2, group=True)
     client = mlflow.tracking.MlflowClient(f"sqlite:///{stopped / 'mlflow.db'}")
     runs = client.search_runs([client.get_experiment_by_name("faults").experiment_id])
     job = [r for r in runs if "mlflow.parentRunId" not in r.data.tags]
@@ -162,12 +167,18 @@ def test_workers_of_a_killed_split_training_stop_with_it(data, tmp_path):
     deadline = time.time() + 300
     while time.time() < deadline and len(list((tmp_path / "ckpt").rglob("last.ckpt"))) < 2:
         time.sleep(0.05)
-    children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True).stdout.split()
-    workers = [int(pid) for pid in children
-               if "popen_loky" in Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace")]
-    assert len(workers) == 2, children
-    proc.kill()
-    proc.wait()
+    try:
+        workers = []
+        for pid in subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True).stdout.split():
+            try:
+                if "popen_loky" in Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace"):
+                    workers.append(int(pid))
+            except FileNotFoundError:  # a helper process that ended meanwhile
+                pass
+        assert len(workers) == 2
+    finally:
+        proc.kill()
+        proc.wait()
     deadline = time.time() + 20
     while time.time() < deadline and any(Path(f"/proc/{pid}").exists() for pid in workers):
         time.sleep(0.2)

@@ -82,23 +82,27 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
                   workers: int | None = None) -> tuple[SurrogateForceModel, dict]:
     """Train one network per eccentricity region (one region: the single model).
 
-    The networks of a split model train side by side, ``workers`` at a time (None: one per core), each in
-    its own process with one torch thread.  One thread per network always, however many train at once,
-    so the weights do not depend on ``workers`` nor on the machine's core count; a single network uses
-    torch's default threads.  ``logger_for(r)`` gives network r's MLflow child run
+    The networks of a split model train side by side, ``workers`` at a time (None: one per core), in worker
+    processes (with ``workers=1``: one after the other in this process), each with one torch thread.  One
+    thread per network always, however many train at once, so the weights do not depend on ``workers`` nor
+    on the machine's core count; a single network uses torch's default threads.  ``logger_for(r)`` gives network r's MLflow child run
     (``tracking.child_logger_factory``).
 
     Returns the force model and a report with per-network and total
     training times (to the target validation error, and in all) and the wall time of the training.
     """
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1 or null (one per core), got {workers!r}")
     frame, meta = load_dataset(dataset_dir)
     bearing = dataset_bearing(meta)
     boundaries = list(split_cfg.get("boundaries", []))
     blend = float(split_cfg.get("blend_width", 0.0))
     bounds = regions(boundaries, blend)
-    if workers is not None and int(workers) < 1:
-        raise ValueError(f"workers must be >= 1 or null (one per core), got {workers!r}")
-    n_workers = min(len(bounds), int(workers) if workers is not None else (os.cpu_count() or 1))
+    if workers is None:
+        from joblib import cpu_count  # the cores this process may use (affinity, container limits)
+
+        workers = cpu_count(only_physical_cores=False)
+    n_workers = min(len(bounds), int(workers))
     jobs = []
     for r, (lo, hi) in enumerate(bounds):
         # a worker gets only its region's rows (the data module selects the same rows from the whole table)
@@ -114,22 +118,23 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
                      "what": "training" if len(bounds) == 1 else
                      f"network {r} (eps {lo:.2f}-{hi:.2f})" if math.isfinite(hi) else f"network {r} (eps >= {lo:.2f})"})
     t0 = time.perf_counter()
-    if n_workers == 1:
-        results = [_train_region(job) for job in jobs]
-    else:
-        from joblib import Parallel, delayed
+    try:
+        if n_workers == 1:
+            results = [_train_region(job) for job in jobs]
+        else:
+            from joblib import Parallel, delayed
 
-        order = sorted(range(len(jobs)), key=lambda r: -len(jobs[r]["table"]))  # largest first: a short tail
-        try:
+            order = sorted(range(len(jobs)), key=lambda r: -len(jobs[r]["table"]))  # largest first: a short tail
             done = Parallel(n_jobs=n_workers, backend="loky")(delayed(_train_region)(jobs[r]) for r in order)
-        except BaseException as exc:
-            # joblib stops the workers; a network's run they left open ends here, as Lightning would end it
-            for job in jobs:
-                if job["run"] is not None and hasattr(job["run"], "end_if_running"):
-                    with contextlib.suppress(Exception):
-                        job["run"].end_if_running("KILLED" if isinstance(exc, KeyboardInterrupt) else "FAILED")
-            raise
-        results = [dict(zip(order, done))[r] for r in range(len(jobs))]
+            results = [dict(zip(order, done))[r] for r in range(len(jobs))]
+    except BaseException as exc:
+        # every network's run was made up front; those a stopped worker or a network not yet started left
+        # open end here, as Lightning ends the run of the network it was training (joblib stops the workers)
+        for job in jobs:
+            if job["run"] is not None and hasattr(job["run"], "end_if_running"):
+                with contextlib.suppress(Exception):
+                    job["run"].end_if_running("KILLED" if isinstance(exc, KeyboardInterrupt) else "FAILED")
+        raise
     wall = time.perf_counter() - t0
     nets, scalings, per_net = [], [], []
     for (lo, hi), res in zip(bounds, results):

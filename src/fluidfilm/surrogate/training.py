@@ -98,7 +98,7 @@ class ForceMLP(L.LightningModule):
         z, y = batch[0], batch[1]
         loss = nn.functional.mse_loss(self(z), y)
         # the epoch's row-weighted mean loss, summed here and logged once at the epoch's end: the value
-        # ``self.log(on_epoch=True)`` gives, without its per-step bookkeeping (a third of a step's time)
+        # ``self.log(on_epoch=True)`` gives, without its per-step bookkeeping (benchmarks/bench_training_step.py)
         self._train_sq_sum += loss.detach().double() * z.shape[0]
         self._train_rows += z.shape[0]
         return loss
