@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import os
 import sys
 from collections.abc import Mapping
@@ -206,30 +207,25 @@ def log_artifacts(directory, artifact_path: str | None = None) -> None:
         mlflow.log_artifacts(str(directory), artifact_path=artifact_path)
 
 
-class _InterruptibleLoggers:
-    """Built on first use, so that importing this module does not import Lightning."""
+@functools.cache
+def _interruptible_logger_class():
+    """Lightning's MLflow logger, with Ctrl-C ending the run KILLED; built on first use, so that importing
+    this module does not import Lightning."""
+    from lightning.pytorch.loggers import MLFlowLogger
 
-    cls = None
+    class InterruptibleMLFlowLogger(MLFlowLogger):
+        """Lightning ends its logger's run inside its own Ctrl-C handler, before ours: the SQLite locks the
+        interrupt left held are released first (``_release_interrupted_transactions``), and the run ends
+        KILLED, as the job's run does, rather than FAILED."""
 
-    @classmethod
-    def get(cls):
-        if cls.cls is None:
-            from lightning.pytorch.loggers import MLFlowLogger
+        def finalize(self, status: str = "success") -> None:
+            exc = sys.exc_info()[1]
+            if isinstance(exc, KeyboardInterrupt):
+                _release_interrupted_transactions(exc)
+                status = "KILLED"
+            super().finalize(status)
 
-            class InterruptibleMLFlowLogger(MLFlowLogger):
-                """Lightning ends its logger's run inside its own Ctrl-C handler, before ours: the SQLite locks
-                the interrupt left held are released first (``_release_interrupted_transactions``), and the run
-                ends KILLED, as the job's run does, rather than FAILED."""
-
-                def finalize(self, status: str = "success") -> None:
-                    exc = sys.exc_info()[1]
-                    if isinstance(exc, KeyboardInterrupt):
-                        _release_interrupted_transactions(exc)
-                        status = "KILLED"
-                    super().finalize(status)
-
-            cls.cls = InterruptibleMLFlowLogger
-        return cls.cls
+    return InterruptibleMLFlowLogger
 
 
 @dataclasses.dataclass(frozen=True)
@@ -243,7 +239,7 @@ class ChildRun:
 
     def logger(self):
         """Lightning's MLflow logger of this run."""
-        return _InterruptibleLoggers.get()(experiment_name=self.experiment, tracking_uri=self.uri, run_id=self.run_id)
+        return _interruptible_logger_class()(experiment_name=self.experiment, tracking_uri=self.uri, run_id=self.run_id)
 
     def end_if_running(self, status: str = "KILLED") -> None:
         """End the run if its process was stopped before Lightning could (a worker terminated on Ctrl-C)."""

@@ -85,8 +85,8 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
     The networks of a split model train side by side, ``workers`` at a time (None: one per core), in worker
     processes (with ``workers=1``: one after the other in this process), each with one torch thread.  One
     thread per network always, however many train at once, so the weights do not depend on ``workers`` nor
-    on the machine's core count; a single network uses torch's default threads.  ``logger_for(r)`` gives network r's MLflow child run
-    (``tracking.child_logger_factory``).
+    on the machine's core count; a single network uses torch's default threads.  ``logger_for(r)`` gives
+    network r's MLflow child run (``tracking.child_logger_factory``).
 
     Returns the force model and a report with per-network and total
     training times (to the target validation error, and in all) and the wall time of the training.
@@ -126,7 +126,8 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
 
             order = sorted(range(len(jobs)), key=lambda r: -len(jobs[r]["table"]))  # largest first: a short tail
             done = Parallel(n_jobs=n_workers, backend="loky")(delayed(_train_region)(jobs[r]) for r in order)
-            results = [dict(zip(order, done))[r] for r in range(len(jobs))]
+            by_region = dict(zip(order, done))
+            results = [by_region[r] for r in range(len(jobs))]
     except BaseException as exc:
         # every network's run was made up front; those a stopped worker or a network not yet started left
         # open end here, as Lightning ends the run of the network it was training (joblib stops the workers)
