@@ -137,7 +137,7 @@ def test_ctrl_c_of_a_split_training_in_worker_processes_is_one_line_and_resumes_
         return [*_args(data, root, "split=paper", "trainer.max_epochs=12", "trainer.workers=2"), "name=split"]
 
     stopped = tmp_path / "stopped"
-    _ctrl_c_training(args(stopped), stopped / "ckpt", checkpoints=2, group=True)
+    _ctrl_c_training(args(stopped), stopped / "ckpt", checkpoints=2)
     client = mlflow.tracking.MlflowClient(f"sqlite:///{stopped / 'mlflow.db'}")
     runs = client.search_runs([client.get_experiment_by_name("faults").experiment_id])
     job = [r for r in runs if "mlflow.parentRunId" not in r.data.tags]
