@@ -41,9 +41,9 @@ $(STAMP): pyproject.toml
 
 reproduce: setup
 ifeq ($(PROFILE),full)
-	$(PY) -m fluidfilm.pipeline run
+	$(PY) -m fluidfilm.workflow.pipeline run
 else
-	$(PY) -m fluidfilm.pipeline run --profile $(PROFILE) --workdir $(QUICK_DIR)
+	$(PY) -m fluidfilm.workflow.pipeline run --profile $(PROFILE) --workdir $(QUICK_DIR)
 endif
 
 test: setup
@@ -64,7 +64,7 @@ bench: setup
 	$(PY) benchmarks/bench_training_step.py
 
 mlflow: setup
-	$(PY) -m fluidfilm.pipeline serve --port $(MLFLOW_PORT)
+	$(PY) -m fluidfilm.workflow.pipeline serve --port $(MLFLOW_PORT)
 
 # Sharing outputs in a team (there is no default remote: `make reproduce` regenerates everything).
 #   make dvc-remote REMOTE=/shared/fluidfilm-dvc   (any DVC remote URL: s3://..., ssh://...), then
@@ -99,7 +99,7 @@ ROSS_PINS       := benchmarks/ross_peer_constraints.txt
 train-time-ci: setup
 	$(PY) experiments/train_time.py samples_per_seed=12000 seeds_max=1000 budget_s=36000 ranking_check.enabled=false \
 	    cache_dir=cache/train_time_ci out=reports/train_time_ci.json
-	$(PY) -m fluidfilm.readme
+	$(PY) -m fluidfilm.reporting.readme
 
 # The issue's full-scale check: single vs split trained once each on the whole paper dataset, with
 # mini-batch Adam under the same division and stopping rule (Levenberg-Marquardt would take hours per network).
@@ -107,7 +107,7 @@ train-time-ci: setup
 train-time-full-scale: setup
 	$(PY) experiments/train_time.py main_study=false full_scale.enabled=true \
 	    cache_dir=cache/train_time_full_scale out=reports/train_time_full_scale.json
-	$(PY) -m fluidfilm.readme
+	$(PY) -m fluidfilm.reporting.readme
 
 .PHONY: ross-peer
 ross-peer: setup

@@ -3,7 +3,7 @@
     python benchmarks/bench_batch.py [--model models/best] [--t-end 0.005] [--quick] [--json out.json]
 
 N = 1, 64, 1024 Monte Carlo trajectories (imbalance, side load, initial
-state; ``fluidfilm.throughput``), each ``t_end`` of rotor time at dt = 1e-5 s.
+state; ``fluidfilm.perf.throughput``), each ``t_end`` of rotor time at dt = 1e-5 s.
 The reference is the paper's graded policy (30x30 below eps 0.9, 55x55
 above), driven the same way as the surrogate: ``simulate`` per trajectory
 and ``simulate_batch`` for the batch.  Unbatched runs of N = 1024 are
@@ -17,7 +17,7 @@ import json
 import os
 
 from fluidfilm import GradedReynoldsModel, load_surrogate, paper_bearing
-from fluidfilm.throughput import trajectories_per_second
+from fluidfilm.perf.throughput import trajectories_per_second
 
 
 def main() -> None:

@@ -19,7 +19,7 @@ from pathlib import Path
 
 
 from fluidfilm import ReynoldsSolver, load_surrogate, paper_bearing
-from fluidfilm.benchmarking import median_seconds
+from fluidfilm.perf.benchmarking import median_seconds
 from fluidfilm.characteristics import coefficients as coef
 from fluidfilm.characteristics.stability import operating_point
 from fluidfilm.reynolds.feed import GroovedReynoldsSolver

@@ -16,8 +16,8 @@ from pathlib import Path
 import yaml
 
 from fluidfilm import ReynoldsSolver, paper_bearing
-from fluidfilm.bearing import bearing_from_dict
-from fluidfilm.benchmarking import median_seconds
+from fluidfilm.core.bearing import bearing_from_dict
+from fluidfilm.perf.benchmarking import median_seconds
 from fluidfilm.reynolds.conical import ConicalReynoldsSolver
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,7 +56,7 @@ def main() -> None:
         print(f"\nactive surrogate (models/active): {t * 1e6:.2f} us per force, {t_ref / t:.1f}x faster than "
               f"the conical fast path at 30x30")
         table["active surrogate (models/active)"] = {30: f"{t * 1e6:.2f} us ({t / t_ref:.2f}x)", 55: "-"}
-    from fluidfilm.benchmarking import write_benchmark
+    from fluidfilm.perf.benchmarking import write_benchmark
 
     write_benchmark("conical", "Conical bearing, per force evaluation through the compiled kernels (medians; ratio to "
                     "the cone's fast path)", ["path", "30x30", "55x55"],

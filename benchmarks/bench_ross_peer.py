@@ -26,10 +26,11 @@ import sys
 from pathlib import Path
 
 from fluidfilm import io
-from fluidfilm.benchmarking import median_seconds
+from fluidfilm.perf.benchmarking import median_seconds
 from fluidfilm.characteristics import coefficients as coef
 from fluidfilm.characteristics import published as pub
-from fluidfilm.characteristics import static, study
+from fluidfilm.characteristics import static
+from fluidfilm.studies import characteristics as study
 
 NAMES = pub.LUND_THOMSEN_COEFFICIENTS
 ROSS_SIDE = Path(__file__).with_name("ross_peer_ross_side.py")
@@ -142,7 +143,7 @@ def main() -> None:
              f"Worst err %: the largest *_err_pct of study.lund_thomsen_table's measure. "
              f"Both sides measured in one run (ROSS in its own venv, {r['python']}, numpy {r['numpy_version']}).")
     if not args.quick:
-        from fluidfilm.benchmarking import write_benchmark
+        from fluidfilm.perf.benchmarking import write_benchmark
         path = write_benchmark("ross_peer", "External peer: ROSS PlainJournal vs ours on Lund & Thomsen's "
                                "two-axial-groove bearing (L/D = 0.5), coefficients and time per set", header, table,
                                notes)

@@ -44,7 +44,7 @@ def main() -> None:
         table.append([name, f"{med:.2f} s", f"{1e6 * med / steps:.1f} us", f"{1e6 * med / tr.n_force_evals:.1f} us",
                       tr.status])
     if not args.quick:
-        from fluidfilm.benchmarking import write_benchmark
+        from fluidfilm.perf.benchmarking import write_benchmark
 
         write_benchmark("rotor", f"Case e trajectory with the reference model ({t_end} s of rotor time, dt = 1e-5 s, "
                         f"RK4, median of {repeats})", ["model", "wall time", "per RK4 step", "per force evaluation",

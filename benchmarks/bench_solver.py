@@ -103,7 +103,7 @@ def main() -> None:
                       f"{t_scipy / t_api:.0f}x", f"{n_pairs / t_batch:,.0f} /s",
                       f"{Xp.shape[0] * Vq.shape[0] / t_prod:,.0f} /s"])
     if not args.quick:
-        from fluidfilm.benchmarking import write_benchmark
+        from fluidfilm.perf.benchmarking import write_benchmark
 
         write_benchmark("solver", "Reference solver, per force evaluation (medians of 9 x 2000 calls; batches on all cores)",
                         ["grid", "`forces(x, v)` Python call", "compiled kernel", "scipy sparse direct solve, same system",

@@ -27,7 +27,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from fluidfilm.benchmarking import write_benchmark
+from fluidfilm.perf.benchmarking import write_benchmark
 from fluidfilm.progress import quiet_third_party
 from fluidfilm.surrogate.training import ForceMLP, _Batches
 

@@ -10,9 +10,9 @@ import hydra
 from omegaconf import DictConfig, OmegaConf
 
 from fluidfilm import io, load_surrogate
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
-from fluidfilm.throughput import trajectories_per_second
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.perf.throughput import trajectories_per_second
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="batch_speed", version_base="1.3")

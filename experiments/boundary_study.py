@@ -12,7 +12,7 @@ from fluidfilm import io
 from fluidfilm.rotor.cases import case_summary, run_case
 from fluidfilm.rotor.integrate import Trajectory
 from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config_check import check_config
 
 
 def boundary_jump(model, boundary: float, n: int = 400, delta: float = 1e-6, seed: int = 0) -> tuple[float, float]:

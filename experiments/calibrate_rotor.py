@@ -10,9 +10,9 @@ import pandas as pd
 from omegaconf import DictConfig
 
 from fluidfilm import io
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.rotor.cases import case_summary, run_case
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="calibrate_rotor", version_base="1.3")

@@ -11,11 +11,12 @@ import numpy as np
 import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import ReynoldsSolver, io, load_surrogate, tracking
+from fluidfilm import ReynoldsSolver, io, load_surrogate
+from fluidfilm.workflow import tracking
 from fluidfilm.characteristics import stability as stab
-from fluidfilm.characteristics import study
-from fluidfilm.config import bearing_from_cfg
-from fluidfilm.config_check import check_config
+from fluidfilm.studies import characteristics as study
+from fluidfilm.workflow.config import bearing_from_cfg
+from fluidfilm.workflow.config_check import check_config
 
 
 def _finite_or_none(obj):

@@ -8,12 +8,13 @@ import hydra
 import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import ReynoldsSolver, io, load_surrogate, tracking
-from fluidfilm.benchmarking import machine
-from fluidfilm.comparison import sparse_reference_speed, speed_comparison, trajectory_comparison
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
-from fluidfilm.figures import plot_orbits
-from fluidfilm.config_check import check_config
+from fluidfilm import ReynoldsSolver, io, load_surrogate
+from fluidfilm.workflow import tracking
+from fluidfilm.perf.benchmarking import machine
+from fluidfilm.studies.compare import sparse_reference_speed, speed_comparison, trajectory_comparison
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.studies.plots import plot_orbits
+from fluidfilm.workflow.config_check import check_config
 
 
 def _with_dense_share(table, trajs, clearance, eps_threshold):

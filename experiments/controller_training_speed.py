@@ -14,11 +14,12 @@ import time
 import hydra
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, load_surrogate, tracking
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm import io, load_surrogate
+from fluidfilm.workflow import tracking
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.control.build import env_from_cfg
 from fluidfilm.control.dqn import train_dqn
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="control", version_base="1.3")
@@ -37,7 +38,8 @@ def main(cfg: DictConfig) -> dict:
         env.reset()
         env.step(env.initial_action)  # compile and settle outside the timing
         t0 = time.perf_counter()
-        train_dqn(env, dqn, seed=cfg.controller.seed)
+        train_dqn(env, dqn, seed=cfg.controller.seed,
+                  callback=tracking.sb3_learning_curves())
         wall = time.perf_counter() - t0
         per_step = wall / dqn["total_timesteps"]
         out[name] = {"wall_s": wall, "s_per_env_step": per_step,

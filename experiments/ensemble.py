@@ -7,13 +7,14 @@ from pathlib import Path
 import hydra
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, load_surrogate, tracking
-from fluidfilm.benchmarking import machine
-from fluidfilm.comparison import ensemble_study
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
-from fluidfilm.config_check import check_config
+from fluidfilm import io, load_surrogate
+from fluidfilm.workflow import tracking
+from fluidfilm.perf.benchmarking import machine
+from fluidfilm.studies.compare import ensemble_study
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.workflow.config_check import check_config
 from fluidfilm.data import load_test_set
-from fluidfilm.figures import plot_ensemble
+from fluidfilm.studies.plots import plot_ensemble
 
 
 @hydra.main(config_path="../conf", config_name="ensemble", version_base="1.3")

@@ -9,12 +9,13 @@ import numpy as np
 import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, load_surrogate, tracking
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
-from fluidfilm.config_check import check_config
+from fluidfilm import io, load_surrogate
+from fluidfilm.workflow import tracking
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.workflow.config_check import check_config
 from fluidfilm.data import load_test_set
-from fluidfilm.figures import plot_error_map
-from fluidfilm.grading import OrbitBenchmark, binned_errors, error_quantiles, relative_errors
+from fluidfilm.studies.plots import plot_error_map
+from fluidfilm.studies.grading_study import OrbitBenchmark, binned_errors, error_quantiles, relative_errors
 
 
 @hydra.main(config_path="../conf", config_name="error_map", version_base="1.3")

@@ -10,15 +10,16 @@ import hydra
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, load_surrogate, tracking
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm import io, load_surrogate
+from fluidfilm.workflow import tracking
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.control import ConstantSleeve, DQNController, run_episode
 from fluidfilm.control.mpc import BatchedMPC
 from fluidfilm.control.build import env_from_cfg
 from fluidfilm.control.dqn import load_agent
-from fluidfilm.figures import fig5_panels
+from fluidfilm.studies.plots import fig5_panels
 from fluidfilm.reynolds import ConicalReynoldsSolver
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="control", version_base="1.3")

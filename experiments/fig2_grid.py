@@ -8,10 +8,11 @@ import hydra
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, tracking
-from fluidfilm.config import bearing_from_cfg, solver_from_cfg
-from fluidfilm.figures import grid_comparison, plot_grid_comparison
-from fluidfilm.config_check import check_config
+from fluidfilm import io
+from fluidfilm.workflow import tracking
+from fluidfilm.workflow.config import bearing_from_cfg, solver_from_cfg
+from fluidfilm.studies.plots import grid_comparison, plot_grid_comparison
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="fig2", version_base="1.3")

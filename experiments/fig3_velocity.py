@@ -8,9 +8,9 @@ import hydra
 from omegaconf import DictConfig
 
 from fluidfilm import io
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
-from fluidfilm.figures import plot_velocity_response, velocity_response, velocity_response_wide
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.studies.plots import plot_velocity_response, velocity_response, velocity_response_wide
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="fig3", version_base="1.3")

@@ -3,7 +3,7 @@
     python experiments/grading_study.py -m grading.n_per_side=8,16,24 grading.n_angle=24,48
     python experiments/grading_study.py -m scaling=physics_whirl,standard split=five_blend,none
 Each job writes result.json in its Hydra output folder and logs a run to MLflow (nested under the
-sweep's run); when the multirun ends, fluidfilm.grading.SweepSummaryCallback writes the sweep's
+sweep's run); when the multirun ends, fluidfilm.studies.grading_study.SweepSummaryCallback writes the sweep's
 summary.json, table.csv and figure.png (to summary_dir, or the sweep's folder).
 """
 import os
@@ -14,12 +14,14 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, sweeps, tracking
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
-from fluidfilm.config_check import check_config
+from fluidfilm import io
+from fluidfilm.workflow import sweeps
+from fluidfilm.workflow import tracking
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.workflow.config_check import check_config
 from fluidfilm.data import DatasetSpec, load_test_set
 from fluidfilm.data.spec import check_reference
-from fluidfilm.grading import (SWEEP_ID_ENV, Judges, OrbitBenchmark, StiffnessBenchmark, apply_grading, cached_dataset,
+from fluidfilm.studies.grading_study import (SWEEP_ID_ENV, Judges, OrbitBenchmark, StiffnessBenchmark, apply_grading, cached_dataset,
                                flat_metrics)
 from fluidfilm.reynolds import ReynoldsSolver
 from fluidfilm.surrogate.fit import fit_surrogate, training_digest

@@ -6,10 +6,11 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, tracking
-from fluidfilm.config import bearing_from_cfg, solver_from_cfg
-from fluidfilm.figures import grid_error_study
-from fluidfilm.config_check import check_config
+from fluidfilm import io
+from fluidfilm.workflow import tracking
+from fluidfilm.workflow.config import bearing_from_cfg, solver_from_cfg
+from fluidfilm.studies.plots import grid_error_study
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="grid_sweep", version_base="1.3")

@@ -9,10 +9,10 @@ import hydra
 from omegaconf import DictConfig, OmegaConf
 
 from fluidfilm import io
-from fluidfilm.config import bearing_from_cfg
+from fluidfilm.workflow.config import bearing_from_cfg
 from fluidfilm.data import DatasetSpec, generate_dataset, random_test_set
 from fluidfilm.data.spec import check_reference
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="make_dataset", version_base="1.3")

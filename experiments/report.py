@@ -2,16 +2,17 @@
 
     python experiments/report.py
 
-The report itself is fluidfilm.report; this entry point composes the config and calls it.
+The report itself is fluidfilm.reporting.report; this entry point composes the config and calls it.
 """
 import json
 
 import hydra
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, tracking
-from fluidfilm.config_check import check_config
-from fluidfilm.report import load_inputs, write_report
+from fluidfilm import io
+from fluidfilm.workflow import tracking
+from fluidfilm.workflow.config_check import check_config
+from fluidfilm.reporting.report import load_inputs, write_report
 
 
 @hydra.main(config_path="../conf", config_name="report", version_base="1.3")

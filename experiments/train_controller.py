@@ -9,10 +9,11 @@ import time
 import hydra
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, load_surrogate, tracking
+from fluidfilm import io, load_surrogate
+from fluidfilm.workflow import tracking
 from fluidfilm.control.build import env_from_cfg
 from fluidfilm.control.dqn import save_agent, train_dqn
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="control", version_base="1.3")
@@ -23,7 +24,8 @@ def main(cfg: DictConfig) -> dict:
     env = env_from_cfg(surrogate, c["rotor"], c["controller"])
     with tracking.run(cfg.tracking, "dqn_controller", c, tags={"stage": "train_controller"}):
         t0 = time.perf_counter()
-        agent, returns = train_dqn(env, c["controller"]["dqn"], seed=cfg.controller.seed)
+        agent, returns = train_dqn(env, c["controller"]["dqn"], seed=cfg.controller.seed,
+                  callback=tracking.sb3_learning_curves())
         wall = time.perf_counter() - t0
         save_agent(agent, cfg.agent_path)
     n = c["controller"]["dqn"]["total_timesteps"]

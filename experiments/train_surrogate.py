@@ -17,11 +17,13 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import GradedReynoldsModel, io, sweeps, tracking
-from fluidfilm.speed import sample_states, time_per_force_eval
+from fluidfilm import GradedReynoldsModel, io
+from fluidfilm.workflow import sweeps
+from fluidfilm.workflow import tracking
+from fluidfilm.perf.speed import sample_states, time_per_force_eval
 from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors, training_digest
 from fluidfilm.surrogate.training import read_dataset
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config_check import check_config
 
 
 def _fmt(value, spec=".1f"):

@@ -7,7 +7,7 @@
 Per seed: one random subsample of the dataset, one 70/15/15 division; the
 single network and the three split networks (eps 0-0.5, 0.5-0.7, > 0.7, each
 with its own min-max map) train on it to the validation stopping rule.
-Reported (src/fluidfilm/surrogate/timing_study.py): the reduction of the
+Reported (src/fluidfilm/studies/train_time.py): the reduction of the
 mean training time 100 (1 - mean T_split / mean T_single) with a paired
 bootstrap 95 % confidence interval (seeds are added, up to ``seeds_max`` or
 the time budget, until its half-width is at most the target), the seeds the
@@ -28,10 +28,11 @@ import time
 import hydra
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, tracking
-from fluidfilm.benchmarking import machine
-from fluidfilm.config_check import check_config
-from fluidfilm.surrogate.timing_study import ranking, study
+from fluidfilm import io
+from fluidfilm.workflow import tracking
+from fluidfilm.perf.benchmarking import machine
+from fluidfilm.workflow.config_check import check_config
+from fluidfilm.studies.train_time import ranking, study
 from fluidfilm.surrogate.training import read_dataset
 
 

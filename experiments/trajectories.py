@@ -8,14 +8,15 @@ import hydra
 import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import io, tracking
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm import io
+from fluidfilm.workflow import tracking
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
 import numpy as np
 
-from fluidfilm.figures import plot_equilibrium_locus, plot_orbits
+from fluidfilm.studies.plots import plot_equilibrium_locus, plot_orbits
 from fluidfilm.rotor import equilibrium_locus
 from fluidfilm.rotor.cases import case_summary, run_case
-from fluidfilm.config_check import check_config
+from fluidfilm.workflow.config_check import check_config
 
 
 @hydra.main(config_path="../conf", config_name="trajectories", version_base="1.3")

@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from fluidfilm import ReynoldsSolver, Rotor, paper_bearing, simulate
-from fluidfilm.bearing import bearing_from_dict
+from fluidfilm.core.bearing import bearing_from_dict
 from fluidfilm.rotor import LinearBearing
 from fluidfilm.rotor.batch import simulate_batch
 from fluidfilm.surrogate.inference import SurrogateForceModel

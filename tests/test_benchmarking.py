@@ -1,9 +1,9 @@
-"""The one timer of the workspace (fluidfilm.benchmarking.median_seconds), on a scripted clock."""
+"""The one timer of the workspace (fluidfilm.perf.benchmarking.median_seconds), on a scripted clock."""
 from __future__ import annotations
 
 import pytest
 
-from fluidfilm import benchmarking
+from fluidfilm.perf import benchmarking
 
 
 def _scripted(monkeypatch, durations):

@@ -7,7 +7,7 @@ import pytest
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
-from fluidfilm.config import bearing_from_cfg, reference_from_cfg, solver_from_cfg
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg, solver_from_cfg
 from fluidfilm.data import DatasetSpec
 from fluidfilm.rotor.cases import rotor_for_case
 
@@ -138,7 +138,7 @@ def _assert_holds(composed, own, where):
 
 
 def test_config_check_names_unknown_keys_and_wrong_types():
-    from fluidfilm.config_check import compare
+    from fluidfilm.workflow.config_check import compare
 
     ref = {"trainer": {"max_epochs": 12, "lr": 1e-3, "max_time": None, "deterministic": True},
            "seeds": [0, 1], "name": "x"}
@@ -156,7 +156,7 @@ def test_config_check_names_unknown_keys_and_wrong_types():
 def _schema_fields(schema, prefix=""):
     from dataclasses import fields, is_dataclass
 
-    from fluidfilm.config_schema import _BY_NAME
+    from fluidfilm.workflow.config_schema import _BY_NAME
 
     for f in fields(schema):
         sub = _BY_NAME.get(f.type) if isinstance(f.type, str) else (f.type if is_dataclass(f.type) else None)
@@ -170,7 +170,7 @@ def _schema_fields(schema, prefix=""):
 def test_every_option_validates_against_its_group_schema(group, option):
     """Composed as the entry points compose it, each option fits its schema (types, no unknown key,
     no required key left out); ``experiment`` has none (its values land in the other groups)."""
-    from fluidfilm.config_schema import validate_group
+    from fluidfilm.workflow.config_schema import validate_group
 
     primary, key = GROUPS[group]
     package = "" if key in (None, group) else f"@{key}"
@@ -196,7 +196,7 @@ def _given(node):
 
 def test_every_schema_field_is_used_by_some_option():
     """No field in a schema that no YAML file has: the schema describes conf/, nothing else."""
-    from fluidfilm.config_schema import GROUPS as SCHEMAS
+    from fluidfilm.workflow.config_schema import GROUPS as SCHEMAS
 
     for group, entry in SCHEMAS.items():
         schemas = [entry] if isinstance(entry, type) else list(entry[1].values())
@@ -228,7 +228,7 @@ def test_every_schema_field_is_used_by_some_option():
     ("split.boundaries=[0.5,x]", "'split.boundaries"),
 ])
 def test_schema_refuses_a_mistyped_value_or_unknown_key_naming_it(override, named):
-    from fluidfilm.config_check import schema_problems
+    from fluidfilm.workflow.config_check import schema_problems
 
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
         cfg = compose(config_name="train", overrides=["protocol=adam", override], return_hydra_config=True)

@@ -16,7 +16,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from fluidfilm import JournalBearing, ReynoldsSolver
-from fluidfilm.bearing import ConicalBearing, bearing_from_dict
+from fluidfilm.core.bearing import ConicalBearing, bearing_from_dict
 from fluidfilm.reynolds.conical import ConicalReynoldsSolver
 
 MU, RPM, L, C = 6.53e-4, 3000.0, 0.064, 120e-6

@@ -18,7 +18,7 @@ import yaml
 from gymnasium.utils.env_checker import check_env
 
 from fluidfilm import GradedReynoldsModel, Rotor, load_surrogate, simulate
-from fluidfilm.bearing import bearing_from_dict
+from fluidfilm.core.bearing import bearing_from_dict
 from fluidfilm.control import ActiveBearingEnv, ConstantSleeve, DQNController, ModelPredictiveController, run_episode
 from fluidfilm.control.build import env_from_cfg
 from fluidfilm.control.dqn import load_agent, save_agent, train_dqn

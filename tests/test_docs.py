@@ -9,7 +9,7 @@ import sys
 import numpy as np
 from conftest import ROOT
 
-from fluidfilm.models import ForceModel
+from fluidfilm.core.force_model import ForceModel
 
 
 def _run_doc(tmp_path) -> dict:

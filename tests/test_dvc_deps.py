@@ -176,7 +176,7 @@ def test_static_trace_contains_what_python_loads():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"})
     loaded = set(json.loads(out.stdout.strip().splitlines()[-1]))
-    assert "fluidfilm.figures" in loaded  # the trace saw the entry point's own imports
+    assert "fluidfilm.studies.plots" in loaded  # the trace saw the entry point's own imports
     assert loaded <= static_closure(script), sorted(loaded - static_closure(script))
 
 
@@ -186,7 +186,7 @@ def test_the_trace_finds_a_module_missing_from_a_stage():
                                                                      "src/fluidfilm/reynolds"]}
     script, _ = _entry_point(stage)
     uncovered = {m for m in static_closure(script) if not _covered(_module_file(m), _deps(stage))}
-    assert {"fluidfilm.figures", "fluidfilm.bearing", "fluidfilm.config"} <= uncovered
+    assert {"fluidfilm.studies.plots", "fluidfilm.core.bearing", "fluidfilm.workflow.config"} <= uncovered
 
 
 def test_committed_reports_are_the_outputs_dvc_lock_records():

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from fluidfilm import Rotor, paper_bearing, simulate
-from fluidfilm.ensemble import EnsembleForceModel, HybridForceModel
-from fluidfilm.models import ForceModel
+from fluidfilm.surrogate.ensemble import EnsembleForceModel, HybridForceModel
+from fluidfilm.core.force_model import ForceModel
 from fluidfilm.reynolds import ReynoldsSolver
 from fluidfilm.rotor import LinearBearing
 
@@ -155,7 +155,7 @@ def test_ensembles_take_the_uncached_compiled_loops():
 def test_flag_calibration_counts_what_the_flag_catches():
     """Two linear members around a known truth: the members' mean errs by a known ratio everywhere, and the
     flag fires everywhere (the spread ratio is constant), so recall and precision are 1 or the shares 0."""
-    from fluidfilm.ensemble import flag_calibration
+    from fluidfilm.surrogate.ensemble import flag_calibration
 
     jb = paper_bearing()
     a, b = LinearBearing(jb, 2.0e5, 0.0), LinearBearing(jb, 3.0e5, 0.0)   # mean 2.5e5

@@ -27,7 +27,7 @@ def test_forces_equal_the_pre_refactor_values(name, computed):
 
 
 def test_every_model_implements_the_contract_and_only_active_ones_the_sleeve():
-    from fluidfilm.models import AdjustableForceModel, ForceModel, as_adjustable
+    from fluidfilm.core.force_model import AdjustableForceModel, ForceModel, as_adjustable
 
     for name, (model, sleeve) in gm.models().items():
         assert isinstance(model, ForceModel), name
@@ -68,7 +68,7 @@ def test_the_linear_pressure_fast_path_is_offered_by_the_grid_solvers_only():
     ``reference_coefficients`` takes that path only with Gumbel cavitation, otherwise central differences."""
     from fluidfilm.characteristics.coefficients import (coefficients, coefficients_gumbel_field,
                                                         reference_coefficients)
-    from fluidfilm.models import LinearPressureModel
+    from fluidfilm.core.force_model import LinearPressureModel
     from fluidfilm.reynolds import ConicalReynoldsSolver, ReynoldsSolver
 
     for name, (model, _) in gm.models().items():
@@ -87,7 +87,7 @@ def test_the_linear_pressure_fast_path_is_offered_by_the_grid_solvers_only():
 
 def test_the_batched_mpc_needs_an_active_model_and_batches_only_a_settable_one():
     from fluidfilm.control.mpc import BatchedMPC
-    from fluidfilm.models import BatchSettable
+    from fluidfilm.core.force_model import BatchSettable
 
     models = gm.models()
     with pytest.raises(ValueError, match="no sleeve input"):

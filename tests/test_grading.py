@@ -19,7 +19,7 @@ import pytest
 import yaml
 
 from fluidfilm import GradedReynoldsModel, paper_bearing
-from fluidfilm import grading
+from fluidfilm.studies import grading_study as grading
 from fluidfilm.data import DatasetConfigError, DatasetSpec
 from fluidfilm.rotor.cases import run_case
 
@@ -194,8 +194,8 @@ def test_a_force_with_a_kink_at_rest_gets_the_symmetric_derivative_and_an_undefi
     import sys
 
     from fluidfilm import ReynoldsSolver
-    from fluidfilm.characteristics import study
-    from fluidfilm.characteristics.jacobian import surrogate_jacobian
+    from fluidfilm.studies import characteristics as study
+    from fluidfilm.surrogate.jacobian import surrogate_jacobian
     from fluidfilm.surrogate import SurrogateForceModel
 
     sys.path.insert(0, str(ROOT / "tests"))

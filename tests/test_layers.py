@@ -1,4 +1,10 @@
-"""The library's layering: surrogates depend on the dataset, never on the solver; the solver never on surrogates.
+"""The library's layering, read off the folders.
+
+- physics (``core``, ``reynolds``, ``rotor``, ``characteristics``) never imports learning (``data``,
+  ``surrogate``, ``control``), timing (``perf``), studies, reporting or the workflow;
+- learning never imports studies, reporting or the workflow;
+- surrogates depend on the dataset, never on the solver; the solver never on surrogates;
+- Hydra, OmegaConf and MLflow are imported in ``fluidfilm.workflow`` alone (and by the entry points).
 
 Checked on the static import graph (every import statement, module level and inside functions),
 without the top-level ``fluidfilm/__init__.py``, which re-exports everything for users, and
@@ -73,15 +79,60 @@ def test_the_layering_check_sees_a_real_dependency():
 
 
 def test_only_the_tracking_module_imports_mlflow():
-    """MLflow is reached through fluidfilm.tracking alone (library and entry points)."""
+    """MLflow is reached through fluidfilm.workflow.tracking alone (library and entry points)."""
     root = SRC.parent
     offenders = []
     for path in sorted(list((SRC / "fluidfilm").rglob("*.py")) + list((root / "experiments").glob("*.py"))):
-        if path == SRC / "fluidfilm" / "tracking.py":
+        if path == SRC / "fluidfilm" / "workflow" / "tracking.py":
             continue
         for node in ast.walk(ast.parse(path.read_text())):
             names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
                 [node.module or ""] if isinstance(node, ast.ImportFrom) else []
             if any(n.split(".")[0] == "mlflow" for n in names):
                 offenders.append(str(path.relative_to(root)))
-    assert not offenders, f"import mlflow through fluidfilm.tracking instead: {sorted(set(offenders))}"
+    assert not offenders, f"import mlflow through fluidfilm.workflow.tracking instead: {sorted(set(offenders))}"
+
+
+PHYSICS = ("core", "reynolds", "rotor", "characteristics")
+LEARNING = ("data", "surrogate", "control")
+ABOVE_LEARNING = ("perf", "studies", "reporting", "workflow")
+
+
+def _layer_modules(layers) -> list[str]:
+    return [m for layer in layers for m in _modules(layer)]
+
+
+@pytest.mark.parametrize("module", _layer_modules(PHYSICS))
+def test_physics_never_imports_learning_or_what_sits_above(module):
+    banned = tuple(f"fluidfilm.{p}" for p in LEARNING + ABOVE_LEARNING)
+    assert not {m for m in closure(module) if m.startswith(banned)}, module
+
+
+@pytest.mark.parametrize("module", _layer_modules(LEARNING))
+def test_learning_never_imports_studies_reporting_or_the_workflow(module):
+    banned = tuple(f"fluidfilm.{p}" for p in ("studies", "reporting", "workflow"))
+    assert not {m for m in closure(module) if m.startswith(banned)}, module
+
+
+def test_hydra_and_mlflow_are_imported_in_the_workflow_layer_alone():
+    offenders = []
+    for path in sorted((SRC / "fluidfilm").rglob("*.py")):
+        if (SRC / "fluidfilm" / "workflow") in path.parents:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else []
+            if any(n.split(".")[0] in ("hydra", "omegaconf", "mlflow") for n in names):
+                offenders.append(str(path.relative_to(SRC)))
+    assert not offenders, f"Hydra/OmegaConf/MLflow outside fluidfilm.workflow: {sorted(set(offenders))}"
+
+
+def test_the_package_root_holds_a_handful_of_modules():
+    """Subpackages by role; at most six modules directly under src/fluidfilm (``__init__`` included)."""
+    root = sorted(p.name for p in (SRC / "fluidfilm").glob("*.py"))
+    assert len(root) <= 6, root
+
+
+def test_the_physics_check_sees_a_real_dependency():
+    """It can fail: the rotor integrator does import the force-model contract in core."""
+    assert "fluidfilm.core.force_model" in closure("fluidfilm.rotor.integrate")

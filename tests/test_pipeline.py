@@ -55,7 +55,7 @@ def test_every_stage_of_the_pipeline_ran_with_the_workspace_interpreter(quick_re
         assert entry["cmd"].startswith(".venv/bin/python "), (name, entry["cmd"])
     timing = json.loads((workdir / "reports" / "reproduce_timing.json").read_text())["quick"]
     assert set(timing["stages"]) == set(stages)
-    assert "Results:" in out and "MLflow runs" in out and "fluidfilm.pipeline serve" in out
+    assert "Results:" in out and "MLflow runs" in out and "fluidfilm.workflow.pipeline serve" in out
 
 
 def test_pipeline_writes_every_headline_number(quick_reproduce):
@@ -182,15 +182,15 @@ def test_readme_python_example_runs_as_written(quick_reproduce, index):
 
 
 def test_readme_tables_are_generated_from_the_reports():
-    """The README's (and docs/'s) result tables equal what `python -m fluidfilm.readme` renders from the
+    """The README's (and docs/'s) result tables equal what `python -m fluidfilm.reporting.readme` renders from the
     committed reports: no number is copied by hand."""
-    from fluidfilm import readme
+    from fluidfilm.reporting import readme
 
     text = (ROOT / "README.md").read_text()
     assert readme.BLOCK.search(text), "README has no generated blocks"
     for path in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
         text = path.read_text()
-        assert readme.fill(text, ROOT / "reports", strict=True) == text, f"{path} is stale: python -m fluidfilm.readme"
+        assert readme.fill(text, ROOT / "reports", strict=True) == text, f"{path} is stale: python -m fluidfilm.reporting.readme"
 
 
 def test_readme_points_nowhere_outside_the_repository():

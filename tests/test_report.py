@@ -1,4 +1,4 @@
-"""The paper-comparison report's pieces (fluidfilm.report), on small hand-made inputs.
+"""The paper-comparison report's pieces (fluidfilm.reporting.report), on small hand-made inputs.
 
 The whole report was checked byte for byte against the entry point it replaced (the same inputs, old
 and new code); here each piece against what its input says.
@@ -11,7 +11,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from fluidfilm import report
+from fluidfilm.reporting import report
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import mlflow
 
-from fluidfilm import tracking
+from fluidfilm.workflow import tracking
 
 
 def _log_one_run(workspace: Path) -> str:
@@ -66,7 +66,7 @@ def _free_port() -> int:
 def test_mlflow_serve_answers_and_stops_cleanly_on_ctrl_c(tmp_path):
     _log_one_run(tmp_path)
     port = _free_port()
-    proc = subprocess.Popen([sys.executable, "-m", "fluidfilm.pipeline", "serve", "--port", str(port)], cwd=tmp_path,
+    proc = subprocess.Popen([sys.executable, "-m", "fluidfilm.workflow.pipeline", "serve", "--port", str(port)], cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         deadline = time.time() + 120

@@ -17,7 +17,7 @@ import pytest
 import yaml
 
 from fluidfilm import paper_bearing
-from fluidfilm.config import reference_from_cfg
+from fluidfilm.workflow.config import reference_from_cfg
 from fluidfilm.data import DatasetSpec, generate_dataset, load_dataset
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -52,7 +52,7 @@ def test_grid_density_sweep_logs_error_and_time_per_evaluation(tmp_path):
 
 
 def test_swept_values_are_the_jobs_values_of_the_swept_keys_groups_included():
-    from fluidfilm.sweeps import swept_values
+    from fluidfilm.workflow.sweeps import swept_values
 
     task = ["scaling=standard", "grading.n_per_side=12", "+extra.key=3", "title=ablation", "split=none"]
     assert swept_values(task, ["scaling", "split", "extra.key"]) == {"scaling": "standard", "extra.key": "3",

@@ -1,10 +1,10 @@
-"""The training-time study's statistics (src/fluidfilm/surrogate/timing_study.py) against independent truth."""
+"""The training-time study's statistics (src/fluidfilm/studies/train_time.py) against independent truth."""
 import math
 
 import numpy as np
 import pytest
 
-from fluidfilm.surrogate.timing_study import mean_ci, reduction_ci, seeds_needed
+from fluidfilm.studies.train_time import mean_ci, reduction_ci, seeds_needed
 
 
 def test_the_same_times_on_every_seed_give_1_minus_the_ratio_with_no_spread():
@@ -75,7 +75,7 @@ def test_an_interrupted_study_resumes_at_the_next_seed_with_the_finished_seeds_u
 
     import yaml
 
-    from fluidfilm.surrogate.timing_study import study
+    from fluidfilm.studies.train_time import study
     from fluidfilm.surrogate.training import read_dataset
 
     frame, meta = read_dataset(quick_data[0])

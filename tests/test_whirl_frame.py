@@ -69,7 +69,7 @@ def test_whirl_scaling_needs_physics_and_no_extras():
 
 def test_whirl_jacobian_refuses_a_vanished_drive_and_the_centre():
     """Where u vanishes (to rounding) or at eps = 0 the derivative does not exist: an error, not noise or NaN."""
-    from fluidfilm.characteristics.jacobian import surrogate_jacobian
+    from fluidfilm.surrogate.jacobian import surrogate_jacobian
     rng = np.random.default_rng(1)
     sc = Scaling("physics", C, OM, B.force_scale, 1.5, np.zeros(3), np.ones(3), np.zeros(2), np.ones(2), "whirl")
     m = SurrogateForceModel(B, [[(rng.normal(size=(8, 3)), rng.normal(size=8)), (rng.normal(size=(2, 8)),

@@ -13,10 +13,10 @@ which one they run.
 """
 from importlib import metadata as _metadata
 
-from .bearing import ConicalBearing, JournalBearing, bearing_from_dict, paper_bearing
-from .reynolds import CAVITATION_MODELS, ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
-from .rotor import LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, simulate
-from .surrogate import SurrogateForceModel, load_surrogate
+from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict, paper_bearing
+from fluidfilm.reynolds import CAVITATION_MODELS, ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
+from fluidfilm.rotor import LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, simulate
+from fluidfilm.surrogate import SurrogateForceModel, load_surrogate
 
 try:  # one place for the version: pyproject.toml, read from the installed package's metadata
     __version__ = _metadata.version("fluidfilm")

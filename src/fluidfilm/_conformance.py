@@ -9,13 +9,13 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from .ensemble import EnsembleForceModel, HybridForceModel
-    from .models import AdjustableForceModel, BatchSettable, ForceModel, LinearPressureModel
-    from .reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
-    from .reynolds.feed import GroovedReynoldsSolver
-    from .reynolds.sparse_reference import SparseReferenceModel
-    from .rotor.linear import LinearBearing
-    from .surrogate.inference import SurrogateForceModel
+    from fluidfilm.surrogate.ensemble import EnsembleForceModel, HybridForceModel
+    from fluidfilm.core.force_model import AdjustableForceModel, BatchSettable, ForceModel, LinearPressureModel
+    from fluidfilm.reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
+    from fluidfilm.reynolds.feed import GroovedReynoldsSolver
+    from fluidfilm.reynolds.sparse_reference import SparseReferenceModel
+    from fluidfilm.rotor.linear import LinearBearing
+    from fluidfilm.surrogate.inference import SurrogateForceModel
 
     def _force_models(a: ReynoldsSolver, b: GradedReynoldsModel, c: ConicalReynoldsSolver,
                       d: SurrogateForceModel, e: LinearBearing, f: SparseReferenceModel,

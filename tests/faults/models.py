@@ -5,7 +5,7 @@ import numpy as np
 import yaml
 
 from fluidfilm import GradedReynoldsModel, ReynoldsSolver, paper_bearing
-from fluidfilm.bearing import bearing_from_dict
+from fluidfilm.core.bearing import bearing_from_dict
 from fluidfilm.reynolds import ConicalReynoldsSolver
 from fluidfilm.surrogate import Scaling, SurrogateForceModel
 

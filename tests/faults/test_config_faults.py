@@ -1,4 +1,4 @@
-"""Wrong types and unknown keys are refused before any work, naming the key (fluidfilm.config_check)."""
+"""Wrong types and unknown keys are refused before any work, naming the key (fluidfilm.workflow.config_check)."""
 from __future__ import annotations
 
 import pytest

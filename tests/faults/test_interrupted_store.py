@@ -13,7 +13,7 @@ import sqlite3
 import mlflow
 import pytest
 
-from fluidfilm import tracking
+from fluidfilm.workflow import tracking
 
 
 def _table(db):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from fluidfilm import Rotor, load_surrogate, simulate
-from fluidfilm.states import V_MAX_PHYSICAL
+from fluidfilm.core.states import V_MAX_PHYSICAL
 from fluidfilm.surrogate.inference import SurrogateFileError
 
 from . import models

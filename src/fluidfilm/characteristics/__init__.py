@@ -13,10 +13,10 @@ pressure field), ``coefficients`` (K/C), ``stability`` (Lund's criterion,
 threshold speed, nonlinear check), ``shortbearing`` (Ocvirk, the
 independent check), ``published`` (typed-in tables with sources).
 """
-from . import coefficients, film, published, shortbearing, stability, static
-from .coefficients import NAMES as COEFFICIENT_NAMES
-from .static import equilibrium, film_solver, sommerfeld_sweep, static_point
-from .stability import lund, operating_point, threshold_speed
+from fluidfilm.characteristics import coefficients, film, published, shortbearing, stability, static
+from fluidfilm.characteristics.coefficients import NAMES as COEFFICIENT_NAMES
+from fluidfilm.characteristics.static import equilibrium, film_solver, sommerfeld_sweep, static_point
+from fluidfilm.characteristics.stability import lund, operating_point, threshold_speed
 
 
 def bearing_characteristics(model, load: float, h_rel: float = 1e-4) -> dict:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models import LinearPressureModel
+from fluidfilm.core.force_model import LinearPressureModel
 
 NAMES = ("Kxx", "Kxy", "Kyx", "Kyy", "Cxx", "Cxy", "Cyx", "Cyy")
 
@@ -164,10 +164,13 @@ def reference_coefficients(model, x0, h_rel: float = 1e-4) -> dict:
     """K/C of any model by its best method: the exact (forward-mode) Jacobian of a surrogate network,
     the film-region derivative of a Gumbel ``ReynoldsSolver``, central differences of the force
     otherwise (Swift-Stieber, grooved bearings, other models)."""
-    from ..surrogate import SurrogateForceModel
-    if isinstance(model, SurrogateForceModel) and not model.scalings[0].extras:
-        from .jacobian import surrogate_coefficients
-        return surrogate_coefficients(model, x0)
+    # a model that knows its exact derivatives says so (the surrogates: ``exact_coefficients``, None where
+    # it has none); physics does not import the surrogates to ask
+    exact = getattr(model, "exact_coefficients", None)
+    if exact is not None:
+        out = exact(x0)
+        if out is not None:
+            return out
     if isinstance(model, LinearPressureModel) and model.cavitation == "gumbel":
         return coefficients_gumbel_field(model, x0, h_rel)
     return coefficients(model, x0, h_rel)

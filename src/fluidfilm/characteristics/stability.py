@@ -28,8 +28,8 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from . import coefficients as coef
-from .static import equilibrium
+from fluidfilm.characteristics import coefficients as coef
+from fluidfilm.characteristics.static import equilibrium
 
 
 def lund(d: dict) -> dict:
@@ -117,7 +117,7 @@ def nonlinear_check(make_model, bearing, mass: float, speed_rpm: float, perturba
     Returns the deviation amplitude from the equilibrium in the first and last tenth of the run and
     their ratio (< 1: the orbit decays, > 1: it grows), and whether it ended in contact.
     """
-    from ..rotor import Rotor, simulate
+    from fluidfilm.rotor import Rotor, simulate
     b = at_speed(bearing, speed_rpm)
     model = make_model(b)
     rotor = Rotor(mass=mass)

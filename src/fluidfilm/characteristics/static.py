@@ -22,10 +22,10 @@ import math
 import numpy as np
 from scipy.optimize import brentq, least_squares
 
-from ..reynolds.feed import GroovedReynoldsSolver
-from ..reynolds.solver import ReynoldsSolver
-from . import shortbearing
-from .film import film_flows_and_friction, raimondi_boyd_variables
+from fluidfilm.reynolds.feed import GroovedReynoldsSolver
+from fluidfilm.reynolds.solver import ReynoldsSolver
+from fluidfilm.characteristics import shortbearing
+from fluidfilm.characteristics.film import film_flows_and_friction, raimondi_boyd_variables
 
 FEEDS = ("none", "max-film")
 

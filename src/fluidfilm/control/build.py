@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from ..rotor import Rotor
-from .env import ActiveBearingEnv, RewardWeights, Scenario
+from fluidfilm.rotor import Rotor
+from fluidfilm.control.env import ActiveBearingEnv, RewardWeights, Scenario
 
 
 def scenario_from_cfg(cfg: Mapping) -> Scenario:

@@ -22,9 +22,9 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from ..models import ForceModel, as_adjustable
-from ..rotor import simulate
-from .env import ActiveBearingEnv
+from fluidfilm.core.force_model import ForceModel, as_adjustable
+from fluidfilm.rotor import simulate
+from fluidfilm.control.env import ActiveBearingEnv
 
 
 class Controller(Protocol):

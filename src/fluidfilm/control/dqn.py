@@ -1,21 +1,38 @@
-"""Train the DQN sleeve controller with stable-baselines3, logging its learning curve to MLflow."""
+"""Train the DQN sleeve controller with stable-baselines3.
+
+The library records the episode returns; logging them to MLflow is the workflow's business
+(``fluidfilm.workflow.tracking.sb3_learning_curves`` passed as ``callback``).
+"""
 from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
 
-from .. import tracking
+
+def episode_returns_callback():
+    """A stable-baselines3 callback that keeps the episode returns (from the Monitor wrapper) in ``.returns``."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class EpisodeReturns(BaseCallback):
+        def __init__(self):
+            super().__init__()
+            self.returns: list[tuple[int, float]] = []
+
+        def _on_step(self) -> bool:
+            for info in self.locals.get("infos", []):
+                ep = info.get("episode")
+                if ep is not None:
+                    self.returns.append((self.num_timesteps, float(ep["r"])))
+            return True
+
+    return EpisodeReturns()
 
 
-def _mlflow_callback(log_every: int = 1):
-    # the learning-curve callback lives with the other MLflow code
-    return tracking.sb3_learning_curves()
-
-
-def train_dqn(env, cfg: Mapping, seed: int = 0, progress: bool = False):
+def train_dqn(env, cfg: Mapping, seed: int = 0, progress: bool = False, callback=None):
     """A DQN agent (stable-baselines3, MLP Q-network) trained on ``env`` for ``cfg['total_timesteps']``.
 
-    Returns (agent, episode returns [(timestep, return)]).
+    ``callback``: a stable-baselines3 callback with a ``.returns`` list (default: one that only records
+    the returns). Returns (agent, episode returns [(timestep, return)]).
     """
     from stable_baselines3 import DQN
     from stable_baselines3.common.monitor import Monitor
@@ -28,14 +45,14 @@ def train_dqn(env, cfg: Mapping, seed: int = 0, progress: bool = False):
         raise ValueError(f"total_timesteps must be >= 1, got {total}")
     agent = DQN("MlpPolicy", Monitor(env), seed=seed, verbose=0, device="cpu",
                 policy_kwargs={"net_arch": list(cfg.get("net_arch", [64, 64]))}, **kwargs)
-    cb = _mlflow_callback()
+    cb = episode_returns_callback() if callback is None else callback
     agent.learn(total_timesteps=total, callback=cb, progress_bar=progress)
     return agent, cb.returns
 
 
 def save_agent(agent, path) -> Path:
     """Save atomically (SB3 writes a zip; we write to a temporary name and rename)."""
-    from .. import io
+    from fluidfilm import io
 
     path = Path(path)
     # the temporary name ends in .zip, so SB3 writes it as given (it appends .zip otherwise)

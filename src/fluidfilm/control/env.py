@@ -42,10 +42,10 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-from ..bearing import ConicalBearing
-from ..models import ForceModel, as_adjustable
-from ..rotor import Rotor, simulate
-from ..rotor.model import ramped
+from fluidfilm.core.bearing import ConicalBearing
+from fluidfilm.core.force_model import ForceModel, as_adjustable
+from fluidfilm.rotor import Rotor, simulate
+from fluidfilm.rotor.model import ramped
 
 
 @dataclass(frozen=True)

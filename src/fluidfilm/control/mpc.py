@@ -32,10 +32,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models import BatchSettable, as_adjustable
-from ..rotor import simulate
-from ..rotor.batch import simulate_batch
-from .env import ActiveBearingEnv
+from fluidfilm.core.force_model import BatchSettable, as_adjustable
+from fluidfilm.rotor import simulate
+from fluidfilm.rotor.batch import simulate_batch
+from fluidfilm.control.env import ActiveBearingEnv
 
 
 class BatchedMPC:

@@ -3,9 +3,9 @@
 Surrogates depend on this package and on the columns it writes (``load_dataset``,
 ``load_test_set``, ``dataset_bearing``), never on the solver's internals.
 """
-from .schema import (COLUMNS, EXTRA_INPUTS, DatasetIntegrityError, dataset_bearing, load_dataset, load_test_set,
+from fluidfilm.data.schema import (COLUMNS, EXTRA_INPUTS, DatasetIntegrityError, dataset_bearing, load_dataset, load_test_set,
                      read_metadata, training_domain, verify_dataset)
-from .spec import DatasetConfigError, DatasetSpec, config_hash
+from fluidfilm.data.spec import DatasetConfigError, DatasetSpec, config_hash
 
 __all__ = ["COLUMNS", "EXTRA_INPUTS", "DatasetSpec", "DatasetConfigError", "config_hash", "generate_dataset",
            "random_test_set", "load_dataset", "load_test_set", "read_metadata", "dataset_bearing",
@@ -16,7 +16,7 @@ def __getattr__(name: str):
     # the generator needs the reference solver; imported on first use so that reading data
     # (what a surrogate does) does not import the solver
     if name in ("generate_dataset", "random_test_set"):
-        from . import generate
+        from fluidfilm.data import generate
 
         return getattr(generate, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

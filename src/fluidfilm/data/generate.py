@@ -39,11 +39,11 @@ from pathlib import Path
 import numpy as np
 import pyarrow.parquet as pq
 
-from .. import __version__, io
-from ..bearing import JournalBearing, bearing_from_dict
-from ..reynolds import GradedReynoldsModel
-from .schema import COLUMNS, file_sha256, part_name, write_part
-from .spec import DatasetSpec, check_reference, config_hash
+from fluidfilm import __version__, io
+from fluidfilm.core.bearing import JournalBearing, bearing_from_dict
+from fluidfilm.reynolds import GradedReynoldsModel
+from fluidfilm.data.schema import COLUMNS, file_sha256, part_name, write_part
+from fluidfilm.data.spec import DatasetSpec, check_reference, config_hash
 
 # 2: the centre (eps = 0) once instead of once per angle; per-part checksums in the manifest
 FORMAT_VERSION = 2
@@ -286,7 +286,7 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
 
 def _run_jobs(jobs: list, out: Path, scheduler: str, n_workers: int | None, progress: bool,
               state: dict, t0: float, spent_before: float) -> None:
-    from ..progress import ProgressLog
+    from fluidfilm.progress import ProgressLog
 
     bar = ProgressLog(len(jobs), f"dataset parts ({out.name})", enabled=progress)
 

@@ -33,9 +33,9 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from .. import io
-from ..io import file_sha256
-from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
+from fluidfilm import io
+from fluidfilm.io import file_sha256
+from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict
 
 #: columns of every row, in file order (``S`` comes first where present)
 COLUMNS = ("X1", "X2", "V1", "V2", "F1", "F2", "eps", "section", "n_theta", "n_z")

@@ -11,10 +11,10 @@ One responsibility per module:
 - ``policy``     the paper's grid policy (coarse grid at low, dense at high eccentricity)
 - ``params``     the kernels' named parameters (``FilmParams``, ``GeneralParams``) and ``Cavitation``
 """
-from .conical import ConicalReynoldsSolver
-from .params import Cavitation, FilmParams, GeneralParams
-from .policy import GradedReynoldsModel, make_solver
-from .solver import CAVITATION_MODELS, ReynoldsSolver
+from fluidfilm.reynolds.conical import ConicalReynoldsSolver
+from fluidfilm.reynolds.params import Cavitation, FilmParams, GeneralParams
+from fluidfilm.reynolds.policy import GradedReynoldsModel, make_solver
+from fluidfilm.reynolds.solver import CAVITATION_MODELS, ReynoldsSolver
 
 __all__ = ["ReynoldsSolver", "ConicalReynoldsSolver", "GradedReynoldsModel", "CAVITATION_MODELS", "make_solver",
            "Cavitation", "FilmParams", "GeneralParams"]

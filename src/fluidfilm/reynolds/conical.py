@@ -49,12 +49,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..bearing import ConicalBearing
-from ..states import as_state_pairs
-from . import kernels
-from .mesh import FilmMesh
-from .params import Cavitation, FilmParams, GeneralParams
-from .solver import _GridSolver
+from fluidfilm.core.bearing import ConicalBearing
+from fluidfilm.core.states import as_state_pairs
+from fluidfilm.reynolds import kernels
+from fluidfilm.reynolds.mesh import FilmMesh
+from fluidfilm.reynolds.params import Cavitation, FilmParams, GeneralParams
+from fluidfilm.reynolds.solver import _GridSolver
 
 METHODS = ("auto", "fast", "general")
 

@@ -24,12 +24,12 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..bearing import JournalBearing
-from ..models import ReferenceModel
-from ..states import as_state_pairs
-from . import kernels
-from .params import FilmParams
-from .solver import CAVITATION_MODELS, ReynoldsSolver
+from fluidfilm.core.bearing import JournalBearing
+from fluidfilm.core.force_model import ReferenceModel
+from fluidfilm.core.states import as_state_pairs
+from fluidfilm.reynolds import kernels
+from fluidfilm.reynolds.params import FilmParams
+from fluidfilm.reynolds.solver import CAVITATION_MODELS, ReynoldsSolver
 
 _CAV = {"none": kernels.CAV_NONE, "gumbel": kernels.CAV_GUMBEL, "swift-stieber": kernels.CAV_SWIFT_STIEBER}
 

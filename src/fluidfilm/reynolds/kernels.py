@@ -69,7 +69,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .params import Cavitation
+from fluidfilm.reynolds.params import Cavitation
 
 # cavitation codes used inside kernels (plain ints: the values of ``params.Cavitation``)
 CAV_NONE = int(Cavitation.NONE)

@@ -12,13 +12,13 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..bearing import ConicalBearing, JournalBearing
-from ..models import ReferenceModel
-from ..states import as_state_pairs
-from . import kernels
-from .conical import ConicalReynoldsSolver
-from .params import FilmParams
-from .solver import ReynoldsSolver
+from fluidfilm.core.bearing import ConicalBearing, JournalBearing
+from fluidfilm.core.force_model import ReferenceModel
+from fluidfilm.core.states import as_state_pairs
+from fluidfilm.reynolds import kernels
+from fluidfilm.reynolds.conical import ConicalReynoldsSolver
+from fluidfilm.reynolds.params import FilmParams
+from fluidfilm.reynolds.solver import ReynoldsSolver
 
 
 class GradedParams(NamedTuple):

@@ -13,12 +13,12 @@ from typing import Any
 
 import numpy as np
 
-from ..bearing import JournalBearing
-from ..models import ReferenceModel
-from ..states import V_MAX_PHYSICAL, as_state_pairs, check_states
-from . import kernels
-from .mesh import FilmMesh
-from .params import Cavitation, FilmParams
+from fluidfilm.core.bearing import JournalBearing
+from fluidfilm.core.force_model import ReferenceModel
+from fluidfilm.core.states import V_MAX_PHYSICAL, as_state_pairs, check_states
+from fluidfilm.reynolds import kernels
+from fluidfilm.reynolds.mesh import FilmMesh
+from fluidfilm.reynolds.params import Cavitation, FilmParams
 
 CAVITATION_MODELS = ("gumbel", "swift-stieber", "none")
 

@@ -31,10 +31,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numba import njit, objmode
 
-from ..bearing import JournalBearing
-from ..models import ReferenceModel
-from ..states import as_state_pairs
-from .mesh import FilmMesh
+from fluidfilm.core.bearing import JournalBearing
+from fluidfilm.core.force_model import ReferenceModel
+from fluidfilm.core.states import as_state_pairs
+from fluidfilm.reynolds.mesh import FilmMesh
 
 
 class SparseGridSolver:
@@ -132,7 +132,7 @@ def sparse_callback_force(params, x1, x2, v1, v2):
 class SparseReferenceModel(ReferenceModel):
     """Paper-like reference: 30x30 below ``eps_threshold``, 55x55 above, sparse direct solve per call.
 
-    A force model like every other (``fluidfilm.models.ForceModel``): valid in the whole film.
+    A force model like every other (``fluidfilm.core.force_model.ForceModel``): valid in the whole film.
     """
 
     def __init__(self, bearing: JournalBearing, coarse=(30, 30), dense=(55, 55), eps_threshold: float = 0.9,

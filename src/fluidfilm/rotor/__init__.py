@@ -6,11 +6,11 @@
 - ``equilibrium``  static equilibrium position and the equilibrium locus
 - ``metrics``      settled-orbit statistics and model-vs-reference distances
 """
-from .equilibrium import equilibrium, equilibrium_locus
-from .integrate import Trajectory, simulate
-from .linear import LinearBearing
-from .metrics import compare_orbits, orbit_stats
-from .model import Rotor
+from fluidfilm.rotor.equilibrium import equilibrium, equilibrium_locus
+from fluidfilm.rotor.integrate import Trajectory, simulate
+from fluidfilm.rotor.linear import LinearBearing
+from fluidfilm.rotor.metrics import compare_orbits, orbit_stats
+from fluidfilm.rotor.model import Rotor
 
 __all__ = ["Rotor", "simulate", "Trajectory", "LinearBearing", "equilibrium", "equilibrium_locus",
            "orbit_stats", "compare_orbits"]

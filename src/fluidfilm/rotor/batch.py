@@ -35,9 +35,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from ..models import BatchSettable, ForceModel
-from .integrate import CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration, _uncached, run_loop
-from .model import Rotor
+from fluidfilm.core.force_model import BatchSettable, ForceModel
+from fluidfilm.rotor.integrate import CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration, _uncached, run_loop
+from fluidfilm.rotor.model import Rotor
 
 
 @dataclass
@@ -181,7 +181,7 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     otherwise as ``simulate``.
     """
     if not isinstance(model, ForceModel):
-        raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.models.ForceModel); "
+        raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel); "
                          "the integrator needs one")
     kernel, params = model.force_kernel
     bearing = model.bearing

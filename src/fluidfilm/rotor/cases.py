@@ -3,9 +3,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from .integrate import Trajectory, simulate
-from .metrics import compare_orbits, is_satisfactory, orbit_stats
-from .model import Rotor
+from fluidfilm.rotor.integrate import Trajectory, simulate
+from fluidfilm.rotor.metrics import compare_orbits, is_satisfactory, orbit_stats
+from fluidfilm.rotor.model import Rotor
 
 
 def rotor_for_case(rotor_cfg: Mapping, case_cfg: Mapping) -> Rotor:

@@ -39,8 +39,8 @@ import numpy as np
 from numba import njit
 from numba.core.registry import CPUDispatcher as Dispatcher
 
-from ..models import ForceModel
-from .model import Rotor, ramped
+from fluidfilm.core.force_model import ForceModel
+from fluidfilm.rotor.model import Rotor, ramped
 
 _ramped = njit(inline="always")(ramped)
 
@@ -71,7 +71,7 @@ class Trajectory:
         return np.hypot(self.x[:, 0], self.x[:, 1]) / clearance
 
     def to_npz(self, path) -> None:
-        from .. import io
+        from fluidfilm import io
 
         with io.atomic_path(path, suffix=".npz") as tmp:
             np.savez_compressed(tmp, t=self.t, x=self.x, v=self.v, status=np.array(self.status),
@@ -246,7 +246,7 @@ def _library_types(kernel, params) -> bool:
 def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
              eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
              max_substeps: int = 256, t0: float = 0.0) -> Trajectory:
-    """Integrate the rotor in ``model`` (a ``fluidfilm.models.ForceModel``: its compiled ``force_kernel``).
+    """Integrate the rotor in ``model`` (a ``fluidfilm.core.force_model.ForceModel``: its compiled ``force_kernel``).
 
     Starts at the bearing centre at rest unless ``x0``/``v0`` are given.
     Returns every ``record_every``-th step.
@@ -254,7 +254,7 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     if not isinstance(rotor, Rotor):
         raise ValueError(f"rotor must be a Rotor, got {type(rotor).__name__}")
     if not isinstance(model, ForceModel):
-        raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.models.ForceModel: forces, "
+        raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel: forces, "
                          "force_kernel, bearing, clearance, validity, domain report); the integrator needs one")
     kernel, params = model.force_kernel
     bearing = model.bearing

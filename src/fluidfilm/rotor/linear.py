@@ -11,8 +11,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..bearing import JournalBearing
-from ..models import WHOLE_FILM, ValidityDomain
+from fluidfilm.core.bearing import JournalBearing
+from fluidfilm.core.force_model import WHOLE_FILM, ValidityDomain
 
 
 class LinearParams(NamedTuple):

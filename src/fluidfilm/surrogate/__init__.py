@@ -5,7 +5,7 @@ Training (torch, Lightning) lives in ``training`` and ``fit``; inference
 torch.  Surrogates learn from the dataset (``fluidfilm.data``'s Parquet
 columns) and never import the solver's internals.
 """
-from .inference import ACTIVATIONS, SurrogateForceModel, load_surrogate
-from .scaling import SCALINGS, Scaling
+from fluidfilm.surrogate.inference import ACTIVATIONS, SurrogateForceModel, load_surrogate
+from fluidfilm.surrogate.scaling import SCALINGS, Scaling
 
 __all__ = ["SurrogateForceModel", "load_surrogate", "Scaling", "SCALINGS", "ACTIVATIONS"]

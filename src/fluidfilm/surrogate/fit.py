@@ -10,10 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.schema import dataset_bearing, load_dataset, load_test_set, relative_force_errors, training_domain
-from ..data.spec import config_hash
-from .inference import SurrogateForceModel
-from .training import ForceDataModule, train_network
+from fluidfilm.data.schema import dataset_bearing, load_dataset, load_test_set, relative_force_errors, training_domain
+from fluidfilm.data.spec import config_hash
+from fluidfilm.surrogate.inference import SurrogateForceModel
+from fluidfilm.surrogate.training import ForceDataModule, train_network
 
 EPS_BANDS = ((0.0, 0.5), (0.5, 0.7), (0.7, 0.9), (0.9, 1.0))
 

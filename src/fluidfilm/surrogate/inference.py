@@ -31,12 +31,12 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
-from .. import io
-from ..bearing import ConicalBearing, JournalBearing, bearing_from_dict
-from ..models import ValidityDomain
-from ..states import as_state_pairs
-from .scaling import Scaling, check_whirl_use, network_inputs
-from .transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
+from fluidfilm import io
+from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict
+from fluidfilm.core.force_model import ValidityDomain
+from fluidfilm.core.states import as_state_pairs
+from fluidfilm.surrogate.scaling import Scaling, check_whirl_use, network_inputs
+from fluidfilm.surrogate.transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
                          standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb, whirl_direction_nb)
 
 class Activation(IntEnum):
@@ -439,6 +439,14 @@ class SurrogateForceModel:
                           f"extrapolated ({int(self._counter[0])} such evaluations since the last reset)",
                           RuntimeWarning, stacklevel=2)
         return out.reshape(shape + (2,))
+
+    def exact_coefficients(self, x0) -> dict | None:
+        """K and C at ``x0`` (journal at rest) from the network's exact Jacobian (forward-mode), or None for
+        surrogates with extra inputs (the active bearing's sleeve), which it does not cover."""
+        if self.scalings[0].extras:
+            return None
+        from fluidfilm.surrogate.jacobian import surrogate_coefficients
+        return surrogate_coefficients(self, x0)
 
     @property
     def n_outside_domain(self) -> int:

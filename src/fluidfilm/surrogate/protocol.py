@@ -39,13 +39,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..bearing import bearing_from_dict
-from ..data.schema import relative_force_errors
-from .fit import regions
-from .inference import SurrogateForceModel
-from .levenberg_marquardt import (LMSettings, init_nguyen_widrow, levenberg_marquardt, mlp_forward, mlp_sse,
+from fluidfilm.core.bearing import bearing_from_dict
+from fluidfilm.data.schema import relative_force_errors
+from fluidfilm.surrogate.fit import regions
+from fluidfilm.surrogate.inference import SurrogateForceModel
+from fluidfilm.surrogate.levenberg_marquardt import (LMSettings, init_nguyen_widrow, levenberg_marquardt, mlp_forward, mlp_sse,
                                   normal_equations, unpack)
-from .scaling import Scaling
+from fluidfilm.surrogate.scaling import Scaling
 
 PROTOCOLS = ("paper", "adam")
 INPUTS = ["X1", "X2", "V1", "V2"]

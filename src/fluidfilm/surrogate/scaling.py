@@ -52,7 +52,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from . import transforms as tf
+from fluidfilm.surrogate import transforms as tf
 
 SCALINGS = ("standard", "physics", "physics_v", "minmax")
 FRAMES = ("cartesian", "polar", "whirl")

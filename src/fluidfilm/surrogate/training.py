@@ -27,9 +27,9 @@ import pandas as pd
 import torch
 from torch import nn
 
-from ..bearing import ConicalBearing
-from ..data.schema import EXTRA_INPUTS, dataset_bearing, load_dataset
-from .scaling import Scaling, check_whirl_use
+from fluidfilm.core.bearing import ConicalBearing
+from fluidfilm.data.schema import EXTRA_INPUTS, dataset_bearing, load_dataset
+from fluidfilm.surrogate.scaling import Scaling, check_whirl_use
 
 _ACT = {"tanh": nn.Tanh, "relu": nn.ReLU, "silu": nn.SiLU, "sigmoid": nn.Sigmoid}
 
@@ -361,10 +361,10 @@ def train_network(dm: ForceDataModule, model_cfg: dict, trainer_cfg: dict, targe
     callbacks = [stop]
     if not trainer_cfg.get("progress_bar", False):
         # a line per epoch instead of a bar: readable in DVC stage output and CI logs
-        from ..progress import epoch_log_callback
+        from fluidfilm.progress import epoch_log_callback
 
         callbacks.append(epoch_log_callback(trainer_cfg["max_epochs"], what))
-    from ..progress import quiet_third_party
+    from fluidfilm.progress import quiet_third_party
 
     quiet_third_party()
     ckpt_path = None

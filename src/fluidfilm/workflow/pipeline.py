@@ -1,8 +1,8 @@
 """Run the workspace's DVC pipeline and serve its MLflow runs (what ``make reproduce`` and ``make mlflow`` call).
 
-    python -m fluidfilm.pipeline run                                 # dvc repro, the full profile
-    python -m fluidfilm.pipeline run --profile quick --workdir DIR   # the small profile in a scratch copy
-    python -m fluidfilm.pipeline serve --port 5000                   # MLflow UI on the workspace's store
+    python -m fluidfilm.workflow.pipeline run                                 # dvc repro, the full profile
+    python -m fluidfilm.workflow.pipeline run --profile quick --workdir DIR   # the small profile in a scratch copy
+    python -m fluidfilm.workflow.pipeline serve --port 5000                   # MLflow UI on the workspace's store
 
 Why a module and not a shell line: the stages must start the workspace's interpreter whatever is
 on the caller's PATH (dvc.yaml takes it from ``conf/pipeline/full.yaml``), the small profile must
@@ -112,7 +112,7 @@ def record_timing(workdir: Path, profile: str, stage_times: dict[str, float], to
     runs = data.setdefault(profile, {"stages": {}})
     runs["stages"].update({k: round(v, 1) for k, v in stage_times.items()})
     runs["date"] = _dt.date.today().isoformat()
-    from .benchmarking import machine
+    from fluidfilm.perf.benchmarking import machine
 
     runs["machine"] = machine()
     runs["last_run_total_s"] = round(total, 1)
@@ -133,7 +133,7 @@ def where_things_are(workdir: Path) -> str:
         f"  figures         {prefix}reports/figures/",
         f"  stage timings   {prefix}{TIMING_FILE}",
         f"  MLflow runs     {prefix}mlflow.db          open with: "
-        + ("make mlflow" if not prefix else f"(cd {rel} && .venv/bin/python -m fluidfilm.pipeline serve)")
+        + ("make mlflow" if not prefix else f"(cd {rel} && .venv/bin/python -m fluidfilm.workflow.pipeline serve)")
         + "   then http://127.0.0.1:5000",
         "  DVC             .venv/bin/dvc metrics show ; .venv/bin/dvc plots show   (writes reports/dvc_plots/)",
         "  review notebook .venv/bin/jupyter execute --inplace notebooks/review.ipynb",
@@ -152,7 +152,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         return code
     if stage_times:
         record_timing(workdir, args.profile, stage_times, total)
-    from . import readme
+    from fluidfilm.reporting import readme
 
     readme.main(["--readme", str(workdir / "README.md"), "--reports", str(workdir / "reports")])
     if stage_times:
@@ -171,7 +171,7 @@ def publish(workdir: Path) -> str | None:
     """The reproduction as one MLflow run (report, figures, timings, agent) and the surrogates registered."""
     import yaml
 
-    from .tracking import publish_workspace
+    from fluidfilm.workflow.tracking import publish_workspace
 
     tracking = yaml.safe_load((workdir / "conf" / "tracking" / "default.yaml").read_text())
     cwd = Path.cwd()
@@ -193,7 +193,7 @@ def cmd_publish(args: argparse.Namespace) -> int:
 
 def cmd_serve(args: argparse.Namespace) -> int:
     """The MLflow UI on this workspace's store; artifacts served by the server (portable links)."""
-    from .tracking import relocate_artifacts
+    from fluidfilm.workflow.tracking import relocate_artifacts
 
     url = f"http://{args.host}:{args.port}"
     moved = relocate_artifacts(args.store)   # artifact links follow the workspace if it was moved
@@ -224,7 +224,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m fluidfilm.pipeline", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m fluidfilm.workflow.pipeline", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="dvc repro on a profile")

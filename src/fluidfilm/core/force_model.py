@@ -32,7 +32,7 @@ from typing import Any, Callable, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .bearing import ConicalBearing, JournalBearing
+from fluidfilm.core.bearing import ConicalBearing, JournalBearing
 
 #: ``fn(params, x1, x2, v1, v2) -> (F1, F2)``, compiled with numba
 ForceKernel = Callable[..., tuple[float, float]]

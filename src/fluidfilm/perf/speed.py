@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .benchmarking import median_seconds
+from fluidfilm.perf.benchmarking import median_seconds
 
 
 @njit  # not cached: numba's on-disk cache cannot always pickle a specialisation on a function argument

@@ -11,8 +11,8 @@ import math
 import numpy as np
 import pandas as pd
 
-from .benchmarking import median_seconds
-from .reynolds import ReynoldsSolver
+from fluidfilm.perf.benchmarking import median_seconds
+from fluidfilm.reynolds import ReynoldsSolver
 
 
 def _direction(angle_deg: float) -> np.ndarray:
@@ -301,7 +301,7 @@ def fig5_panels(runs: dict, clearance: float, out_dir, ramp: tuple[float, float]
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
 
-    from . import io
+    from fluidfilm import io
 
     out = Path(out_dir)
     letters = {"dqn": "a", "none": "b", "mpc": "c"}

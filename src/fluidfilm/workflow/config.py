@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from .bearing import JournalBearing, bearing_from_dict
-from .reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver, make_solver
+from fluidfilm.core.bearing import JournalBearing, bearing_from_dict
+from fluidfilm.reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver, make_solver
 
 
 def bearing_from_cfg(cfg: Mapping):

@@ -1,7 +1,7 @@
 """Fill the README's result tables from the pipeline's outputs, so that no number is copied by hand.
 
-    python -m fluidfilm.readme            # rewrite the generated blocks of README.md in place
-    python -m fluidfilm.readme --check    # exit 1 if README.md differs from what reports/ say
+    python -m fluidfilm.reporting.readme            # rewrite the generated blocks of README.md in place
+    python -m fluidfilm.reporting.readme --check    # exit 1 if README.md differs from what reports/ say
 
 A generated block in the README looks like::
 
@@ -211,7 +211,7 @@ def _lund_thomsen(reports: Path, query=None) -> str:
     df = pd.read_csv(path)
     if query is not None:
         df = df.query(query)
-    from .characteristics.published import LUND_THOMSEN_COEFFICIENTS as names
+    from fluidfilm.characteristics.published import LUND_THOMSEN_COEFFICIENTS as names
 
     rows = [[f"{r.l_over_d:g}", f"{r.S:g}", f"{r.eps:.3f} / {r.eps_pub:.3f}", f"{r.phi:.2f} / {r.phi_pub:.2f}"]
             + [f"{r[n]:.3f} / {r[n + '_pub']:.2f}" for n in names]
@@ -231,7 +231,7 @@ def render_characteristics(reports: Path) -> str:
     ch = _load(reports, "characteristics.json")
     rb, sb, lt = ch["raimondi_boyd"], ch["short_bearing"], ch["lund_thomsen"]
     thr = ch["threshold"]["reference"]
-    from .report import grid_label
+    from fluidfilm.reporting.report import grid_label
 
     coarse, fine = (grid_label(ch, k) for k in ("reference", "reference_converged"))
     lines = [
@@ -334,7 +334,7 @@ def render_ensemble(reports: Path) -> str:
 
 
 def _study(reports: Path, name: str, what: str) -> str:
-    from .report import STUDY_HEADER, study_rows
+    from fluidfilm.reporting.report import STUDY_HEADER, study_rows
 
     summary = _load(reports, f"{name}/summary.json")
     return (f"{what} {summary['n_jobs']} jobs (`reports/{name}/table.csv`, figure `reports/{name}/figure.png`); "
@@ -373,7 +373,7 @@ def render_error_map(reports: Path) -> str:
 
 
 def render_surrogate_goals(reports: Path) -> str:
-    from .report import goal_verdict, surrogate_goals
+    from fluidfilm.reporting.report import goal_verdict, surrogate_goals
 
     m = _load(reports, "metrics.json")
     rows = [[g["what"], g["target"], g["measured"] or "not measured", goal_verdict(g), g["tried"]]
@@ -425,7 +425,7 @@ def render_train_time(reports: Path) -> str:
            if tt["train_time_reduction_ci95_low"] < 0 < tt["train_time_reduction_ci95_high"] else "")
         + f", more accurate: {tt['ranking']['more_accurate']}.", ""]
     if tt.get("ranking_check"):
-        from .report import ranking_line
+        from fluidfilm.reporting.report import ranking_line
 
         lines += [f"Ranking check at {ranking_line(tt)}", ""]
     rows = []
@@ -582,7 +582,7 @@ def _renderer(name: str) -> Callable[[Path], str]:
     if name in RENDERERS:
         return RENDERERS[name]
     if name.startswith("bench_"):
-        from .benchmarking import render
+        from fluidfilm.perf.benchmarking import render
 
         def bench(reports: Path) -> str:
             path = reports / "benchmarks" / f"{name[len('bench_'):]}.json"
@@ -614,7 +614,7 @@ def fill(text: str, reports: Path, strict: bool = False) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m fluidfilm.readme", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m fluidfilm.reporting.readme", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--readme", default="README.md", help="the README; docs/*.md beside it are filled too")
     parser.add_argument("--reports", default="reports")
@@ -635,7 +635,7 @@ def main(argv: list[str] | None = None) -> int:
         tmp.replace(path)
         print(f"{path}: generated blocks updated from {args.reports}/")
     if stale:
-        print(f"stale: {', '.join(stale)}: run `python -m fluidfilm.readme`", file=sys.stderr)
+        print(f"stale: {', '.join(stale)}: run `python -m fluidfilm.reporting.readme`", file=sys.stderr)
         return 1
     return 0
 

@@ -10,7 +10,7 @@ and every value must have the reference's type (ints where ints were, numbers wh
 mappings where mappings were; a reference value of ``null`` accepts anything).
 
 Before that comparison every config group the job composed is checked against its schema
-(``fluidfilm.config_schema``: one dataclass per group, registered in Hydra's ConfigStore here), so a
+(``fluidfilm.workflow.config_schema``: one dataclass per group, registered in Hydra's ConfigStore here), so a
 key or type is judged by a declared type, not only by the reference's value; the comparison still
 covers the primary configs' own keys, which have no schema.
 
@@ -87,7 +87,7 @@ def register_schemas() -> None:
     (what a structured-config user composes or extends; the YAML in conf/ keeps the values)."""
     from hydra.core.config_store import ConfigStore
 
-    from .config_schema import GROUPS
+    from fluidfilm.workflow.config_schema import GROUPS
 
     cs = ConfigStore.instance()
     for group, entry in GROUPS.items():
@@ -100,7 +100,7 @@ def schema_problems(cfg, choices: Mapping[str, Any]) -> list[str]:
     """Each composed group of ``cfg`` (``choices``: Hydra's ``group[@package] -> option``) against its schema."""
     from omegaconf import OmegaConf
 
-    from .config_schema import SchemaError, validate_group
+    from fluidfilm.workflow.config_schema import SchemaError, validate_group
 
     problems = []
     for choice, option in choices.items():

@@ -17,7 +17,7 @@ from typing import Any
 
 import pandas as pd
 
-from . import io
+from fluidfilm import io
 
 #: the paper's verdicts on its Fig. 4 cases: which cases each network was satisfactory in, and its words
 PAPER_SATISFACTORY = {"single": set("e"), "split": set("abcde")}

@@ -31,10 +31,10 @@ import numpy as np
 from joblib import Parallel, delayed
 from scipy.stats import bootstrap
 
-from .. import io
-from ..benchmarking import machine
-from . import levenberg_marquardt, protocol as protocol_module, scaling
-from .protocol import band_sq_errors, subsample, time_to_accuracy, train_protocol_model
+from fluidfilm import io
+from fluidfilm.perf.benchmarking import machine
+from fluidfilm.surrogate import levenberg_marquardt, protocol as protocol_module, scaling
+from fluidfilm.surrogate.protocol import band_sq_errors, subsample, time_to_accuracy, train_protocol_model
 
 
 def _net_summary(n: Mapping) -> dict:

@@ -2,7 +2,7 @@
 
 Each script in ``benchmarks/`` prints its table and, unless run with ``--quick``, writes it with
 ``write_benchmark`` to ``reports/benchmarks/<name>.json`` together with the machine and the date;
-``python -m fluidfilm.readme`` renders those files into the README's ``bench_<name>`` blocks.
+``python -m fluidfilm.reporting.readme`` renders those files into the README's ``bench_<name>`` blocks.
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from . import io
+from fluidfilm import io
 
 OUT_DIR = Path("reports/benchmarks")
 

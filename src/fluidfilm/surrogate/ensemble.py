@@ -15,7 +15,7 @@ The spread of the forces F_k of n members is the sample standard deviation of th
 ``s > rel_tol * max(|F_mean|, floor_N)`` (the floor keeps near-zero forces, whose relative spread is
 meaningless, from being flagged everywhere near the bearing centre).
 
-Both implement ``fluidfilm.models.ForceModel`` and run in the compiled integrator: the kernel
+Both implement ``fluidfilm.core.force_model.ForceModel`` and run in the compiled integrator: the kernel
 ``ensemble_force`` calls the members' kernel on each member's parameters, and the fallback's kernel
 when the hybrid flag is set.  The members must share one kernel (e.g. surrogates of one
 architecture, whose parameters then form a homogeneous tuple for the compiled loop).
@@ -31,8 +31,8 @@ from numba import njit
 from numba.core.errors import NumbaExperimentalFeatureWarning
 from numpy.typing import ArrayLike
 
-from .models import Bearing, ForceModel, ValidityDomain
-from .states import as_state_pairs
+from fluidfilm.core.force_model import Bearing, ForceModel, ValidityDomain
+from fluidfilm.core.states import as_state_pairs
 
 # The members' and the fallback's kernels travel in the parameter tuple as numba first-class functions
 # (any force model's kernel may be a member or the fallback); numba still labels that feature
@@ -111,7 +111,7 @@ class EnsembleForceModel:
             raise ValueError(f"an ensemble needs at least 2 members, got {len(members)}")
         for m in members:
             if not isinstance(m, ForceModel):
-                raise ValueError(f"{type(m).__name__} is not a force model (fluidfilm.models.ForceModel)")
+                raise ValueError(f"{type(m).__name__} is not a force model (fluidfilm.core.force_model.ForceModel)")
         kernels = [m.force_kernel for m in members]
         fn = kernels[0][0]
         odd = [m.name for m, (f, _) in zip(members, kernels) if f is not fn]

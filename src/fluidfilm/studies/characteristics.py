@@ -12,15 +12,15 @@ import math
 import numpy as np
 import pandas as pd
 
-from ..bearing import JournalBearing
-from ..benchmarking import median_seconds
-from ..reynolds import ReynoldsSolver
-from . import coefficients as coef
-from . import shortbearing as sb
-from . import stability as stab
-from . import static
-from . import published as pub
-from .published import RAIMONDI_BOYD, short_bearing_kc
+from fluidfilm.core.bearing import JournalBearing
+from fluidfilm.perf.benchmarking import median_seconds
+from fluidfilm.reynolds import ReynoldsSolver
+from fluidfilm.characteristics import coefficients as coef
+from fluidfilm.characteristics import shortbearing as sb
+from fluidfilm.characteristics import stability as stab
+from fluidfilm.characteristics import static
+from fluidfilm.characteristics import published as pub
+from fluidfilm.characteristics.published import RAIMONDI_BOYD, short_bearing_kc
 
 DIRECT = ("Kxx", "Kyy", "Cxx", "Cyy")
 CROSS = ("Kxy", "Kyx", "Cxy", "Cyx")
@@ -66,7 +66,7 @@ def lund_thomsen_bearing(l_over_d: float, grid, d: float = 0.1, clearance: float
     from the load line (+X2), at zero gauge pressure, Swift-Stieber (their condition; ``cavitation="gumbel"``
     for a like-for-like peer that clips at zero).  (The dimensionless results depend only on L/D; the size,
     speed and viscosity are arbitrary.)"""
-    from ..reynolds.feed import GroovedReynoldsSolver
+    from fluidfilm.reynolds.feed import GroovedReynoldsSolver
 
     b = JournalBearing(length=l_over_d * d, diameter=d, clearance=clearance, speed_rpm=3000.0, viscosity=0.02)
     return GroovedReynoldsSolver(b, int(grid[0]), int(grid[1]), cavitation=cavitation, groove_angle=math.pi / 2,
@@ -225,7 +225,7 @@ def loads_for_eccentricities(model, eps_values) -> list[float]:
 def step_table(model, x0, steps) -> pd.DataFrame:
     """Coefficients at a ladder of relative steps.  For a surrogate: central differences at each step,
     then the exact Jacobian (h_rel = 0), to show the differences converge to it."""
-    from ..surrogate import SurrogateForceModel
+    from fluidfilm.surrogate import SurrogateForceModel
     exact = isinstance(model, SurrogateForceModel)
     method = coef.coefficients if exact else coef.reference_coefficients
     rows = [{"h_rel": h, **coef.dimensionless(method(model, x0, h), model.bearing)} for h in steps]

@@ -310,7 +310,7 @@ class MlflowSweepCallback:
         self.failed_jobs = 0
 
     def on_multirun_start(self, config, **kwargs):
-        from .sweeps import SWEEP_KEYS_ENV, swept_keys
+        from fluidfilm.workflow.sweeps import SWEEP_KEYS_ENV, swept_keys
 
         # which keys the sweep varies, for the jobs' names (jobs inherit the environment)
         task = list(config.hydra.overrides.task) if "hydra" in config else []

@@ -30,9 +30,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import io
-from .data.schema import relative_force_errors
-from .data.spec import DatasetConfigError, DatasetSpec, config_hash
+from fluidfilm import io
+from fluidfilm.data.schema import relative_force_errors
+from fluidfilm.data.spec import DatasetConfigError, DatasetSpec, config_hash
 
 #: grading keys (``grading.<key>=...``) and where each acts; None keeps the dataset config's value
 VELOCITY_KEYS = ("v_max", "core", "core_fraction", "n_per_side")
@@ -107,8 +107,8 @@ def cached_dataset(bearing, reference: Mapping, spec: DatasetSpec, cache_dir, *,
     """The dataset of this grading: ``cache_dir/<key>``, generated unless a complete, undamaged copy is
     there.  Returns (path, metadata, reused).  The metadata's ``generation_seconds_total`` is the time it
     took when it was made (reused or not)."""
-    from .data import generate
-    from .data.schema import DatasetIntegrityError, verify_dataset
+    from fluidfilm.data import generate
+    from fluidfilm.data.schema import DatasetIntegrityError, verify_dataset
 
     import fcntl
 
@@ -158,7 +158,7 @@ class OrbitBenchmark:
 
     @classmethod
     def from_dir(cls, reference, trajectory_dir, cases: Sequence[str]) -> "OrbitBenchmark":
-        from .rotor.integrate import Trajectory
+        from fluidfilm.rotor.integrate import Trajectory
 
         trajs = {}
         for case in cases:
@@ -181,7 +181,7 @@ class OrbitBenchmark:
     def verdicts(self, model, rotor_cfg: Mapping, cases: Mapping[str, Mapping], integrator_cfg: Mapping,
                  threshold_pct: float) -> dict:
         """The seven cases run with ``model`` and judged against the reference orbits by the Fig. 4 rule."""
-        from .rotor.cases import case_summary, run_case
+        from fluidfilm.rotor.cases import case_summary, run_case
 
         rows = {}
         for name, case in cases.items():
@@ -210,7 +210,7 @@ class StiffnessBenchmark:
 
     @classmethod
     def from_reference(cls, reference, eps_values: Sequence[float], h_rel: float = 1e-4) -> "StiffnessBenchmark":
-        from .characteristics import study
+        from fluidfilm.studies import characteristics as study
 
         loads = study.loads_for_eccentricities(reference, list(eps_values))
         return cls(loads, study.coefficient_table({"reference": reference}, loads, {"default": h_rel}))
@@ -219,7 +219,7 @@ class StiffnessBenchmark:
         """Largest error of the direct (Kxx, Kyy, Cxx, Cyy) and cross terms over the loads, each relative to
         the reference coefficient (floored at a tenth of its matrix's largest; ``study.coefficient_errors``).
         None where the model finds no equilibrium under one of the loads."""
-        from .characteristics import study
+        from fluidfilm.studies import characteristics as study
 
         try:
             table = study.coefficient_table({"model": model}, self.loads, {})
@@ -257,8 +257,8 @@ class Judges:
 
     def judge(self, model) -> dict:
         """The surrogate's held-out and orbit-state force errors, its verdicts in the cases, its K/C errors and
-        its time per force evaluation (the compiled loop of ``fluidfilm.speed``)."""
-        from .speed import sample_states, time_per_force_eval
+        its time per force evaluation (the compiled loop of ``fluidfilm.perf.speed``)."""
+        from fluidfilm.perf.speed import sample_states, time_per_force_eval
 
         h = self.held_out
         predicted = np.asarray(model.forces(h[["X1", "X2"]].to_numpy(), h[["V1", "V2"]].to_numpy()))
@@ -318,7 +318,7 @@ def read_results(sweep_dir, sweep_id: str | None = None) -> list[dict]:
 
 def write_summary(results: Sequence[Mapping], out_dir, title: str) -> dict:
     """``summary.json``, ``table.csv`` and ``figure.png`` of a sweep in ``out_dir`` (each atomic)."""
-    from .figures import plot_grading_study
+    from fluidfilm.studies.plots import plot_grading_study
 
     table, summary = summarise(results)
     out = Path(out_dir)

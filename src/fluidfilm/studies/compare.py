@@ -10,9 +10,9 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from .models import ForceModel
-from .rotor.cases import case_summary, run_case
-from .speed import sample_states, time_per_force_eval
+from fluidfilm.core.force_model import ForceModel
+from fluidfilm.rotor.cases import case_summary, run_case
+from fluidfilm.perf.speed import sample_states, time_per_force_eval
 
 
 def trajectory_comparison(models: Mapping[str, ForceModel], reference_name: str, rotor_cfg: Mapping,
@@ -95,8 +95,8 @@ def sparse_reference_speed(sparse, table: pd.DataFrame, rotor_cfg: Mapping, case
     sparse model's estimated trajectory time.  The surrogates' trajectory times are the measured ones in
     ``table``.
     """
-    from .rotor.cases import run_case
-    from .speed import sample_states, time_per_force_eval
+    from fluidfilm.rotor.cases import run_case
+    from fluidfilm.perf.speed import sample_states, time_per_force_eval
 
     c = sparse.bearing.clearance
     x, v = sample_states(c, n_states)
@@ -139,13 +139,13 @@ def ensemble_study(reference: ForceModel, members: Mapping[str, ForceModel], rot
 
     Every model runs every case through the same integrator (``trajectory_comparison``); the ensemble
     (mean of the members) records the share of its force evaluations whose members disagree beyond
-    ``rel_tol`` (``fluidfilm.ensemble``), each hybrid (one per tolerance in ``hybrid_rel_tols``) the
+    ``rel_tol`` (``fluidfilm.surrogate.ensemble``), each hybrid (one per tolerance in ``hybrid_rel_tols``) the
     share it answered with the reference.  Returns the per-case table and a summary (per model: the
     satisfactory cases, orbit errors, flagged/fallback shares, trajectory time and its speed-up on the
     reference).  ``held_out`` (a test set: X1, X2, V1, V2, F1, F2) adds the flag's calibration there
     (``ensemble.flag_calibration``: does the flag mark the states where the ensemble is wrong?).
     """
-    from .ensemble import EnsembleForceModel, HybridForceModel, flag_calibration
+    from fluidfilm.surrogate.ensemble import EnsembleForceModel, HybridForceModel, flag_calibration
 
     ensemble = EnsembleForceModel(list(members.values()), rel_tol=rel_tol, floor_N=floor_N, name="ensemble")
     hybrids = {f"hybrid_{tol:g}": HybridForceModel(list(members.values()), reference, rel_tol=tol, floor_N=floor_N,

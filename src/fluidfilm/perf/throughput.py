@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .benchmarking import median_seconds
-from .rotor import Rotor, simulate
-from .rotor.batch import simulate_batch
+from fluidfilm.perf.benchmarking import median_seconds
+from fluidfilm.rotor import Rotor, simulate
+from fluidfilm.rotor.batch import simulate_batch
 
 
 def monte_carlo_batch(clearance: float, n: int, mass: float = 2.5, seed: int = 0):
