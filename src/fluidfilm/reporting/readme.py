@@ -73,6 +73,29 @@ def render_reproduce_timing(reports: Path) -> str:
             f"scratch:\n\n" + _table(["stage", "wall time"], rows))
 
 
+def _minutes(seconds: float) -> str:
+    return f"{seconds / 60:.0f} min" if seconds >= 60 else f"{seconds:.0f} s"
+
+
+def render_commands(reports: Path) -> str:
+    """The README's commands and how long each takes: the pipeline from ``reproduce_timing.json`` (written by
+    ``make reproduce``), the install and the test suite from ``test_timing.json`` (a fresh clone's run)."""
+    full = _load(reports, "reproduce_timing.json").get("full")
+    if not full:
+        raise FileNotFoundError("reports/reproduce_timing.json has no full-profile run yet")
+    t = _load(reports, "test_timing.json")
+    rows = [["`make setup`", "creates `.venv`, installs torch (CPU) and the project; the two below run it first",
+             f"{t['setup_s_min'] / 60:.1f}-{t['setup_s_max'] / 60:.0f} min"],
+            ["`make reproduce`", "the whole pipeline (`dvc repro`): datasets, models, studies, figures, report",
+             _minutes(full["stages_total_s"])],
+            ["`make test`", f"the default suite ({t['tests']:,} tests, {t['skipped']} skipped), among them the pipeline "
+             f"on its small profile ({_minutes(t['quick_reproduce_s'])})", _minutes(t["suite_s"])]]
+    return (_table(["command", "what it does", "time"], rows)
+            + f"\nMeasured on {full['machine']}: the pipeline on {full['date']} (`reports/reproduce_timing.json`, "
+              f"per stage in [docs/results.md](docs/results.md#how-long-make-reproduce-takes)), the install and the "
+              f"tests from a fresh clone of {t['commit']} on {t['date']} (`reports/test_timing.json`).\n")
+
+
 def render_headline(reports: Path) -> str:
     m = _load(reports, "metrics.json")
     g = m.get
@@ -134,7 +157,7 @@ def render_headline(reports: Path) -> str:
         if g(key) is not None:
             rows.append([label, paper, _num(g(key), spec, unit)])
     if g("surrogate_goals") is not None:
-        rows.append(["goals of the fast, accurate surrogate met (table below)", "-",
+        rows.append(["goals of the fast, accurate surrogate met (docs/results.md)", "-",
                      f"{g('surrogate_goals_met')} of {g('surrogate_goals')}"])
     return _table(["quantity", "paper", "this workspace"], rows)
 
@@ -202,29 +225,20 @@ def render_short_bearing(reports: Path) -> str:
                    "M_crit closed / ours", "M_crit err %"], rows) + tail
 
 
-def _lund_thomsen(reports: Path, query=None) -> str:
+def render_lund_thomsen(reports: Path) -> str:
+    """Lund & Thomsen's 21 published rows beside ours (``reports/characteristics/lund_thomsen.csv``)."""
     import pandas as pd
 
     path = reports / "characteristics" / "lund_thomsen.csv"
     if not path.exists():
         raise FileNotFoundError(f"{path} is missing: run `make reproduce`")
     df = pd.read_csv(path)
-    if query is not None:
-        df = df.query(query)
     from fluidfilm.characteristics.published import LUND_THOMSEN_COEFFICIENTS as names
 
     rows = [[f"{r.l_over_d:g}", f"{r.S:g}", f"{r.eps:.3f} / {r.eps_pub:.3f}", f"{r.phi:.2f} / {r.phi_pub:.2f}"]
             + [f"{r[n]:.3f} / {r[n + '_pub']:.2f}" for n in names]
             + [f"{max(r[n + '_err_pct'] for n in names):.2f} %"] for _, r in df.iterrows()]
     return _table(["L/D", "S", "eps", "attitude °", *names, "largest error"], rows)
-
-
-def render_lund_thomsen(reports: Path) -> str:
-    return _lund_thomsen(reports)
-
-
-def render_lund_thomsen_short(reports: Path) -> str:
-    return _lund_thomsen(reports, "two_typings or l_over_d == 1.0")
 
 
 def render_characteristics(reports: Path) -> str:
@@ -566,9 +580,9 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "raimondi_boyd": render_raimondi_boyd,
     "raimondi_boyd_no_feed": render_raimondi_boyd_no_feed,
     "lund_thomsen": render_lund_thomsen,
-    "lund_thomsen_short": render_lund_thomsen_short,
     "short_bearing": render_short_bearing,
     "reproduce_timing": render_reproduce_timing,
+    "commands": render_commands,
     "headline": render_headline,
     "grading_study": render_grading_study,
     "ablation": render_ablation,

@@ -225,8 +225,7 @@ SURROGATE_GOALS = (
     ("kc_max_rel_err_direct_best", "stiffness/damping against the grid-converged reference, largest error of "
      "the direct terms, eps 0.1-0.9", 2, "<=", 100, " %",
      "the whirl frame and tanh units (ReLU / polar frame: 1400 %); what is left sits at eps 0.9 "
-     "(docs/characteristics.md); until 2026-11-26 this key was against the 30x30 grid (now "
-     "kc_max_rel_err_*_vs_paper_grid)"),
+     "(docs/characteristics.md); against the 30x30 grid: kc_max_rel_err_*_vs_paper_grid"),
     ("kc_max_rel_err_cross_best", "stiffness/damping against the grid-converged reference, largest error of "
      "the cross terms, eps 0.1-0.9", 5, "<=", 100, " %", "as above"),
     ("whirl_threshold_rel_err_best", "whirl threshold speed against the grid-converged reference", 2, "<=", 100,
