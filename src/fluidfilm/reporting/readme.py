@@ -1,18 +1,22 @@
-"""Fill the README's result tables from the pipeline's outputs, so that no number is copied by hand.
+"""Fill the generated blocks of the README and the docs from the pipeline's outputs, so that no number
+is copied by hand.
 
-    python -m fluidfilm.reporting.readme            # rewrite the generated blocks of README.md in place
-    python -m fluidfilm.reporting.readme --check    # exit 1 if README.md differs from what reports/ say
+    python -m fluidfilm.reporting.readme            # rewrite the generated blocks in place
+    python -m fluidfilm.reporting.readme --check    # exit 1 if a page differs from what reports/ say
 
-A generated block in the README looks like::
+The pages (``pages``): README.md (the commands' times and the headline), docs/results.md (every table)
+and the other docs/*.md (the tables their discussion needs). A generated block looks like::
 
     <!-- generated: headline -->
     ...table...
     <!-- end generated -->
 
 and ``RENDERERS[name](reports_dir)`` produces its content from the files under ``reports/`` that
-``make reproduce`` writes (``metrics.json``, ``reproduce_timing.json``, ``control.json``, ...).
-``make reproduce`` runs this after ``dvc repro``; ``tests/test_readme.py`` checks that the
-committed README agrees with the committed reports.
+``make reproduce`` writes (``metrics.json``, ``reproduce_timing.json``, ``control.json``, ...); the tables
+the paper-comparison report shows too are drawn by the same functions (``fluidfilm.reporting.tables``).
+``make reproduce`` runs this after ``dvc repro``; ``tests/test_pipeline.py``
+(``test_readme_tables_are_generated_from_the_reports``) checks that the committed pages agree with the
+committed reports.
 """
 from __future__ import annotations
 
@@ -627,16 +631,24 @@ def fill(text: str, reports: Path, strict: bool = False) -> str:
     return BLOCK.sub(sub, text)
 
 
+def pages(readme: Path) -> list[Path]:
+    """The pages with generated blocks: ``readme``, then docs/results.md, then the other docs/*.md beside it."""
+    docs = readme.parent / "docs"
+    results = docs / "results.md"
+    if not results.exists():
+        raise FileNotFoundError(f"{results} is missing: the results page holds every generated table")
+    return [readme, results, *sorted(p for p in docs.glob("*.md") if p != results)]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m fluidfilm.reporting.readme", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--readme", default="README.md", help="the README; docs/*.md beside it are filled too")
+    parser.add_argument("--readme", default="README.md", help="the README; docs/results.md and the other docs/*.md beside it are filled too")
     parser.add_argument("--reports", default="reports")
-    parser.add_argument("--check", action="store_true", help="only compare; exit 1 when README.md is stale")
+    parser.add_argument("--check", action="store_true", help="only compare; exit 1 when a page is stale")
     args = parser.parse_args(argv)
-    readme = Path(args.readme)
     stale = []
-    for path in [readme, *sorted((readme.parent / "docs").glob("*.md"))]:
+    for path in pages(Path(args.readme)):
         old = path.read_text()
         new = fill(old, Path(args.reports), strict=args.check)
         if new == old:
