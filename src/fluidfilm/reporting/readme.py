@@ -27,6 +27,8 @@ import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
+from fluidfilm.reporting import report
+
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[a-z_0-9]+) -->\n)(?P<body>.*?)(<!-- end generated -->)", re.S)
 
 
@@ -45,10 +47,7 @@ def _num(x, spec: str = ".1f", unit: str = "") -> str:
     return f"{format(x, spec)}{unit}"
 
 
-def _table(header: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(lines) + "\n"
+_table = report.markdown_table
 
 
 # Stages that the paper's figures and numbers do not need: the workspace's own surrogate (three seeds),
@@ -167,15 +166,7 @@ def render_headline(reports: Path) -> str:
 
 
 def render_control(reports: Path) -> str:
-    control = _load(reports, "control.json")
-    names = {"none": "none (sleeve held at 0)", "dqn": "DQN (SB3)", "mpc": "MPC (surrogate)"}
-    rows = []
-    for name, r in control["controllers"].items():
-        rows.append([names.get(name, name), f"{1e6 * r['max_amplitude_m']:.1f} µm", f"{r['amplitude_reduction_pct']:.1f} %",
-                     f"{1e6 * r['final_amplitude_m']:.1f} µm", f"{r['mean_friction_power_W']:.2f} W",
-                     f"{1e3 * r['sleeve_travel_m']:.1f} mm", f"{r['decision_ms_median']:.2f} ms"])
-    return _table(["controller", "largest orbit amplitude", "reduction vs none", "amplitude at the end",
-                   "mean friction power", "sleeve travel", "time per decision"], rows)
+    return report.controller_table(_load(reports, "control.json")["controllers"])
 
 
 def _csv_table(path: Path, columns: dict[str, str], query=None) -> str:
@@ -249,9 +240,7 @@ def render_characteristics(reports: Path) -> str:
     ch = _load(reports, "characteristics.json")
     rb, sb, lt = ch["raimondi_boyd"], ch["short_bearing"], ch["lund_thomsen"]
     thr = ch["threshold"]["reference"]
-    from fluidfilm.reporting.report import grid_label
-
-    coarse, fine = (grid_label(ch, k) for k in ("reference", "reference_converged"))
+    coarse, fine = (report.grid_label(ch, k) for k in ("reference", "reference_converged"))
     lines = [
         "Validation of the reference model (limits in brackets):", "",
         _table(["check", "worst measured"], [
@@ -322,42 +311,14 @@ def render_characteristics(reports: Path) -> str:
 
 
 def render_ensemble(reports: Path) -> str:
-    ens = _load(reports, "ensemble.json")
-    n = ens["n_cases"]
-    rows = []
-    for name, m in ens["models"].items():
-        share = m.get("flagged_share_mean")
-        rows.append([name, f"{m['n_satisfactory']} of {n} ({m['satisfactory_cases'] or '-'})",
-                     _num(m["orbit_rms_pct_max"], ".2f", " %"), _num(m["orbit_hausdorff_pct_max"], ".2f", " %"),
-                     "-" if share is None else _num(100 * share, ".2f", " %"), _num(m["speedup_trajectory"], ".1f", "x")])
-    cal = ens.get("flag_calibration") or {}
-
-    def pct(key: str, spec: str) -> str:  # a share of the calibration in per cent ("n/a" where undefined)
-        return _num(None if cal[key] is None else 100 * cal[key], spec, " %")
-
-    calibration = "" if not cal else (
-        f"\nThe flag on the held-out orbit test set ({cal['n_states']:,} states, reference forces): "
-        f"{pct('flagged_share', '.1f')} of the states flagged, {pct('wrong_share', '.1f')} with the ensemble's "
-        f"force error above the tolerance; of those, {pct('recall', '.0f')} flagged (recall), and "
-        f"{pct('precision', '.0f')} of the flagged states are such (precision); median error flagged / "
-        f"unflagged {pct('median_err_flagged', '.2f')} / {pct('median_err_unflagged', '.2f')}; "
-        f"rank correlation of spread and error {_num(cal['spearman_spread_error'], '.2f')}.\n")
-    return (f"Seeds satisfactory in all {n} cases: **{ens['n_seeds_all_cases']} of {len(ens['members'])}** "
-            f"({', '.join(ens['members'])}). Ensemble flag: spread of the members' forces above "
-            f"{100 * ens['rel_tol']:g} % of the mean force (floor {ens['floor_N']:g} N); hybrid_<tol>: the "
-            "reference model answers wherever the spread exceeds <tol>.\n\n"
-            + _table(["model", "satisfactory", "worst orbit RMS (% of c)", "worst Hausdorff (% of c)",
-                      "flagged / answered by the reference", "trajectory speed-up vs reference"], rows)
-            + calibration)
+    return report.ensemble_block(_load(reports, "ensemble.json"))
 
 
 def _study(reports: Path, name: str, what: str) -> str:
-    from fluidfilm.reporting.report import STUDY_HEADER, study_rows
-
     summary = _load(reports, f"{name}/summary.json")
     return (f"{what} {summary['n_jobs']} jobs (`reports/{name}/table.csv`, figure `reports/{name}/figure.png`); "
             f"the lowest 99th-percentile force error along the orbits: `{summary['lowest_orbit_p99_job']}` "
-            f"({100 * summary['lowest_orbit_p99']:.0f} %).\n\n" + _table(STUDY_HEADER, study_rows(summary)))
+            f"({100 * summary['lowest_orbit_p99']:.0f} %).\n\n" + report.study_table(summary))
 
 
 def render_grading_study(reports: Path) -> str:
@@ -391,13 +352,9 @@ def render_error_map(reports: Path) -> str:
 
 
 def render_surrogate_goals(reports: Path) -> str:
-    from fluidfilm.reporting.report import goal_verdict, surrogate_goals
-
     m = _load(reports, "metrics.json")
-    rows = [[g["what"], g["target"], g["measured"] or "not measured", goal_verdict(g), g["tried"]]
-            for g in surrogate_goals(m)]
     return (f"Met: **{m['surrogate_goals_met']} of {m['surrogate_goals']}** (`reports/metrics.json`).\n\n"
-            + _table(["goal", "target", "measured", "", "what was done"], rows))
+            + report.goals_table(m))
 
 
 def render_characteristics_timing(reports: Path) -> str:
@@ -443,9 +400,7 @@ def render_train_time(reports: Path) -> str:
            if tt["train_time_reduction_ci95_low"] < 0 < tt["train_time_reduction_ci95_high"] else "")
         + f", more accurate: {tt['ranking']['more_accurate']}.", ""]
     if tt.get("ranking_check"):
-        from fluidfilm.reporting.report import ranking_line
-
-        lines += [f"Ranking check at {ranking_line(tt)}", ""]
+        lines += [f"Ranking check at {report.ranking_line(tt)}", ""]
     rows = []
     for r in tt["runs"]:
         eq = r.get("time_to_equal_accuracy_split_s")
