@@ -1,4 +1,4 @@
-"""The README's "Adding a force model" example runs and is right."""
+"""The worked example of docs/adding_a_model.md runs and is right."""
 from __future__ import annotations
 
 import re
@@ -13,9 +13,8 @@ from fluidfilm.core.force_model import ForceModel
 
 
 def _run_doc(tmp_path) -> dict:
-    text = (ROOT / "README.md").read_text()
-    section = text[text.index("## Adding a force model"):]
-    section = section[:section.index("\n## ", 4)]
+    text = (ROOT / "docs" / "adding_a_model.md").read_text()
+    section = text[text.index("## Example"):]
     blocks = re.findall(r"```python\n(.*?)```", section, flags=re.S)
     assert len(blocks) == 1
     model = blocks[0][:blocks[0].index("# use it like any other model")]

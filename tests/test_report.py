@@ -150,8 +150,35 @@ def test_ensemble_stage_adds_its_numbers_without_replacing_the_compare_stages(in
     assert m["seed_study_satisfactory_best"] == 5 and m["seed_study_cases_hybrid_0.01"] == "abcdefg"
     assert m["flagged_share_mean_hybrid_0.01"] == 0.04 and m["best_seeds_all_seven"] == 0
     md = report.ensemble_section(_ensemble_study())
-    assert "| hybrid_0.01 | 7/7 (abcdefg) | 2.50 | 3.10 | 4.00 | 2.0x |" in md
-    assert "| best | 5/7 (bcdef) | 2.50 | 3.10 | n/a | 9.0x |" in md
+    assert "| hybrid_0.01 | 7 of 7 (abcdefg) | 2.50 % | 3.10 % | 4.00 % | 2.0x |" in md
+    assert "| best | 5 of 7 (bcdef) | 2.50 % | 3.10 % | - | 9.0x |" in md   # a seed alone flags nothing
+
+
+def test_the_report_and_the_results_page_draw_each_shared_table_with_one_renderer(tmp_path):
+    """The paper-comparison report and docs/results.md show the ensemble, goals, study and controller
+    tables; each is drawn by one function, so the two cannot disagree in columns or numbers."""
+    import json
+
+    from fluidfilm.reporting import readme
+
+    ens = dict(_ensemble_study(), flag_calibration={
+        "n_states": 1000, "flagged_share": 0.2, "wrong_share": 0.1, "recall": 0.9, "precision": None,
+        "median_err_flagged": 0.05, "median_err_unflagged": 0.002, "spearman_spread_error": 0.4})
+    ctl = {"none": {"max_amplitude_m": 8e-5, "amplitude_reduction_pct": 0.0, "final_amplitude_m": 7e-5,
+                    "mean_friction_power_W": 1.5, "sleeve_travel_m": 0.0, "decision_ms_median": 0.0,
+                    "axial_force_N_mean_last_rev": 6.7}}
+    (tmp_path / "ensemble.json").write_text(json.dumps(ens))
+    (tmp_path / "control.json").write_text(json.dumps({"controllers": ctl}))
+    page = readme.render_ensemble(tmp_path)
+    assert page in report.ensemble_section(ens)
+    assert "| best_s1 | 5 of 7 (bcdef) |" in page and "recall" in page and "n/a of the flagged" in page
+    control = readme.render_control(tmp_path)
+    assert control == report.controller_table(ctl)
+    assert "| none (sleeve held at 0) | 80.0 µm | 0.0 % | 70.0 µm | 1.50 W | 0.0 mm | 0.00 ms | 6.7 N |" in control
+    metrics = {"surrogate_goals_met": 0, "surrogate_goals": len(report.SURROGATE_GOALS)}
+    (tmp_path / "metrics.json").write_text(json.dumps(metrics))
+    goals = readme.render_surrogate_goals(tmp_path)
+    assert report.goals_table(metrics) in goals and report.goals_table(metrics) in report.goals_section(metrics)
 
 
 def test_the_worst_seed_decides_the_seeds_verdict():

@@ -1,18 +1,22 @@
-"""Fill the README's result tables from the pipeline's outputs, so that no number is copied by hand.
+"""Fill the generated blocks of the README and the docs from the pipeline's outputs, so that no number
+is copied by hand.
 
-    python -m fluidfilm.reporting.readme            # rewrite the generated blocks of README.md in place
-    python -m fluidfilm.reporting.readme --check    # exit 1 if README.md differs from what reports/ say
+    python -m fluidfilm.reporting.readme            # rewrite the generated blocks in place
+    python -m fluidfilm.reporting.readme --check    # exit 1 if a page differs from what reports/ say
 
-A generated block in the README looks like::
+The pages (``pages``): README.md (the commands' times and the headline), docs/results.md (every table)
+and the other docs/*.md (the tables their discussion needs). A generated block looks like::
 
     <!-- generated: headline -->
     ...table...
     <!-- end generated -->
 
 and ``RENDERERS[name](reports_dir)`` produces its content from the files under ``reports/`` that
-``make reproduce`` writes (``metrics.json``, ``reproduce_timing.json``, ``control.json``, ...).
-``make reproduce`` runs this after ``dvc repro``; ``tests/test_readme.py`` checks that the
-committed README agrees with the committed reports.
+``make reproduce`` writes (``metrics.json``, ``reproduce_timing.json``, ``control.json``, ...); the tables
+the paper-comparison report shows too are drawn by the same functions (``fluidfilm.reporting.tables``).
+``make reproduce`` runs this after ``dvc repro``; ``tests/test_pipeline.py``
+(``test_readme_tables_are_generated_from_the_reports``) checks that the committed pages agree with the
+committed reports.
 """
 from __future__ import annotations
 
@@ -22,6 +26,8 @@ import re
 import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
+
+from fluidfilm.reporting import report
 
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[a-z_0-9]+) -->\n)(?P<body>.*?)(<!-- end generated -->)", re.S)
 
@@ -41,10 +47,7 @@ def _num(x, spec: str = ".1f", unit: str = "") -> str:
     return f"{format(x, spec)}{unit}"
 
 
-def _table(header: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(lines) + "\n"
+_table = report.markdown_table
 
 
 # Stages that the paper's figures and numbers do not need: the workspace's own surrogate (three seeds),
@@ -71,6 +74,29 @@ def render_reproduce_timing(reports: Path) -> str:
             f"its time). A rerun reuses finished dataset parts and a finished training checkpoint of the "
             f"same configuration, so such a stage shows the time of the resumed run, not of a run from "
             f"scratch:\n\n" + _table(["stage", "wall time"], rows))
+
+
+def _minutes(seconds: float) -> str:
+    return f"{seconds / 60:.0f} min" if seconds >= 60 else f"{seconds:.0f} s"
+
+
+def render_commands(reports: Path) -> str:
+    """The README's commands and how long each takes: the pipeline from ``reproduce_timing.json`` (written by
+    ``make reproduce``), the install and the test suite from ``test_timing.json`` (a fresh clone's run)."""
+    full = _load(reports, "reproduce_timing.json").get("full")
+    if not full:
+        raise FileNotFoundError("reports/reproduce_timing.json has no full-profile run yet")
+    t = _load(reports, "test_timing.json")
+    rows = [["`make setup`", "creates `.venv`, installs torch (CPU) and the project; the two below run it first",
+             f"{t['setup_s_min'] / 60:.1f}-{t['setup_s_max'] / 60:.0f} min"],
+            ["`make reproduce`", "the whole pipeline (`dvc repro`): datasets, models, studies, figures, report",
+             _minutes(full["stages_total_s"])],
+            ["`make test`", f"the default suite ({t['tests']:,} tests, {t['skipped']} skipped), among them the pipeline "
+             f"on its small profile ({_minutes(t['quick_reproduce_s'])})", _minutes(t["suite_s"])]]
+    return (_table(["command", "what it does", "time"], rows)
+            + f"\nMeasured on {full['machine']}: the pipeline on {full['date']} (`reports/reproduce_timing.json`, "
+              f"per stage in [docs/results.md](docs/results.md#how-long-make-reproduce-takes)), the install and the "
+              f"tests from a fresh clone of {t['commit']} on {t['date']} (`reports/test_timing.json`).\n")
 
 
 def render_headline(reports: Path) -> str:
@@ -134,21 +160,13 @@ def render_headline(reports: Path) -> str:
         if g(key) is not None:
             rows.append([label, paper, _num(g(key), spec, unit)])
     if g("surrogate_goals") is not None:
-        rows.append(["goals of the fast, accurate surrogate met (table below)", "-",
+        rows.append(["goals of the fast, accurate surrogate met (docs/results.md)", "-",
                      f"{g('surrogate_goals_met')} of {g('surrogate_goals')}"])
     return _table(["quantity", "paper", "this workspace"], rows)
 
 
 def render_control(reports: Path) -> str:
-    control = _load(reports, "control.json")
-    names = {"none": "none (sleeve held at 0)", "dqn": "DQN (SB3)", "mpc": "MPC (surrogate)"}
-    rows = []
-    for name, r in control["controllers"].items():
-        rows.append([names.get(name, name), f"{1e6 * r['max_amplitude_m']:.1f} µm", f"{r['amplitude_reduction_pct']:.1f} %",
-                     f"{1e6 * r['final_amplitude_m']:.1f} µm", f"{r['mean_friction_power_W']:.2f} W",
-                     f"{1e3 * r['sleeve_travel_m']:.1f} mm", f"{r['decision_ms_median']:.2f} ms"])
-    return _table(["controller", "largest orbit amplitude", "reduction vs none", "amplitude at the end",
-                   "mean friction power", "sleeve travel", "time per decision"], rows)
+    return report.controller_table(_load(reports, "control.json")["controllers"])
 
 
 def _csv_table(path: Path, columns: dict[str, str], query=None) -> str:
@@ -202,15 +220,14 @@ def render_short_bearing(reports: Path) -> str:
                    "M_crit closed / ours", "M_crit err %"], rows) + tail
 
 
-def _lund_thomsen(reports: Path, query=None) -> str:
+def render_lund_thomsen(reports: Path) -> str:
+    """Lund & Thomsen's 21 published rows beside ours (``reports/characteristics/lund_thomsen.csv``)."""
     import pandas as pd
 
     path = reports / "characteristics" / "lund_thomsen.csv"
     if not path.exists():
         raise FileNotFoundError(f"{path} is missing: run `make reproduce`")
     df = pd.read_csv(path)
-    if query is not None:
-        df = df.query(query)
     from fluidfilm.characteristics.published import LUND_THOMSEN_COEFFICIENTS as names
 
     rows = [[f"{r.l_over_d:g}", f"{r.S:g}", f"{r.eps:.3f} / {r.eps_pub:.3f}", f"{r.phi:.2f} / {r.phi_pub:.2f}"]
@@ -219,21 +236,11 @@ def _lund_thomsen(reports: Path, query=None) -> str:
     return _table(["L/D", "S", "eps", "attitude °", *names, "largest error"], rows)
 
 
-def render_lund_thomsen(reports: Path) -> str:
-    return _lund_thomsen(reports)
-
-
-def render_lund_thomsen_short(reports: Path) -> str:
-    return _lund_thomsen(reports, "two_typings or l_over_d == 1.0")
-
-
 def render_characteristics(reports: Path) -> str:
     ch = _load(reports, "characteristics.json")
     rb, sb, lt = ch["raimondi_boyd"], ch["short_bearing"], ch["lund_thomsen"]
     thr = ch["threshold"]["reference"]
-    from fluidfilm.reporting.report import grid_label
-
-    coarse, fine = (grid_label(ch, k) for k in ("reference", "reference_converged"))
+    coarse, fine = (report.grid_label(ch, k) for k in ("reference", "reference_converged"))
     lines = [
         "Validation of the reference model (limits in brackets):", "",
         _table(["check", "worst measured"], [
@@ -304,42 +311,14 @@ def render_characteristics(reports: Path) -> str:
 
 
 def render_ensemble(reports: Path) -> str:
-    ens = _load(reports, "ensemble.json")
-    n = ens["n_cases"]
-    rows = []
-    for name, m in ens["models"].items():
-        share = m.get("flagged_share_mean")
-        rows.append([name, f"{m['n_satisfactory']} of {n} ({m['satisfactory_cases'] or '-'})",
-                     _num(m["orbit_rms_pct_max"], ".2f", " %"), _num(m["orbit_hausdorff_pct_max"], ".2f", " %"),
-                     "-" if share is None else _num(100 * share, ".2f", " %"), _num(m["speedup_trajectory"], ".1f", "x")])
-    cal = ens.get("flag_calibration") or {}
-
-    def pct(key: str, spec: str) -> str:  # a share of the calibration in per cent ("n/a" where undefined)
-        return _num(None if cal[key] is None else 100 * cal[key], spec, " %")
-
-    calibration = "" if not cal else (
-        f"\nThe flag on the held-out orbit test set ({cal['n_states']:,} states, reference forces): "
-        f"{pct('flagged_share', '.1f')} of the states flagged, {pct('wrong_share', '.1f')} with the ensemble's "
-        f"force error above the tolerance; of those, {pct('recall', '.0f')} flagged (recall), and "
-        f"{pct('precision', '.0f')} of the flagged states are such (precision); median error flagged / "
-        f"unflagged {pct('median_err_flagged', '.2f')} / {pct('median_err_unflagged', '.2f')}; "
-        f"rank correlation of spread and error {_num(cal['spearman_spread_error'], '.2f')}.\n")
-    return (f"Seeds satisfactory in all {n} cases: **{ens['n_seeds_all_cases']} of {len(ens['members'])}** "
-            f"({', '.join(ens['members'])}). Ensemble flag: spread of the members' forces above "
-            f"{100 * ens['rel_tol']:g} % of the mean force (floor {ens['floor_N']:g} N); hybrid_<tol>: the "
-            "reference model answers wherever the spread exceeds <tol>.\n\n"
-            + _table(["model", "satisfactory", "worst orbit RMS (% of c)", "worst Hausdorff (% of c)",
-                      "flagged / answered by the reference", "trajectory speed-up vs reference"], rows)
-            + calibration)
+    return report.ensemble_block(_load(reports, "ensemble.json"))
 
 
 def _study(reports: Path, name: str, what: str) -> str:
-    from fluidfilm.reporting.report import STUDY_HEADER, study_rows
-
     summary = _load(reports, f"{name}/summary.json")
     return (f"{what} {summary['n_jobs']} jobs (`reports/{name}/table.csv`, figure `reports/{name}/figure.png`); "
             f"the lowest 99th-percentile force error along the orbits: `{summary['lowest_orbit_p99_job']}` "
-            f"({100 * summary['lowest_orbit_p99']:.0f} %).\n\n" + _table(STUDY_HEADER, study_rows(summary)))
+            f"({100 * summary['lowest_orbit_p99']:.0f} %).\n\n" + report.study_table(summary))
 
 
 def render_grading_study(reports: Path) -> str:
@@ -373,13 +352,9 @@ def render_error_map(reports: Path) -> str:
 
 
 def render_surrogate_goals(reports: Path) -> str:
-    from fluidfilm.reporting.report import goal_verdict, surrogate_goals
-
     m = _load(reports, "metrics.json")
-    rows = [[g["what"], g["target"], g["measured"] or "not measured", goal_verdict(g), g["tried"]]
-            for g in surrogate_goals(m)]
     return (f"Met: **{m['surrogate_goals_met']} of {m['surrogate_goals']}** (`reports/metrics.json`).\n\n"
-            + _table(["goal", "target", "measured", "", "what was done"], rows))
+            + report.goals_table(m))
 
 
 def render_characteristics_timing(reports: Path) -> str:
@@ -425,9 +400,7 @@ def render_train_time(reports: Path) -> str:
            if tt["train_time_reduction_ci95_low"] < 0 < tt["train_time_reduction_ci95_high"] else "")
         + f", more accurate: {tt['ranking']['more_accurate']}.", ""]
     if tt.get("ranking_check"):
-        from fluidfilm.reporting.report import ranking_line
-
-        lines += [f"Ranking check at {ranking_line(tt)}", ""]
+        lines += [f"Ranking check at {report.ranking_line(tt)}", ""]
     rows = []
     for r in tt["runs"]:
         eq = r.get("time_to_equal_accuracy_split_s")
@@ -566,9 +539,9 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "raimondi_boyd": render_raimondi_boyd,
     "raimondi_boyd_no_feed": render_raimondi_boyd_no_feed,
     "lund_thomsen": render_lund_thomsen,
-    "lund_thomsen_short": render_lund_thomsen_short,
     "short_bearing": render_short_bearing,
     "reproduce_timing": render_reproduce_timing,
+    "commands": render_commands,
     "headline": render_headline,
     "grading_study": render_grading_study,
     "ablation": render_ablation,
@@ -613,16 +586,24 @@ def fill(text: str, reports: Path, strict: bool = False) -> str:
     return BLOCK.sub(sub, text)
 
 
+def pages(readme: Path) -> list[Path]:
+    """The pages with generated blocks: ``readme``, then docs/results.md, then the other docs/*.md beside it."""
+    docs = readme.parent / "docs"
+    results = docs / "results.md"
+    if not results.exists():
+        raise FileNotFoundError(f"{results} is missing: the results page holds every generated table")
+    return [readme, results, *sorted(p for p in docs.glob("*.md") if p != results)]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m fluidfilm.reporting.readme", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--readme", default="README.md", help="the README; docs/*.md beside it are filled too")
+    parser.add_argument("--readme", default="README.md", help="the README; docs/results.md and the other docs/*.md beside it are filled too")
     parser.add_argument("--reports", default="reports")
-    parser.add_argument("--check", action="store_true", help="only compare; exit 1 when README.md is stale")
+    parser.add_argument("--check", action="store_true", help="only compare; exit 1 when a page is stale")
     args = parser.parse_args(argv)
-    readme = Path(args.readme)
     stale = []
-    for path in [readme, *sorted((readme.parent / "docs").glob("*.md"))]:
+    for path in pages(Path(args.readme)):
         old = path.read_text()
         new = fill(old, Path(args.reports), strict=args.check)
         if new == old:

@@ -82,6 +82,13 @@ def _f(x, spec=".1f"):
     return "n/a" if x is None else format(x, spec)
 
 
+def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    """A Markdown table (one line per row, ending in a newline): every table of the report and the pages."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
+
+
 def generation_seconds(meta: Mapping) -> float:
     """A dataset's generation time: the total over resumed runs where recorded, else the last run's."""
     return meta.get("generation_seconds_total", meta["generation_seconds_last_run"])
@@ -225,8 +232,7 @@ SURROGATE_GOALS = (
     ("kc_max_rel_err_direct_best", "stiffness/damping against the grid-converged reference, largest error of "
      "the direct terms, eps 0.1-0.9", 2, "<=", 100, " %",
      "the whirl frame and tanh units (ReLU / polar frame: 1400 %); what is left sits at eps 0.9 "
-     "(docs/characteristics.md); until 2026-11-26 this key was against the 30x30 grid (now "
-     "kc_max_rel_err_*_vs_paper_grid)"),
+     "(docs/characteristics.md); against the 30x30 grid: kc_max_rel_err_*_vs_paper_grid"),
     ("kc_max_rel_err_cross_best", "stiffness/damping against the grid-converged reference, largest error of "
      "the cross terms, eps 0.1-0.9", 5, "<=", 100, " %", "as above"),
     ("whirl_threshold_rel_err_best", "whirl threshold speed against the grid-converged reference", 2, "<=", 100,
@@ -278,30 +284,34 @@ def study_rows(summary: Mapping) -> list[list[str]]:
     return rows
 
 
+def study_table(summary: Mapping) -> str:
+    """A grading study's or ablation's jobs, one row each (the report and the results page)."""
+    return markdown_table(STUDY_HEADER, study_rows(summary))
+
+
 def study_section(summary: Mapping, title: str, figure: str) -> str:
     """Markdown: a grading study's or ablation's jobs as a table, and its figure."""
-    table = "\n".join(["| " + " | ".join(STUDY_HEADER) + " |", "|" + "---|" * len(STUDY_HEADER)]
-                      + ["| " + " | ".join(r) + " |" for r in study_rows(summary)])
     return f"""
 ## {title}
 
-{table}
-
+{study_table(summary)}
 ![{title}]({figure})
 """
 
 
+def goals_table(metrics: Mapping) -> str:
+    """The surrogate goals, what was measured, met or missed (the report and the results page)."""
+    return markdown_table(["goal", "target", "measured", "", "what was done"],
+                          [[g["what"], g["target"], g["measured"] or "not measured", goal_verdict(g), g["tried"]]
+                           for g in surrogate_goals(metrics)])
+
+
 def goals_section(metrics: Mapping) -> str:
     """Markdown: the surrogate goals, what was measured, met or missed."""
-    rows = "\n".join(f"| {g['what']} | {g['target']} | {g['measured'] or 'not measured'} | {goal_verdict(g)} | "
-                     f"{g['tried']} |" for g in surrogate_goals(metrics))
     return f"""
 ## The best surrogate against its goals
 
-| goal | target | measured | | what was done |
-|---|---|---|---|---|
-{rows}
-"""
+{goals_table(metrics)}"""
 
 
 def goal_verdict(goal: Mapping) -> str:
@@ -416,11 +426,19 @@ def speed_rows(speed: pd.DataFrame) -> str:
     return "\n".join(f"| {r.model} | {r.kind} | {r.time_per_eval_us:.2f} |" for r in speed.itertuples())
 
 
-def controller_rows(ctl: Mapping[str, dict]) -> list[str]:
-    """Fig. 5 study: amplitude, friction, sleeve travel, decision time and axial force per controller."""
-    return [f"| {n} | {1e6 * r['max_amplitude_m']:.1f} | {r['amplitude_reduction_pct']:.1f} | "
-            f"{1e6 * r['final_amplitude_m']:.1f} | {r['mean_friction_power_W']:.2f} | {1e3 * r['sleeve_travel_m']:.1f} | "
-            f"{r['decision_ms_median']:.3f} | {r['axial_force_N_mean_last_rev']:.1f} |" for n, r in ctl.items()]
+CONTROLLER_NAMES = {"none": "none (sleeve held at 0)", "dqn": "DQN (SB3)", "mpc": "MPC (surrogate)"}
+
+
+def controller_table(ctl: Mapping[str, dict]) -> str:
+    """Fig. 5 study, evaluated on the reference model: amplitude, friction, sleeve travel, decision time and
+    axial force per controller (the report and the results page)."""
+    rows = [[CONTROLLER_NAMES.get(n, n), f"{1e6 * r['max_amplitude_m']:.1f} µm", f"{r['amplitude_reduction_pct']:.1f} %",
+             f"{1e6 * r['final_amplitude_m']:.1f} µm", f"{r['mean_friction_power_W']:.2f} W",
+             f"{1e3 * r['sleeve_travel_m']:.1f} mm", f"{r['decision_ms_median']:.2f} ms",
+             _f(r.get("axial_force_N_mean_last_rev"), ".1f") + " N"] for n, r in ctl.items()]
+    return markdown_table(["controller", "largest orbit amplitude", "reduction vs none", "amplitude at the end",
+                           "mean friction power", "sleeve travel", "time per decision",
+                           "axial force (last revolution)"], rows)
 
 
 def grid_label(ch: dict, model: str) -> str:
@@ -490,25 +508,43 @@ def ensemble_metrics(ens: Mapping) -> dict:
     return out
 
 
+def ensemble_block(ens: Mapping) -> str:
+    """reports/ensemble.json: the seeds' verdicts, the flag, the table per model and the flag's calibration on
+    the held-out set (the report and the results page)."""
+    n = ens["n_cases"]
+    rows = []
+    for name, m in ens["models"].items():
+        share = m.get("flagged_share_mean")
+        rows.append([name, f"{m['n_satisfactory']} of {n} ({m['satisfactory_cases'] or '-'})",
+                     f"{m['orbit_rms_pct_max']:.2f} %", f"{m['orbit_hausdorff_pct_max']:.2f} %",
+                     "-" if share is None else f"{100 * share:.2f} %", f"{m['speedup_trajectory']:.1f}x"])
+    cal = ens.get("flag_calibration") or {}
+
+    def pct(key: str, spec: str) -> str:  # a share of the calibration in per cent ("n/a" where undefined)
+        return "n/a" if cal[key] is None else f"{100 * cal[key]:{spec}} %"
+
+    calibration = "" if not cal else (
+        f"\nThe flag on the held-out orbit test set ({cal['n_states']:,} states, reference forces): "
+        f"{pct('flagged_share', '.1f')} of the states flagged, {pct('wrong_share', '.1f')} with the ensemble's "
+        f"force error above the tolerance; of those, {pct('recall', '.0f')} flagged (recall), and "
+        f"{pct('precision', '.0f')} of the flagged states are such (precision); median error flagged / "
+        f"unflagged {pct('median_err_flagged', '.2f')} / {pct('median_err_unflagged', '.2f')}; "
+        f"rank correlation of spread and error {_f(cal['spearman_spread_error'], '.2f')}.\n")
+    return (f"Seeds satisfactory in all {n} cases: **{ens['n_seeds_all_cases']} of {len(ens['members'])}** "
+            f"({', '.join(ens['members'])}). Ensemble flag: spread of the members' forces above "
+            f"{100 * ens['rel_tol']:g} % of the mean force (floor {ens['floor_N']:g} N); hybrid_<tol>: the "
+            "reference model answers wherever the spread exceeds <tol>.\n\n"
+            + markdown_table(["model", "satisfactory", "worst orbit RMS (% of c)", "worst Hausdorff (% of c)",
+                              "flagged / answered by the reference", "trajectory speed-up vs reference"], rows)
+            + calibration)
+
+
 def ensemble_section(ens: Mapping) -> str:
-    """Markdown summary of reports/ensemble.json."""
-    rows = "\n".join(
-        f"| {n} | {m['n_satisfactory']}/{ens['n_cases']} ({m['satisfactory_cases'] or '-'}) | "
-        f"{m['orbit_rms_pct_max']:.2f} | {m['orbit_hausdorff_pct_max']:.2f} | "
-        f"{_f(100 * m['flagged_share_mean'] if 'flagged_share_mean' in m else None, '.2f')} | "
-        f"{m['speedup_trajectory']:.1f}x |" for n, m in ens["models"].items())
+    """Markdown: the ensemble stage's block under its heading, and its figure."""
     return f"""
 ## Every seed of the best model, their ensemble, and the hybrid with the reference
 
-{len(ens['members'])} training seeds of the best model ({', '.join(ens['members'])}); satisfactory in all
-{ens['n_cases']} cases: {ens['n_seeds_all_cases']} of {len(ens['members'])} seeds. The ensemble answers the
-members' mean and flags a state where their spread exceeds {100 * ens['rel_tol']:g} % of the mean force (floor
-{ens['floor_N']:g} N); a hybrid answers with the reference model at the states it flags (its tolerance in the name).
-
-| model | satisfactory | worst orbit RMS % of c | worst Hausdorff % of c | flagged / fallback % of evaluations | trajectory speed-up vs reference |
-|---|---|---|---|---|---|
-{rows}
-
+{ensemble_block(ens)}
 ![ensemble](figures/ensemble.png)
 """
 
@@ -632,10 +668,7 @@ sleeve as an input, {active_meta.get('generation_seconds_total', active_meta['ge
 {active['metrics']['test_rel_err_median']:.4f}). Paper (qualitative): the DQN agent "tends to restrain the growth" of
 the orbit, the passive bearing's orbit grows.
 
-| controller | max amplitude um | reduction vs none % | final amplitude um | mean friction W | sleeve travel mm | ms per decision | axial force N (last rev.) |
-|---|---|---|---|---|---|---|---|
-{chr(10).join(controller_rows(ctl))}
-
+{controller_table(ctl)}
 ![Fig. 5 a](figures/fig5_a_dqn.png) ![Fig. 5 b](figures/fig5_b_none.png) ![MPC](figures/fig5_c_mpc.png)
 
 ![Fig. 5 amplitude](figures/fig5_amplitude.png)
