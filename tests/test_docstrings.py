@@ -163,4 +163,5 @@ def test_checker_accepts_a_complete_docstring_and_names_each_fault():
 
 @pytest.mark.parametrize("name", sorted(PUBLIC))
 def test_docstring_matches_signature(name: str):
-    assert problems(PUBLIC[name]) == []
+    found = problems(PUBLIC[name])
+    assert not found, f"{name}: " + "; ".join(found)
