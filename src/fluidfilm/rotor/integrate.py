@@ -49,7 +49,39 @@ OK, CONTACT, CONTACT_STAGE, NONFINITE = 0, 1, 2, 3
 
 @dataclass
 class Trajectory:
-    """A rotor trajectory: t (n,), x (n, 2) m, v (n, 2) m/s, and how it ended."""
+    """A rotor trajectory: t (n,), x (n, 2) m, v (n, 2) m/s, and how it ended.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,)
+        Recorded times [s].
+    x : ndarray, shape (n, 2)
+        Journal positions (X1, X2) [m], +X2 along gravity.
+    v : ndarray, shape (n, 2)
+        Journal velocities [m/s].
+    status : str
+        ``"ok"`` (reached the end time, possibly followed by "; <note>"), ``"contact: ..."`` or
+        ``"diverged: ..."``.
+    t_stop : float or None, default None
+        Time [s] at which the run stopped; None when it reached the end.
+    n_force_evals : int, default 0
+        Force evaluations of the run.
+    wall_time_s : float, default 0.0
+        Wall time of the compiled loop [s].
+    meta : dict, optional
+        Run settings (``dt``, ``t_end``, ``record_every``).
+    n_outside_domain : int, default 0
+        Force evaluations outside the model's training domain (0 for a reference model).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fluidfilm import Trajectory
+    >>> tr = Trajectory(t=np.array([0.0, 1e-3]), x=np.array([[0.0, 0.0], [0.0, 3e-5]]),
+    ...                 v=np.zeros((2, 2)), status="ok")
+    >>> tr.ok, tr.eccentricity(clearance=1e-4).tolist()
+    (True, [0.0, 0.3])
+    """
 
     t: np.ndarray
     x: np.ndarray
@@ -68,9 +100,11 @@ class Trajectory:
         return self.status == "ok" or self.status.startswith("ok;")
 
     def eccentricity(self, clearance: float) -> np.ndarray:
+        """|X| / ``clearance`` at every recorded time."""
         return np.hypot(self.x[:, 0], self.x[:, 1]) / clearance
 
     def to_npz(self, path) -> None:
+        """Write the trajectory to a compressed ``.npz`` file (atomically; ``from_npz`` reads it)."""
         from fluidfilm import io
 
         with io.atomic_path(path, suffix=".npz") as tmp:
@@ -82,6 +116,7 @@ class Trajectory:
 
     @classmethod
     def from_npz(cls, path) -> "Trajectory":
+        """A trajectory written by ``to_npz``."""
         d = np.load(path)
         t_stop = float(d["t_stop"])
         return cls(t=d["t"], x=d["x"], v=d["v"], status=str(d["status"]),
