@@ -137,7 +137,7 @@ class JournalBearing(_FilmScales):
         return self.length / self.diameter
 
     def sommerfeld(self, load: float) -> float:
-        """Sommerfeld number S = (R/c)^2 * mu * N / P, N in rev/s, P = W/(L D), of a load magnitude W [N]."""
+        """Sommerfeld number S = (R/c)^2 * mu * N / P, N in rev/s, P = W/(L D)."""
         p_mean = load / (self.length * self.diameter)
         return (self.radius / self.clearance) ** 2 * self.viscosity * (self.speed_rpm / 60.0) / p_mean
 

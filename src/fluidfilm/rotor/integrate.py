@@ -283,8 +283,58 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
              max_substeps: int = 256, t0: float = 0.0) -> Trajectory:
     """Integrate the rotor in ``model`` (a ``fluidfilm.core.force_model.ForceModel``: its compiled ``force_kernel``).
 
-    Starts at the bearing centre at rest unless ``x0``/``v0`` are given.
-    Returns every ``record_every``-th step.
+    Fixed-step RK4 of m dV/dt = F_film(X, V) + imbalance + m g (along +X2) + F_ext (module doc);
+    starts at the bearing centre at rest unless ``x0``/``v0`` are given.  The run stops early, with
+    ``status`` saying why and when, at contact (eps reaching ``eps_stop``) or a non-finite state.
+
+    Parameters
+    ----------
+    model : ForceModel
+        The bearing's force model.
+    rotor : Rotor
+        What the bearing carries (mass, imbalance, external force, gravity).
+    t_end : float
+        End time of the run [s] (target API of issue #26: an end time, so the run covers
+        [t0, t_end]; before the api branch it is the duration from t0).
+    dt : float, default 1e-5
+        RK4 step [s], at most the run's length.
+    x0, v0 : array_like, shape (2,), optional
+        Initial position [m] (eccentricity below ``eps_stop``) and velocity [m/s].
+    eps_stop : float, default 0.98
+        Eccentricity ratio in (0, 1) that ends the run as a contact.
+    record_every : int, default 1
+        Every ``record_every``-th step is recorded (a positive integer).
+    eps_substep : float, default 0.8
+        Eccentricity ratio above which steps are split into substeps (module doc).
+    max_substeps : int, default 256
+        Largest number of substeps per step.
+    t0 : float, default 0.0
+        Start time [s] (the imbalance phase and ramp run on absolute time).
+
+    Returns
+    -------
+    Trajectory
+        The recorded states, ``status`` ("ok", "contact: ...", "diverged: ..."), force evaluations
+        and wall time.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: a rotor that is not a ``Rotor``, a model that is not a force model,
+        times or settings that are not finite positive numbers of the right kind, an initial state
+        of the wrong shape, non-finite, or not below ``eps_stop``.
+
+    Examples
+    --------
+    A spring-damper under the rotor's weight settles at m g / K = 2.4525e-5 m:
+
+    >>> from fluidfilm import LinearBearing, Rotor, paper_bearing, simulate
+    >>> spring = LinearBearing(paper_bearing(), stiffness=1e6, damping=1e3)
+    >>> traj = simulate(spring, Rotor(mass=2.5), t_end=0.05, dt=1e-5, record_every=100)
+    >>> traj.status, len(traj.t), f"{traj.x[-1, 1]:.4g}"
+    ('ok', 51, '2.453e-05')
+    >>> simulate(spring, Rotor(mass=2.5, external_force=(0.0, 1e3)), t_end=0.05).status
+    'contact: eccentricity reached eps_stop=0.98 at t=0.0008075 s'
     """
     if not isinstance(rotor, Rotor):
         raise ValueError(f"rotor must be a Rotor, got {type(rotor).__name__}")
