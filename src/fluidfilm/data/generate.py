@@ -226,6 +226,47 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
     or whose bytes no longer match (and says so).  The returned dict adds
     what this call did: ``seconds_this_run``, ``chunks_computed_this_run``,
     ``damaged_parts_recomputed``.
+
+    Parameters
+    ----------
+    bearing : JournalBearing
+        The bearing (a ``ConicalBearing`` with the spec's ``sleeve_positions``).
+    reference : dict
+        The grid policy {coarse, dense, eps_threshold, cavitation} (``GradedReynoldsModel``).
+    spec : DatasetSpec
+        The layout.
+    out_dir : path-like
+        The dataset's folder (created; an existing one of another config is refused).
+    scheduler : str, default "local"
+        "local", "inline" or a Dask scheduler address.
+    n_workers : int or None, default None
+        Workers of the local cluster (None: Dask's default).
+    progress : bool, default True
+        Show a progress bar.
+    config : dict or None, default None
+        The config to record in the metadata (and hash).
+
+    Returns
+    -------
+    dict
+        The metadata (``read_metadata``) plus what this call did.
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.data import DatasetSpec, generate_dataset
+    >>> spec = DatasetSpec.from_cfg({
+    ...     "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
+    ...     "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01,
+    ...                            "core_fraction": 0.0, "n_per_side": 2}],
+    ...     "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
+    >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
+    >>> tmp = tempfile.mkdtemp()
+    >>> meta = generate_dataset(paper_bearing(), reference, spec, f"{tmp}/ds", scheduler="inline", progress=False)
+    >>> meta["n_samples"], meta["chunks_computed_this_run"]
+    (128, 1)
+    >>> shutil.rmtree(tmp)
     """
     out = Path(out_dir)
     # the whole config is checked (and the model built) before anything on disk is touched
@@ -327,6 +368,42 @@ def random_test_set(bearing: JournalBearing, reference: dict, spec: DatasetSpec,
     them between the training levels) and eps is relative to its clearance.
     Forces from the same reference model and grid policy.  Written
     atomically as one part file.
+
+    Parameters
+    ----------
+    bearing : JournalBearing
+        The bearing.
+    reference : dict
+        The grid policy {coarse, dense, eps_threshold, cavitation}.
+    spec : DatasetSpec
+        The dataset's layout (its domain).
+    out_dir : path-like
+        The test set's folder.
+    n : int or None, default None
+        Number of states (None: ``spec.n_test``).
+    seed : int or None, default None
+        Random seed (None: ``spec.test_seed``).
+
+    Returns
+    -------
+    dict
+        The test set's metadata (columns, number of samples, seed, checksums).
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.data import DatasetSpec, random_test_set
+    >>> spec = DatasetSpec.from_cfg({
+    ...     "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
+    ...     "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01,
+    ...                            "core_fraction": 0.0, "n_per_side": 2}],
+    ...     "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
+    >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
+    >>> tmp = tempfile.mkdtemp()
+    >>> random_test_set(paper_bearing(), reference, spec, f"{tmp}/test", n=20)["n_samples"]
+    20
+    >>> shutil.rmtree(tmp)
     """
     n = spec.n_test if n is None else int(n)
     seed = spec.test_seed if seed is None else int(seed)
