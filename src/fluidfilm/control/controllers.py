@@ -110,17 +110,14 @@ class ModelPredictiveController:
 
     Examples
     --------
-    >>> from fluidfilm import ConicalBearing, ConicalReynoldsSolver, Rotor
-    >>> from fluidfilm.control import ActiveBearingEnv, Scenario
-    >>> cone = ConicalBearing(length=0.05, diameter_small=0.04, diameter_large=0.05, clearance=100e-6,
-    ...                       speed_rpm=3000, viscosity=6.53e-4, sleeve_min=-0.5e-3, sleeve_max=0.5e-3)
-    >>> model = ConicalReynoldsSolver(cone, 16, 8)
-    >>> short = Scenario(t_end=0.04, ramp_time=0.04, control_interval=0.02, settle_time=0.0)   # two decisions
-    >>> env = ActiveBearingEnv(model, Rotor(mass=2.5), [-0.4e-3, 0.0, 0.4e-3], short)
-    >>> from fluidfilm.control import ModelPredictiveController, run_episode
-    >>> out = run_episode(env, ModelPredictiveController(model, horizon_intervals=1), keep_trajectory=False)
-    >>> out["controller"], [float(h["sleeve"]) for h in out["history"]]
-    ('mpc', [-0.0004, -0.0004])
+    The controller in an episode: see ``run_episode``.  It needs a model with a sleeve:
+
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.control import ModelPredictiveController
+    >>> ModelPredictiveController(ReynoldsSolver(paper_bearing(), 16, 8))
+    Traceback (most recent call last):
+    ...
+    ValueError: ReynoldsSolver has no sleeve input: an active (adjustable) bearing model is needed
     """
 
     name = "mpc"
@@ -178,17 +175,22 @@ def run_episode(env: ActiveBearingEnv, controller: Controller, keep_trajectory: 
 
     Examples
     --------
+    Two decisions of 0.02 s in a conical bearing, the sleeve held, then the model predictive
+    controller on the same episode (the reference solver as its model):
+
     >>> from fluidfilm import ConicalBearing, ConicalReynoldsSolver, Rotor
-    >>> from fluidfilm.control import ActiveBearingEnv, Scenario
-    >>> cone = ConicalBearing(length=0.05, diameter_small=0.04, diameter_large=0.05, clearance=100e-6,
-    ...                       speed_rpm=3000, viscosity=6.53e-4, sleeve_min=-0.5e-3, sleeve_max=0.5e-3)
-    >>> model = ConicalReynoldsSolver(cone, 16, 8)
-    >>> short = Scenario(t_end=0.04, ramp_time=0.04, control_interval=0.02, settle_time=0.0)   # two decisions
-    >>> env = ActiveBearingEnv(model, Rotor(mass=2.5), [-0.4e-3, 0.0, 0.4e-3], short)
-    >>> from fluidfilm.control import ConstantSleeve, run_episode
+    >>> from fluidfilm.control import (ActiveBearingEnv, ConstantSleeve, ModelPredictiveController, Scenario,
+    ...                                run_episode)
+    >>> solver = ConicalReynoldsSolver(ConicalBearing(0.05, 0.04, 0.05, 100e-6, 3000, 6.53e-4, sleeve_min=-0.5e-3,
+    ...                                               sleeve_max=0.5e-3), 16, 8)
+    >>> env = ActiveBearingEnv(solver, Rotor(mass=2.5), [-0.4e-3, 0.0, 0.4e-3],
+    ...                        Scenario(t_end=0.04, ramp_time=0.04, control_interval=0.02, settle_time=0.0))
     >>> out = run_episode(env, ConstantSleeve(1))
     >>> out["controller"], out["n_decisions"], out["contact"], out["x"].shape[1]
     ('constant_1', 2, False, 2)
+    >>> out = run_episode(env, ModelPredictiveController(solver, horizon_intervals=1), keep_trajectory=False)
+    >>> out["controller"], [float(h["sleeve"]) for h in out["history"]]
+    ('mpc', [-0.0004, -0.0004])
     """
     obs, _ = env.reset()
     t_parts: list[np.ndarray] = []

@@ -43,7 +43,7 @@ from fluidfilm import __version__, io
 from fluidfilm.core.bearing import JournalBearing, bearing_from_dict
 from fluidfilm.reynolds import GradedReynoldsModel
 from fluidfilm.data.schema import COLUMNS, file_sha256, part_name, write_part
-from fluidfilm.data.spec import DatasetSpec, check_reference, config_hash
+from fluidfilm.data.spec import DatasetSpec, check_reference, config_hash, example_spec
 
 # 2: the centre (eps = 0) once instead of once per angle; per-part checksums in the manifest
 FORMAT_VERSION = 2
@@ -255,15 +255,10 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
     --------
     >>> import shutil, tempfile
     >>> from fluidfilm import paper_bearing
-    >>> from fluidfilm.data import DatasetSpec, generate_dataset
-    >>> spec = DatasetSpec.from_cfg({
-    ...     "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
-    ...     "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01,
-    ...                            "core_fraction": 0.0, "n_per_side": 2}],
-    ...     "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
+    >>> from fluidfilm.data import example_spec, generate_dataset
     >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
     >>> tmp = tempfile.mkdtemp()
-    >>> meta = generate_dataset(paper_bearing(), reference, spec, f"{tmp}/ds", scheduler="inline", progress=False)
+    >>> meta = generate_dataset(paper_bearing(), reference, example_spec(), f"{tmp}/ds", scheduler="inline", progress=False)
     >>> meta["n_samples"], meta["chunks_computed_this_run"]
     (128, 1)
     >>> shutil.rmtree(tmp)
@@ -393,15 +388,10 @@ def random_test_set(bearing: JournalBearing, reference: dict, spec: DatasetSpec,
     --------
     >>> import shutil, tempfile
     >>> from fluidfilm import paper_bearing
-    >>> from fluidfilm.data import DatasetSpec, random_test_set
-    >>> spec = DatasetSpec.from_cfg({
-    ...     "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
-    ...     "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01,
-    ...                            "core_fraction": 0.0, "n_per_side": 2}],
-    ...     "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
+    >>> from fluidfilm.data import example_spec, random_test_set
     >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
     >>> tmp = tempfile.mkdtemp()
-    >>> random_test_set(paper_bearing(), reference, spec, f"{tmp}/test", n=20)["n_samples"]
+    >>> random_test_set(paper_bearing(), reference, example_spec(), f"{tmp}/test", n=20)["n_samples"]
     20
     >>> shutil.rmtree(tmp)
     """
@@ -438,6 +428,40 @@ def random_test_set(bearing: JournalBearing, reference: dict, spec: DatasetSpec,
 
 
 N_TEST_SLEEVES = 33  # sleeve levels of the test set: between the grid's, so the test checks interpolation in s
+
+
+def example_dataset(out_dir, test_set: bool = False) -> Path:
+    """The ``example_spec`` dataset of ``paper_bearing()`` (16 x 8 reference grid), for examples and smoke runs.
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Folder to write (as ``generate_dataset``, inline: no Dask cluster).
+    test_set : bool, default False
+        Write the random test set of the layout (``random_test_set``, 10 states) instead.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out_dir``.
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm.data import example_dataset, read_metadata
+    >>> folder = example_dataset(tempfile.mkdtemp())
+    >>> read_metadata(folder)["reference"]["coarse"]
+    [16, 8]
+    >>> shutil.rmtree(folder)
+    """
+    from fluidfilm.core.bearing import paper_bearing
+
+    reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
+    if test_set:
+        random_test_set(paper_bearing(), reference, example_spec(), out_dir)
+    else:
+        generate_dataset(paper_bearing(), reference, example_spec(), out_dir, scheduler="inline", progress=False)
+    return Path(out_dir)
 
 
 def _random_states(spec: DatasetSpec, c: float, n: int, rng):

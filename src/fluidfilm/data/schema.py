@@ -101,19 +101,11 @@ def verify_dataset(path) -> dict:
     Examples
     --------
     >>> import shutil, tempfile
-    >>> from fluidfilm import paper_bearing
-    >>> from fluidfilm.data import DatasetSpec, generate_dataset
-    >>> spec = DatasetSpec.from_cfg({
-    ...     "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
-    ...     "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01,
-    ...                            "core_fraction": 0.0, "n_per_side": 2}],
-    ...     "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
-    >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
-    >>> tmp = tempfile.mkdtemp()
-    >>> meta = generate_dataset(paper_bearing(), reference, spec, f"{tmp}/ds", scheduler="inline", progress=False)
-    >>> verify_dataset(f"{tmp}/ds")["n_samples"]
-    128
-    >>> shutil.rmtree(tmp)
+    >>> from fluidfilm.data import example_dataset, verify_dataset
+    >>> folder = example_dataset(tempfile.mkdtemp())
+    >>> list(verify_dataset(folder)["parts"])
+    ['part-00000.parquet']
+    >>> shutil.rmtree(folder)
     """
     path = Path(path)
     meta_file = path / "_metadata.json"
@@ -162,19 +154,11 @@ def read_metadata(path) -> dict:
     Examples
     --------
     >>> import shutil, tempfile
-    >>> from fluidfilm import paper_bearing
-    >>> from fluidfilm.data import DatasetSpec, generate_dataset
-    >>> spec = DatasetSpec.from_cfg({
-    ...     "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
-    ...     "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01,
-    ...                            "core_fraction": 0.0, "n_per_side": 2}],
-    ...     "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
-    >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
-    >>> tmp = tempfile.mkdtemp()
-    >>> meta = generate_dataset(paper_bearing(), reference, spec, f"{tmp}/ds", scheduler="inline", progress=False)
-    >>> read_metadata(f"{tmp}/ds")["n_samples"]
+    >>> from fluidfilm.data import example_dataset, read_metadata
+    >>> folder = example_dataset(tempfile.mkdtemp())
+    >>> read_metadata(folder)["n_samples"]
     128
-    >>> shutil.rmtree(tmp)
+    >>> shutil.rmtree(folder)
     """
     path = Path(path)
     meta_file = path / "_metadata.json"
@@ -210,20 +194,12 @@ def load_dataset(path, columns=TRAINING_COLUMNS) -> tuple[pd.DataFrame, dict]:
     Examples
     --------
     >>> import shutil, tempfile
-    >>> from fluidfilm import paper_bearing
-    >>> from fluidfilm.data import DatasetSpec, generate_dataset
-    >>> spec = DatasetSpec.from_cfg({
-    ...     "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
-    ...     "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01,
-    ...                            "core_fraction": 0.0, "n_per_side": 2}],
-    ...     "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
-    >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
-    >>> tmp = tempfile.mkdtemp()
-    >>> meta = generate_dataset(paper_bearing(), reference, spec, f"{tmp}/ds", scheduler="inline", progress=False)
-    >>> rows, meta = load_dataset(f"{tmp}/ds")
+    >>> from fluidfilm.data import example_dataset, load_dataset
+    >>> folder = example_dataset(tempfile.mkdtemp())
+    >>> rows, meta = load_dataset(folder)
     >>> rows.shape, list(rows.columns)
     ((128, 7), ['X1', 'X2', 'V1', 'V2', 'F1', 'F2', 'eps'])
-    >>> shutil.rmtree(tmp)
+    >>> shutil.rmtree(folder)
     """
     meta = read_metadata(path)
     verify_dataset(path)  # checksums recorded at generation; names a damaged file
@@ -252,19 +228,11 @@ def load_test_set(path) -> pd.DataFrame:
     Examples
     --------
     >>> import shutil, tempfile
-    >>> from fluidfilm import paper_bearing
-    >>> from fluidfilm.data import DatasetSpec, load_test_set, random_test_set
-    >>> spec = DatasetSpec.from_cfg({
-    ...     "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
-    ...     "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01,
-    ...                            "core_fraction": 0.0, "n_per_side": 2}],
-    ...     "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
-    >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
-    >>> tmp = tempfile.mkdtemp()
-    >>> _ = random_test_set(paper_bearing(), reference, spec, f"{tmp}/test")
-    >>> load_test_set(f"{tmp}/test").shape
+    >>> from fluidfilm.data import example_dataset, load_test_set
+    >>> folder = example_dataset(tempfile.mkdtemp(), test_set=True)
+    >>> load_test_set(folder).shape
     (10, 10)
-    >>> shutil.rmtree(tmp)
+    >>> shutil.rmtree(folder)
     """
     verify_dataset(path)
     return pd.read_parquet(Path(path))
@@ -306,11 +274,12 @@ def training_domain(meta: dict) -> list[list[float]]:
     Parameters
     ----------
     meta : dict
-        The dataset's metadata (``read_metadata``).
+        Metadata with the layout under ``spec`` (as ``read_metadata`` gives it).
 
     Returns
     -------
     list of [float, float, float]
+        One row per velocity section, in the layout's order.
 
     Examples
     --------

@@ -267,6 +267,27 @@ class DatasetSpec:
         return asdict(self)
 
 
+def example_spec() -> DatasetSpec:
+    """A tiny layout for examples and smoke runs: 8 positions at eps 0.1 and 0.5, 16 velocity pairs each.
+
+    Returns
+    -------
+    DatasetSpec
+        128 samples (a second or so with a 16 x 8 reference grid), a test set of 10.
+
+    Examples
+    --------
+    >>> from fluidfilm.data import example_spec
+    >>> example_spec().n_samples(clearance=120e-6)
+    128
+    """
+    return DatasetSpec.from_cfg({
+        "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
+        "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01, "core_fraction": 0.0,
+                               "n_per_side": 2}],
+        "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
+
+
 CAVITATION_MODELS = ("gumbel", "swift-stieber")
 
 

@@ -155,9 +155,9 @@ class GeneralParams(NamedTuple):
     Parameters
     ----------
     n_theta : int
-        Circumferential nodes.
+        Number of angles of the periodic grid.
     cavitation : int
-        A ``Cavitation`` value.
+        The cavitation rule's code (``Cavitation``).
     sin_node, cos_node, sin_face, cos_face : ndarray
         sin/cos theta at the nodes and at the faces.
     c_node, c_half : ndarray

@@ -336,6 +336,13 @@ class SurrogateForceModel:
     SurrogateForceModel('tiny', 1 network(s), boundaries=[], 58 parameters)
     >>> model.forces([0.0, 60e-6], [0.0, 0.0]).round(2).tolist()      # [N]
     [4.63, -2.58]
+    >>> import tempfile
+    >>> from fluidfilm import load_surrogate
+    >>> folder = tempfile.mkdtemp()
+    >>> model.save(f"{folder}/tiny")                   # model.json and surrogate.npz
+    >>> again = load_surrogate(f"{folder}/tiny")
+    >>> again.name, bool(np.array_equal(again.forces(x, v), model.forces(x, v)))
+    ('tiny', True)
     """
 
     def __init__(self, bearing: JournalBearing | ConicalBearing, networks: list, scalings: list[Scaling], activation: str,
@@ -606,23 +613,11 @@ def load_surrogate(path) -> SurrogateForceModel:
 
     Examples
     --------
+    A model saved and loaded again: see ``SurrogateForceModel``.  A folder without one:
+
     >>> import tempfile
-    >>> import numpy as np
-    >>> from fluidfilm import ReynoldsSolver, SurrogateForceModel, paper_bearing
-    >>> from fluidfilm.perf import sample_states
-    >>> from fluidfilm.surrogate import Scaling
-    >>> b = paper_bearing()
-    >>> x, v = sample_states(b.clearance, n=200, v_max=0.01)
-    >>> scaling = Scaling.fit("standard", x, v, ReynoldsSolver(b, 16, 8).forces(x, v), b.clearance, b.omega,
-    ...                       b.force_scale)
-    >>> rng = np.random.default_rng(0)                 # an untrained 4-8-2 network, for the interface only
-    >>> layers = [(0.5 * rng.normal(size=(8, 4)), np.zeros(8)), (0.5 * rng.normal(size=(2, 8)), np.zeros(2))]
-    >>> model = SurrogateForceModel(b, [layers], [scaling], "tanh", name="tiny")
+    >>> from fluidfilm.surrogate import load_surrogate
     >>> folder = tempfile.mkdtemp()
-    >>> model.save(f"{folder}/tiny")
-    >>> again = load_surrogate(f"{folder}/tiny")
-    >>> again.name, bool(np.array_equal(again.forces(x, v), model.forces(x, v)))
-    ('tiny', True)
     >>> load_surrogate(f"{folder}/none")
     Traceback (most recent call last):
     ...

@@ -129,15 +129,15 @@ class Scaling:
     --------
     >>> import numpy as np
     >>> from fluidfilm import ReynoldsSolver, paper_bearing
-    >>> from fluidfilm.perf import sample_states
     >>> from fluidfilm.surrogate import Scaling
-    >>> b = paper_bearing()
-    >>> x, v = sample_states(b.clearance, n=200, v_max=0.01)
-    >>> s = Scaling.fit("physics", x, v, ReynoldsSolver(b, 16, 8).forces(x, v), b.clearance, b.omega,
-    ...                 b.force_scale)
+    >>> bearing = paper_bearing()
+    >>> X = np.array([[0.0, 30e-6], [40e-6, 0.0], [0.0, -80e-6]])   # [m]
+    >>> V = np.array([[0.0, 0.0], [0.01, 0.0], [0.0, -0.02]])       # [m/s]
+    >>> F = ReynoldsSolver(bearing, 16, 8).forces(X, V)
+    >>> s = Scaling.fit("physics", X, V, F, bearing.clearance, bearing.omega, bearing.force_scale)
     >>> s.kind, s.in_mean.shape, s.out_std.shape
     ('physics', (4,), (2,))
-    >>> Scaling.fit("log", x, v, x, b.clearance, b.omega, b.force_scale)
+    >>> Scaling.fit("log", X, V, F, bearing.clearance, bearing.omega, bearing.force_scale)
     Traceback (most recent call last):
     ...
     ValueError: unknown scaling 'log'; choose one of ('standard', 'physics', 'physics_v', 'minmax')
