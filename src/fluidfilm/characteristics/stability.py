@@ -33,7 +33,29 @@ from fluidfilm.characteristics.static import equilibrium
 
 
 def lund(d: dict) -> dict:
-    """Whirl ratio gamma, K0 and the dimensionless critical mass of coefficients ``d`` (dimensionless)."""
+    """Whirl ratio gamma, K0 and the dimensionless critical mass of coefficients ``d`` (dimensionless).
+
+    Parameters
+    ----------
+    d : dict
+        Dimensionless coefficients ``Kxx, Kxy, Kyx, Kyy`` (K c/W) and ``Cxx, Cxy, Cyx, Cyy``
+        (C c omega/W), with K_ij = -dF_i/dX_j (x = X1, y = X2, +X2 along gravity).
+
+    Returns
+    -------
+    dict
+        ``K0``, ``whirl_ratio`` gamma and ``critical_mass_bar`` (m c omega^2/W at the onset of
+        whirl); gamma = 0 and an infinite critical mass where the rotor is stable for any mass.
+
+    Examples
+    --------
+    >>> from fluidfilm.characteristics import lund
+    >>> iso = {"Kxx": 1.0, "Kyy": 1.0, "Cxx": 2.0, "Cyy": 2.0, "Kxy": 0.0, "Kyx": 0.0, "Cxy": 0.0, "Cyx": 0.0}
+    >>> lund(iso)                                   # no cross-coupling: stable for any mass
+    {'K0': 1.0, 'whirl_ratio': 0.0, 'critical_mass_bar': inf}
+    >>> {k: round(v, 3) for k, v in lund({**iso, "Kxy": 1.0, "Kyx": -1.0}).items()}   # gamma = q/c, M = k c^2/q^2
+    {'K0': 1.0, 'whirl_ratio': 0.5, 'critical_mass_bar': 4.0}
+    """
     kxx, kxy, kyx, kyy = d["Kxx"], d["Kxy"], d["Kyx"], d["Kyy"]
     cxx, cxy, cyx, cyy = d["Cxx"], d["Cxy"], d["Cyx"], d["Cyy"]
     k0 = (kxx * cyy + kyy * cxx - kxy * cyx - kyx * cxy) / (cxx + cyy)

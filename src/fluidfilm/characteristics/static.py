@@ -31,7 +31,45 @@ FEEDS = ("none", "max-film")
 
 
 def film_solver(bearing, cavitation: str = "gumbel", feed="none", n_theta: int = 90, n_z: int = 41):
-    """The reference film model for a feed assumption (see module doc)."""
+    """The reference film model for a feed assumption (see module doc).
+
+    Parameters
+    ----------
+    bearing : JournalBearing
+        The bearing.
+    cavitation : str, default "gumbel"
+        Cavitation rule (see ``ReynoldsSolver``).
+    feed : {"none", "max-film"} or float, default "none"
+        No groove, a groove at the supply pressure on the line of maximum film thickness
+        (theta = pi for a journal on +X2), or a groove fixed at this angle [deg] from +X2
+        towards +X1.
+    n_theta : int, default 90
+        Circumferential nodes (even where there is a groove).
+    n_z : int, default 41
+        Axial nodes.
+
+    Returns
+    -------
+    ReynoldsSolver or GroovedReynoldsSolver
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``feed`` or an odd ``n_theta`` with a groove (both named).
+
+    Examples
+    --------
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.characteristics import film_solver
+    >>> film_solver(paper_bearing(), n_theta=24, n_z=12)
+    ReynoldsSolver(24x12, cavitation='gumbel')
+    >>> type(film_solver(paper_bearing(), feed="max-film", n_theta=24, n_z=12)).__name__
+    'GroovedReynoldsSolver'
+    >>> film_solver(paper_bearing(), feed="top")
+    Traceback (most recent call last):
+    ...
+    ValueError: feed must be one of ('none', 'max-film') or a groove angle in degrees, got 'top'
+    """
     if feed == "none":
         return ReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation)
     if feed == "max-film":
@@ -54,7 +92,40 @@ def attitude_deg(x, force) -> float:
 
 
 def static_point(solver, eps: float) -> dict:
-    """Load, Sommerfeld number, attitude, friction, power loss, flows with the journal at eps on +X2."""
+    """Load, Sommerfeld number, attitude, friction, power loss, flows with the journal at eps on +X2.
+
+    One row of a design table: the journal is placed at eccentricity ``eps`` on +X2 (at rest) and
+    the load is what the film carries there.
+
+    Parameters
+    ----------
+    solver : ReynoldsSolver or GroovedReynoldsSolver
+        The film model (``film_solver``); it needs ``pressure`` and ``mesh``.
+    eps : float
+        Eccentricity ratio in [0, 1).
+
+    Returns
+    -------
+    dict
+        ``eps``, ``load_N`` [N], ``attitude_deg`` (angle between load line and line of centres
+        [deg], >= 0; NaN at no load), ``friction_N`` [N], ``power_W`` [W], ``side_flow_m3s`` and
+        ``feed_flow_m3s`` [m^3/s]; where the load is positive also ``sommerfeld`` and Raimondi &
+        Boyd's ``friction_variable``, ``flow_variable`` and ``side_flow_ratio``.
+
+    Raises
+    ------
+    ValueError
+        For ``eps`` outside [0, 1) (named).
+
+    Examples
+    --------
+    >>> from fluidfilm import JournalBearing, ReynoldsSolver
+    >>> from fluidfilm.characteristics import static_point
+    >>> b = JournalBearing(length=0.02, diameter=0.04, clearance=50e-6, speed_rpm=6000, viscosity=0.02)
+    >>> row = static_point(ReynoldsSolver(b, 24, 12), 0.5)
+    >>> round(row["load_N"], 1), round(row["sommerfeld"], 3), round(row["attitude_deg"], 1)
+    (476.4, 0.537, 58.1)
+    """
     if not 0.0 <= eps < 1.0:
         raise ValueError(f"eccentricity ratio must lie in [0, 1), got {eps!r}")
     b = solver.bearing
@@ -77,7 +148,29 @@ def static_point(solver, eps: float) -> dict:
 
 
 def sommerfeld_sweep(solver, eps_values) -> list[dict]:
-    """``static_point`` at every eccentricity (the eps- and attitude-vs-S tables)."""
+    """``static_point`` at every eccentricity (the eps- and attitude-vs-S tables).
+
+    Parameters
+    ----------
+    solver : ReynoldsSolver or GroovedReynoldsSolver
+        The film model (``film_solver``).
+    eps_values : iterable of float
+        Eccentricity ratios in [0, 1).
+
+    Returns
+    -------
+    list of dict
+        One ``static_point`` row per eccentricity, in the given order.
+
+    Examples
+    --------
+    >>> from fluidfilm import JournalBearing, ReynoldsSolver
+    >>> from fluidfilm.characteristics import sommerfeld_sweep
+    >>> b = JournalBearing(length=0.02, diameter=0.04, clearance=50e-6, speed_rpm=6000, viscosity=0.02)
+    >>> rows = sommerfeld_sweep(ReynoldsSolver(b, 24, 12), [0.3, 0.6])
+    >>> rows[0]["sommerfeld"] > rows[1]["sommerfeld"]        # S falls as eps grows
+    True
+    """
     return [static_point(solver, float(e)) for e in eps_values]
 
 

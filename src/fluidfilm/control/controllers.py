@@ -36,7 +36,22 @@ class Controller(Protocol):
 
 
 class ConstantSleeve:
-    """No control: always the same sleeve position."""
+    """No control: always the same sleeve position.
+
+    Parameters
+    ----------
+    action : int
+        The sleeve index held.
+    name : str or None, default None
+        Display name; None: ``"constant_<action>"``.
+
+    Examples
+    --------
+    >>> from fluidfilm.control import ConstantSleeve
+    >>> hold = ConstantSleeve(1)
+    >>> hold.name, hold(None, None)
+    ('constant_1', 1)
+    """
 
     def __init__(self, action: int, name: str | None = None):
         self.action = int(action)
@@ -47,7 +62,22 @@ class ConstantSleeve:
 
 
 class DQNController:
-    """A trained stable-baselines3 DQN agent, acting greedily."""
+    """A trained stable-baselines3 DQN agent, acting greedily.
+
+    Parameters
+    ----------
+    agent : stable_baselines3.DQN
+        Anything with ``predict(obs, deterministic=True) -> (action, state)``.
+
+    Examples
+    --------
+    >>> from fluidfilm.control import DQNController
+    >>> class Always2:                                 # stands in for a trained agent
+    ...     def predict(self, obs, deterministic=True):
+    ...         return 2, None
+    >>> DQNController(Always2())(obs=None, env=None)
+    2
+    """
 
     name = "dqn"
 
@@ -60,7 +90,35 @@ class DQNController:
 
 
 class ModelPredictiveController:
-    """Shooting MPC over constant sleeve holds, with its own force model."""
+    """Shooting MPC over constant sleeve holds, with its own force model.
+
+    At each decision it integrates, from the measured state, every sleeve position held for
+    ``horizon_intervals`` control intervals at the present imbalance, and takes the one of least
+    predicted cost (the environment's own; contact costs ``contact_penalty``).
+
+    Parameters
+    ----------
+    model : AdjustableForceModel
+        The controller's own force model (a surrogate, or the reference for a perfect model).
+    horizon_intervals : int, default 2
+        Prediction horizon in control intervals (>= 1).
+
+    Raises
+    ------
+    ValueError
+        For a model without a sleeve input, or a horizon below 1.
+
+    Examples
+    --------
+    The controller in an episode: see ``run_episode``.  It needs a model with a sleeve:
+
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.control import ModelPredictiveController
+    >>> ModelPredictiveController(ReynoldsSolver(paper_bearing(), 16, 8))
+    Traceback (most recent call last):
+    ...
+    ValueError: ReynoldsSolver has no sleeve input: an active (adjustable) bearing model is needed
+    """
 
     name = "mpc"
 
@@ -98,6 +156,41 @@ def run_episode(env: ActiveBearingEnv, controller: Controller, keep_trajectory: 
 
     ``decision_ms``: wall time the controller took per decision (median), the
     figure that matters for running it on-line.
+
+    Parameters
+    ----------
+    env : ActiveBearingEnv
+        The environment (reset here).
+    controller : Controller
+        A named callable ``controller(obs, env) -> action index``.
+    keep_trajectory : bool, default True
+        Also return the whole trajectory (``t`` [s], ``x`` [m], ``v`` [m/s]).
+
+    Returns
+    -------
+    dict
+        ``controller``, ``return``, ``n_decisions``, ``contact``, ``max_amplitude_m``,
+        ``final_amplitude_m``, ``mean_friction_power_W``, ``sleeve_travel_m``,
+        ``decision_ms_median``, ``history`` (one record per decision) and, when kept, ``t``, ``x``, ``v``.
+
+    Examples
+    --------
+    Two decisions of 0.02 s in a conical bearing, the sleeve held, then the model predictive
+    controller on the same episode (the reference solver as its model):
+
+    >>> from fluidfilm import ConicalBearing, ConicalReynoldsSolver, Rotor
+    >>> from fluidfilm.control import (ActiveBearingEnv, ConstantSleeve, ModelPredictiveController, Scenario,
+    ...                                run_episode)
+    >>> solver = ConicalReynoldsSolver(ConicalBearing(0.05, 0.04, 0.05, 100e-6, 3000, 6.53e-4, sleeve_min=-0.5e-3,
+    ...                                               sleeve_max=0.5e-3), 16, 8)
+    >>> env = ActiveBearingEnv(solver, Rotor(mass=2.5), [-0.4e-3, 0.0, 0.4e-3],
+    ...                        Scenario(t_end=0.04, ramp_time=0.04, control_interval=0.02, settle_time=0.0))
+    >>> out = run_episode(env, ConstantSleeve(1))
+    >>> out["controller"], out["n_decisions"], out["contact"], out["x"].shape[1]
+    ('constant_1', 2, False, 2)
+    >>> out = run_episode(env, ModelPredictiveController(solver, horizon_intervals=1), keep_trajectory=False)
+    >>> out["controller"], [float(h["sleeve"]) for h in out["history"]]
+    ('mpc', [-0.0004, -0.0004])
     """
     obs, _ = env.reset()
     t_parts: list[np.ndarray] = []

@@ -50,7 +50,47 @@ from fluidfilm.rotor.model import ramped
 
 @dataclass(frozen=True)
 class Scenario:
-    """The Fig. 5 scenario and the controller's timing; SI units."""
+    """The Fig. 5 scenario and the controller's timing; SI units.
+
+    Parameters
+    ----------
+    imbalance_start : float, default 2e-4
+        Total rotor imbalance at t = 0 [kg m].
+    imbalance_end : float, default 2e-3
+        Total rotor imbalance at t = ``ramp_time`` [kg m].
+    ramp_time : float, default 5.0
+        Duration of the imbalance ramp [s].
+    t_end : float, default 5.0
+        Episode length [s], a whole number of control intervals.
+    control_interval : float, default 0.02
+        Time between decisions [s], a whole number of ``record_every`` steps.
+    settle_time : float, default 0.2
+        Run before t = 0 at the initial sleeve and imbalance [s].
+    dt : float, default 1e-5
+        RK4 step [s].
+    record_every : int, default 10
+        Steps between recorded states.
+    eps_stop : float, default 0.95
+        Eccentricity ratio (of the current clearance) that ends the episode as a contact.
+    initial_action : int or None, default None
+        Sleeve index at t = 0; None: the position closest to s = 0.
+
+    Raises
+    ------
+    ValueError
+        Naming the field: non-positive times, negative imbalances, or intervals that are not whole
+        numbers of steps.
+
+    Examples
+    --------
+    >>> from fluidfilm.control import Scenario
+    >>> Scenario().n_decisions
+    250
+    >>> Scenario(control_interval=0.015)
+    Traceback (most recent call last):
+    ...
+    ValueError: scenario.t_end=5.0 must be a whole number of control intervals (0.015 s)
+    """
 
     imbalance_start: float = 2.0e-4      # kg m, total rotor imbalance at t = 0
     imbalance_end: float = 2.0e-3        # kg m, at t = ramp_time
@@ -88,6 +128,26 @@ class Scenario:
 
 @dataclass(frozen=True)
 class RewardWeights:
+    """Weights of the environment's cost per interval (module doc); the reward is its negative.
+
+    Parameters
+    ----------
+    amplitude_ref : float, default 0.2
+        a_ref, the orbit amplitude of unit cost, as a fraction of the nominal clearance.
+    friction : float, default 1.0
+        w_friction, weight of the friction power relative to its nominal value.
+    move : float, default 0.5
+        w_move, weight of a sleeve move relative to the whole travel.
+    contact_penalty : float, default 100.0
+        Cost added when the episode ends in contact.
+
+    Examples
+    --------
+    >>> from fluidfilm.control import RewardWeights
+    >>> RewardWeights(friction=0.0)
+    RewardWeights(amplitude_ref=0.2, friction=0.0, move=0.5, contact_penalty=100.0)
+    """
+
     amplitude_ref: float = 0.2       # a_ref as a fraction of the nominal clearance
     friction: float = 1.0            # w_friction
     move: float = 0.5                # w_move
@@ -95,19 +155,100 @@ class RewardWeights:
 
 
 def friction_power(bearing, clearance: float, eps: float) -> float:
-    """Viscous power loss of the film [W]: Petroff's 2 pi mu omega^2 R^3 L / c with 1/sqrt(1 - eps^2)."""
+    """Viscous power loss of the film [W]: Petroff's 2 pi mu omega^2 R^3 L / c with 1/sqrt(1 - eps^2).
+
+    Parameters
+    ----------
+    bearing : JournalBearing or ConicalBearing
+        Gives mu, omega, R (the mean radius of a cone) and L.
+    clearance : float
+        Radial clearance [m] (of the current sleeve position).
+    eps : float
+        Eccentricity ratio (1 - eps^2 is floored at 1e-6).
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.control import friction_power
+    >>> round(friction_power(paper_bearing(), 120e-6, 0.0), 3), round(friction_power(paper_bearing(), 120e-6, 0.6), 3)
+    (1.728, 2.16)
+    """
     r = bearing.radius
     return 2 * math.pi * bearing.viscosity * bearing.omega**2 * r**3 * bearing.length / (
         clearance * math.sqrt(max(1.0 - eps * eps, 1e-6)))
 
 
 def orbit_amplitude(x: np.ndarray) -> float:
-    """Largest distance of the journal from the mean position of a stretch of orbit [m]."""
+    """Largest distance of the journal from the mean position of a stretch of orbit [m].
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, 2)
+        Journal positions [m].
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fluidfilm.control import orbit_amplitude
+    >>> orbit_amplitude(np.array([[1e-5, 0.0], [-1e-5, 0.0], [0.0, 1e-5], [0.0, -1e-5]]))
+    1e-05
+    """
     return float(np.max(np.linalg.norm(x - x.mean(axis=0), axis=1)))
 
 
 class ActiveBearingEnv(gym.Env):
-    """Rotor in an active bearing under a growing imbalance; a discrete sleeve controller acts on it."""
+    """Rotor in an active bearing under a growing imbalance; a discrete sleeve controller acts on it.
+
+    A gymnasium environment (module doc): 7 observations, ``Discrete(len(sleeve_positions))``
+    actions, one decision per ``scenario.control_interval``.
+
+    Parameters
+    ----------
+    model : AdjustableForceModel
+        Force model of a conical bearing with a sleeve input (reference solver or surrogate).
+    rotor : Rotor
+        What the bearing carries (mass share, gravity along +X2, external force); its own imbalance
+        is ignored.
+    sleeve_positions : sequence of float
+        At least two increasing sleeve positions [m] inside the bearing's travel.
+    scenario : Scenario, default Scenario()
+        The imbalance ramp and the timing.
+    weights : RewardWeights, default RewardWeights()
+        The cost's weights.
+    load_share : float, default 1.0
+        Fraction in (0, 1] of the scenario's total imbalance this bearing carries.
+
+    Raises
+    ------
+    ValueError
+        For a model without a sleeve input or of a non-conical bearing, sleeve positions that are
+        not increasing or outside the travel, a ``load_share`` outside (0, 1] or a bad
+        ``initial_action`` (each named).
+
+    Examples
+    --------
+    >>> from fluidfilm import ConicalBearing, ConicalReynoldsSolver, Rotor
+    >>> from fluidfilm.control import ActiveBearingEnv, Scenario
+    >>> cone = ConicalBearing(length=0.05, diameter_small=0.04, diameter_large=0.05, clearance=100e-6,
+    ...                       speed_rpm=3000, viscosity=6.53e-4, sleeve_min=-0.5e-3, sleeve_max=0.5e-3)
+    >>> model = ConicalReynoldsSolver(cone, 16, 8)
+    >>> short = Scenario(t_end=0.04, ramp_time=0.04, control_interval=0.02, settle_time=0.0)   # two decisions
+    >>> env = ActiveBearingEnv(model, Rotor(mass=2.5), [-0.4e-3, 0.0, 0.4e-3], short)
+    >>> obs, info = env.reset()
+    >>> obs.shape, env.action_space
+    ((7,), Discrete(3))
+    >>> obs, reward, terminated, truncated, info = env.step(1)     # hold the sleeve at s = 0
+    >>> round(reward, 3), terminated, truncated
+    (-4.645, False, False)
+    """
 
     metadata: dict = {"render_modes": []}
 

@@ -55,13 +55,48 @@ class _FilmScales:
 
 @dataclass(frozen=True)
 class JournalBearing(_FilmScales):
-    """A plain cylindrical journal bearing with a fixed sleeve.
+    """A plain cylindrical journal bearing with a fixed sleeve (frozen; SI units).
 
-    Parameters (SI): ``length`` L [m], ``diameter`` D [m] (of the bearing bore,
-    R = D/2 is used as the film radius), ``clearance`` c [m] (radial),
-    ``speed_rpm`` shaft speed [rev/min], ``viscosity`` mu [Pa s],
-    ``supply_pressure`` gauge pressure at the supply end z = 0 [Pa],
-    ``density`` rho [kg/m^3] (only used for the Couette Reynolds number).
+    The frame of every force model built on it: X1 horizontal, X2 along gravity; the angle theta
+    runs from +X2 towards +X1 and the journal surface moves towards +theta (docs/conventions.md).
+
+    Parameters
+    ----------
+    length : float
+        Axial length L [m].
+    diameter : float
+        Bore diameter D [m]; R = D/2 is the film radius.
+    clearance : float
+        Radial clearance c [m], far smaller than R.
+    speed_rpm : float
+        Shaft speed [rpm].
+    viscosity : float
+        Dynamic viscosity mu of the lubricant [Pa s].
+    supply_pressure : float, default 0.0
+        Gauge pressure at the supply end z = 0 [Pa], >= 0.
+    density : float, default 992.0
+        Lubricant density rho [kg/m^3] (only used for the Couette Reynolds number).
+
+    Raises
+    ------
+    ValueError
+        Naming the field, for a value that is not a finite number, a length, diameter, clearance,
+        viscosity or density <= 0, a negative supply pressure, a speed that is not a positive
+        number of rpm, or a clearance not far smaller than the radius.  (Target API of issue #26:
+        the api branch tightens this validation - speed 0, booleans, text, large clearances.)
+
+    Examples
+    --------
+    >>> from fluidfilm import JournalBearing
+    >>> b = JournalBearing(length=0.02, diameter=0.04, clearance=50e-6, speed_rpm=6000, viscosity=0.02)
+    >>> round(b.omega, 3), b.slenderness          # [rad/s], L/D
+    (628.319, 0.5)
+    >>> round(b.sommerfeld(1000.0), 4)            # S under 1000 N
+    0.256
+    >>> JournalBearing(0.02, 0.04, -50e-6, 6000, 0.02)
+    Traceback (most recent call last):
+    ...
+    ValueError: clearance must be a positive finite number, got -5e-05
     """
 
     length: float
@@ -107,6 +142,7 @@ class JournalBearing(_FilmScales):
         return (self.radius / self.clearance) ** 2 * self.viscosity * (self.speed_rpm / 60.0) / p_mean
 
     def to_dict(self) -> dict:
+        """The fields as a plain dict (what ``from_dict`` and the dataset metadata take)."""
         return asdict(self)
 
     @classmethod
@@ -120,7 +156,27 @@ class JournalBearing(_FilmScales):
 
 
 def paper_bearing(supply_pressure: float = 0.0) -> JournalBearing:
-    """The paper's test bearing (CONVENTIONS.md): L=64 mm, D=40 mm, c=120 um, 3000 rpm, water at 40 C."""
+    """The paper's test bearing (docs/conventions.md): L=64 mm, D=40 mm, c=120 um, 3000 rpm, water at 40 C.
+
+    Parameters
+    ----------
+    supply_pressure : float, default 0.0
+        Gauge pressure at the supply end z = 0 [Pa].
+
+    Returns
+    -------
+    JournalBearing
+        mu = 6.53e-4 Pa s, rho = 992 kg/m^3.
+
+    Examples
+    --------
+    >>> from fluidfilm import paper_bearing
+    >>> b = paper_bearing()
+    >>> b.length, b.diameter, b.clearance, b.speed_rpm
+    (0.064, 0.04, 0.00012, 3000.0)
+    >>> f"{b.force_scale:.4g}"                    # mu omega R L (R/c)^2 [N]
+    '7.294'
+    """
     return JournalBearing(
         length=0.064,
         diameter=0.040,
@@ -134,7 +190,7 @@ def paper_bearing(supply_pressure: float = 0.0) -> JournalBearing:
 
 @dataclass(frozen=True)
 class ConicalBearing(_FilmScales):
-    """An adjustable conical journal bearing: the film lies between two coaxial cones.
+    """An adjustable conical journal bearing: the film lies between two coaxial cones (frozen; SI units).
 
     The journal radius grows linearly along the axis, from ``diameter_small/2``
     at the supply end z = 0 to ``diameter_large/2`` at z = L (half-cone angle
@@ -149,7 +205,49 @@ class ConicalBearing(_FilmScales):
     ``clearance_taper`` is the radial clearance at z = L minus that at z = 0
     (a sleeve cone angle slightly off the journal's); 0 for matched cones,
     where the film thickness does not depend on z.  ``sleeve_min`` and
-    ``sleeve_max`` bound the sleeve travel [m].
+    ``sleeve_max`` bound the sleeve travel [m].  The frame (X1, X2 with +X2 along gravity) is the
+    journal bearing's.
+
+    Parameters
+    ----------
+    length : float
+        Axial length L [m].
+    diameter_small : float
+        Journal diameter at the supply end z = 0 [m].
+    diameter_large : float
+        Journal diameter at z = L [m], >= ``diameter_small``.
+    clearance : float
+        Nominal radial clearance c at the supply end, sleeve at s = 0 [m].
+    speed_rpm : float
+        Shaft speed [rpm], >= 0.
+    viscosity : float
+        Dynamic viscosity mu [Pa s].
+    supply_pressure : float, default 0.0
+        Gauge pressure at z = 0 [Pa], >= 0.
+    density : float, default 992.0
+        Lubricant density [kg/m^3].
+    clearance_taper : float, default 0.0
+        Radial clearance at z = L minus that at z = 0 [m].
+    sleeve_min, sleeve_max : float, default 0.0
+        Bounds of the sleeve's axial travel s [m].
+
+    Raises
+    ------
+    ValueError
+        Naming the field, for a non-finite or non-positive geometry or viscosity, a negative speed
+        or supply pressure, ``diameter_large < diameter_small``, ``sleeve_min > sleeve_max``, a sleeve
+        position in the travel that closes the film, or a clearance not far smaller than the radius.
+
+    Examples
+    --------
+    >>> import math
+    >>> from fluidfilm import ConicalBearing
+    >>> b = ConicalBearing(length=0.05, diameter_small=0.04, diameter_large=0.05, clearance=100e-6,
+    ...                    speed_rpm=3000, viscosity=6.53e-4, sleeve_min=-0.5e-3, sleeve_max=0.5e-3)
+    >>> round(b.radius, 4), round(math.degrees(b.half_angle), 3)   # mean radius [m], alpha [deg]
+    (0.0225, 5.711)
+    >>> f"{b.clearance_at(0.2e-3):.3g}"            # s = +0.2 mm opens the clearance [m]
+    '0.00012'
     """
 
     length: float
@@ -225,7 +323,8 @@ class ConicalBearing(_FilmScales):
         return self.density * self.omega * self.radius_large * self.clearance / self.viscosity
 
     def clearance_at(self, sleeve: float, check_travel: bool = True) -> float:
-        """Radial clearance at the supply end [m] with the sleeve displaced axially by ``sleeve`` [m]."""
+        """Radial clearance at the supply end [m] with the sleeve displaced axially by ``sleeve`` [m];
+        a ``ValueError`` outside the travel (when ``check_travel``) or for a non-finite value."""
         s = float(sleeve)
         if not math.isfinite(s):
             raise ValueError(f"sleeve displacement must be finite, got {s!r}")
@@ -250,7 +349,35 @@ class ConicalBearing(_FilmScales):
 
 
 def bearing_from_dict(cfg):
-    """A bearing from a mapping: ``kind: conical`` gives a ``ConicalBearing``, otherwise a ``JournalBearing``."""
+    """A bearing from a mapping: ``kind: conical`` gives a ``ConicalBearing``, otherwise a ``JournalBearing``.
+
+    Parameters
+    ----------
+    cfg : Mapping
+        The bearing's fields in SI units and rpm (a dict, a Hydra/OmegaConf node); ``kind`` is
+        ``"journal"`` (the default) or ``"conical"``; extra keys such as ``name`` are ignored.
+
+    Returns
+    -------
+    JournalBearing or ConicalBearing
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``kind``, missing keys (named) or an invalid value (see the classes).
+
+    Examples
+    --------
+    >>> from fluidfilm import bearing_from_dict
+    >>> bearing_from_dict({"name": "mine", "length": 0.02, "diameter": 0.04, "clearance": 50e-6,
+    ...                    "speed_rpm": 6000, "viscosity": 0.02})
+    JournalBearing(length=0.02, diameter=0.04, clearance=5e-05, speed_rpm=6000.0, viscosity=0.02,
+                   supply_pressure=0.0, density=992.0)
+    >>> bearing_from_dict({"kind": "tilting-pad"})
+    Traceback (most recent call last):
+    ...
+    ValueError: unknown bearing kind 'tilting-pad'; choose 'journal' or 'conical'
+    """
     kind = cfg.get("kind", "journal") if hasattr(cfg, "get") else "journal"
     if kind == "conical":
         return ConicalBearing.from_dict(cfg)

@@ -46,13 +46,29 @@ class ValidityDomain:
     The eccentricity ratio (relative to the current clearance) at most ``eps_max``, and, where
     ``bands`` are given as rows ``(eps_low, eps_high, v_max)``, every velocity component within
     that band's ``v_max`` [m/s] (the last band also covers eps above its ``eps_high``).
+
+    Parameters
+    ----------
+    eps_max : float, default 1.0
+        Largest trusted eccentricity ratio |X|/c.
+    bands : tuple of (float, float, float), default ()
+        Rows ``(eps_low, eps_high, v_max)``: the velocity bound [m/s] per eccentricity band.
+
+    Examples
+    --------
+    >>> from fluidfilm.core import ValidityDomain
+    >>> d = ValidityDomain(eps_max=0.9, bands=((0.0, 0.5, 0.01), (0.5, 0.9, 0.02)))
+    >>> d.contains([[0.0, 50e-6], [0.0, 50e-6], [0.0, 110e-6]],
+    ...            [[0.0, 0.005], [0.0, 0.05], [0.0, 0.0]], clearance=120e-6).tolist()
+    [True, False, False]
     """
 
     eps_max: float = 1.0
     bands: tuple[tuple[float, float, float], ...] = ()
 
     def contains(self, X: ArrayLike, V: ArrayLike, clearance: float) -> np.ndarray:
-        """Boolean mask over the leading dimensions of X, V (..., 2)."""
+        """Boolean mask over the leading dimensions of X [m], V [m/s] (..., 2): inside the domain, with
+        eccentricities relative to ``clearance`` [m]."""
         x = np.asarray(X, dtype=float)
         v = np.asarray(V, dtype=float)
         eps = np.hypot(x[..., 0], x[..., 1]) / clearance
@@ -70,7 +86,21 @@ WHOLE_FILM = ValidityDomain()
 
 @runtime_checkable
 class ForceModel(Protocol):
-    """The film force of one bearing: see the module docstring for each member."""
+    """The film force of one bearing: see the module docstring for each member.
+
+    A structural protocol (``isinstance`` checks the members at run time, mypy statically): a class
+    need not inherit from it.  ``forces(X, V)`` takes positions X [m] and velocities V [m/s] in the
+    (X1, X2) frame, +X2 along gravity, and returns the film force on the journal [N].
+
+    Examples
+    --------
+    >>> from fluidfilm import LinearBearing, ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import ForceModel
+    >>> isinstance(ReynoldsSolver(paper_bearing(), 16, 8), ForceModel)
+    True
+    >>> isinstance(object(), ForceModel)
+    False
+    """
 
     @property
     def name(self) -> str: ...
@@ -106,6 +136,17 @@ class AdjustableForceModel(ForceModel, Protocol):
 
     ``set_sleeve(s)`` moves the sleeve to ``s`` [m] (inside the bearing's travel, else a
     ``ValueError``); ``clearance`` and the forces follow at once.
+
+    Examples
+    --------
+    >>> from fluidfilm import ConicalBearing, ConicalReynoldsSolver, ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import AdjustableForceModel
+    >>> cone = ConicalBearing(length=0.05, diameter_small=0.04, diameter_large=0.05, clearance=100e-6,
+    ...                       speed_rpm=3000, viscosity=6.53e-4, sleeve_min=-0.5e-3, sleeve_max=0.5e-3)
+    >>> isinstance(ConicalReynoldsSolver(cone, 16, 8), AdjustableForceModel)
+    True
+    >>> isinstance(ReynoldsSolver(paper_bearing(), 16, 8), AdjustableForceModel)
+    False
     """
 
     @property
@@ -124,6 +165,13 @@ class BatchSettable(Protocol):
 
     ``setting_array`` is the kernel's own setting (written in place during a batch and restored after);
     ``setting_for(sleeve)`` the row for one sleeve position.
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import BatchSettable
+    >>> isinstance(ReynoldsSolver(paper_bearing(), 16, 8), BatchSettable)   # the solver re-solves instead
+    False
     """
 
     @property
@@ -149,6 +197,14 @@ class LinearPressureModel(Protocol):
 
     ``linear_pressure(x, v)`` for one state ((2,), (2,)) -> (n_theta, n_z) Pa on ``mesh``; ``theta``
     the grid's angles; ``cavitation`` the label of the cavitation rule ("gumbel", "none", ...).
+
+    Examples
+    --------
+    >>> from fluidfilm import LinearBearing, ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import LinearPressureModel
+    >>> solver = ReynoldsSolver(paper_bearing(), 16, 8)
+    >>> isinstance(solver, LinearPressureModel), solver.linear_pressure([0.0, 60e-6], [0.0, 0.0]).shape
+    (True, (16, 8))
     """
 
     @property
@@ -169,7 +225,16 @@ class LinearPressureModel(Protocol):
 class ReferenceModel:
     """Defaults for a physics-based model: valid in the whole film, nothing to count.
 
-    Subclasses set ``_bearing`` (and ``_c`` when the clearance can move).
+    Subclasses set ``_bearing`` (and ``_c`` when the clearance can move).  A mixin with no
+    constructor of its own.
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import WHOLE_FILM, ReferenceModel
+    >>> solver = ReynoldsSolver(paper_bearing(), 16, 8)
+    >>> isinstance(solver, ReferenceModel), solver.validity is WHOLE_FILM, solver.domain_report()
+    (True, True, None)
     """
 
     _bearing: Any
@@ -208,6 +273,30 @@ def as_adjustable(model: ForceModel) -> AdjustableForceModel:
 
     A model class may serve both kinds of bearing (a surrogate with or without the sleeve input, the
     graded reference model of a journal or a conical bearing); ``adjustable`` says which it is.
+
+    Parameters
+    ----------
+    model : ForceModel
+        Any force model.
+
+    Returns
+    -------
+    AdjustableForceModel
+        ``model`` itself.
+
+    Raises
+    ------
+    ValueError
+        Naming the model's class, when it has no sleeve input.
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import as_adjustable
+    >>> as_adjustable(ReynoldsSolver(paper_bearing(), 16, 8))
+    Traceback (most recent call last):
+    ...
+    ValueError: ReynoldsSolver has no sleeve input: an active (adjustable) bearing model is needed
     """
     if isinstance(model, AdjustableForceModel) and model.adjustable:
         return model

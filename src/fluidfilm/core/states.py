@@ -15,7 +15,41 @@ V_MAX_PHYSICAL = 100.0
 
 
 def as_state_pairs(X, V, clearance: float):
-    """Validate and broadcast positions and velocities to flat (N, 2) arrays."""
+    """Validate and broadcast positions and velocities to flat (N, 2) arrays.
+
+    Parameters
+    ----------
+    X : array_like, shape (..., 2)
+        Journal positions (X1, X2) [m], +X2 along gravity.
+    V : array_like, shape (..., 2)
+        Journal velocities (V1, V2) [m/s]; broadcast against ``X``.
+    clearance : float
+        Radial clearance c [m] the positions must stay inside.
+
+    Returns
+    -------
+    x, v : ndarray, shape (N, 2)
+        C-contiguous float64 copies.
+    shape : tuple of int
+        The broadcast leading shape (``()`` for one state), to reshape the forces back.
+
+    Raises
+    ------
+    ValueError
+        For a last axis other than 2, shapes that do not broadcast, or a state that
+        ``check_states`` refuses (named in the message).
+
+    Examples
+    --------
+    >>> from fluidfilm.core import as_state_pairs
+    >>> x, v, shape = as_state_pairs([[0.0, 1e-5], [2e-5, 0.0]], [0.0, 0.0], clearance=1e-4)
+    >>> x.shape, v.shape, shape
+    ((2, 2), (2, 2), (2,))
+    >>> as_state_pairs([0.0, 0.0, 1e-5], [0.0, 0.0], clearance=1e-4)
+    Traceback (most recent call last):
+    ...
+    ValueError: X must have a last axis of length 2 (X1, X2) in m, got shape (3,)
+    """
     X = np.asarray(X, dtype=np.float64)
     V = np.asarray(V, dtype=np.float64)
     if X.ndim == 0 or X.shape[-1] != 2:
@@ -40,6 +74,30 @@ def check_states(x: np.ndarray, v: np.ndarray, clearance: float) -> None:
     >= 1 (contact: no film) or a speed |V| above ``V_MAX_PHYSICAL``.  States
     outside a surrogate's *training* range are legal; the surrogate counts
     them (``SurrogateForceModel.n_outside_domain``, ``Trajectory.n_outside_domain``).
+
+    Parameters
+    ----------
+    x : ndarray, shape (N, 2)
+        Positions [m].
+    v : ndarray, shape (N, 2)
+        Velocities [m/s].
+    clearance : float
+        Radial clearance c [m].
+
+    Raises
+    ------
+    ValueError
+        Naming the first offending state.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fluidfilm.core import check_states
+    >>> check_states(np.array([[0.0, 5e-5]]), np.zeros((1, 2)), clearance=1e-4)    # fine: nothing returned
+    >>> check_states(np.array([[0.0, 1e-4]]), np.zeros((1, 2)), clearance=1e-4)
+    Traceback (most recent call last):
+    ...
+    ValueError: eccentricity ratio 1 >= 1 at X=(...) m: the journal touches the sleeve (clearance 0.0001 m)
     """
     if not np.isfinite(x).all():
         bad = x[~np.isfinite(x).all(axis=1)][0]

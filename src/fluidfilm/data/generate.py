@@ -43,7 +43,7 @@ from fluidfilm import __version__, io
 from fluidfilm.core.bearing import JournalBearing, bearing_from_dict
 from fluidfilm.reynolds import GradedReynoldsModel
 from fluidfilm.data.schema import COLUMNS, file_sha256, part_name, write_part
-from fluidfilm.data.spec import DatasetSpec, check_reference, config_hash
+from fluidfilm.data.spec import DatasetSpec, check_reference, config_hash, example_spec
 
 # 2: the centre (eps = 0) once instead of once per angle; per-part checksums in the manifest
 FORMAT_VERSION = 2
@@ -226,6 +226,42 @@ def generate_dataset(bearing: JournalBearing, reference: dict, spec: DatasetSpec
     or whose bytes no longer match (and says so).  The returned dict adds
     what this call did: ``seconds_this_run``, ``chunks_computed_this_run``,
     ``damaged_parts_recomputed``.
+
+    Parameters
+    ----------
+    bearing : JournalBearing
+        The bearing (a ``ConicalBearing`` with the spec's ``sleeve_positions``).
+    reference : dict
+        The grid policy {coarse, dense, eps_threshold, cavitation} (``GradedReynoldsModel``).
+    spec : DatasetSpec
+        The layout.
+    out_dir : path-like
+        The dataset's folder (created; an existing one of another config is refused).
+    scheduler : str, default "local"
+        "local", "inline" or a Dask scheduler address.
+    n_workers : int or None, default None
+        Workers of the local cluster (None: Dask's default).
+    progress : bool, default True
+        Show a progress bar.
+    config : dict or None, default None
+        The config to record in the metadata (and hash).
+
+    Returns
+    -------
+    dict
+        The metadata (``read_metadata``) plus what this call did.
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.data import example_spec, generate_dataset
+    >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
+    >>> tmp = tempfile.mkdtemp()
+    >>> meta = generate_dataset(paper_bearing(), reference, example_spec(), f"{tmp}/ds", scheduler="inline", progress=False)
+    >>> meta["n_samples"], meta["chunks_computed_this_run"]
+    (128, 1)
+    >>> shutil.rmtree(tmp)
     """
     out = Path(out_dir)
     # the whole config is checked (and the model built) before anything on disk is touched
@@ -327,6 +363,37 @@ def random_test_set(bearing: JournalBearing, reference: dict, spec: DatasetSpec,
     them between the training levels) and eps is relative to its clearance.
     Forces from the same reference model and grid policy.  Written
     atomically as one part file.
+
+    Parameters
+    ----------
+    bearing : JournalBearing
+        The bearing.
+    reference : dict
+        The grid policy {coarse, dense, eps_threshold, cavitation}.
+    spec : DatasetSpec
+        The dataset's layout (its domain).
+    out_dir : path-like
+        The test set's folder.
+    n : int or None, default None
+        Number of states (None: ``spec.n_test``).
+    seed : int or None, default None
+        Random seed (None: ``spec.test_seed``).
+
+    Returns
+    -------
+    dict
+        The test set's metadata (columns, number of samples, seed, checksums).
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.data import example_spec, random_test_set
+    >>> reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
+    >>> tmp = tempfile.mkdtemp()
+    >>> random_test_set(paper_bearing(), reference, example_spec(), f"{tmp}/test", n=20)["n_samples"]
+    20
+    >>> shutil.rmtree(tmp)
     """
     n = spec.n_test if n is None else int(n)
     seed = spec.test_seed if seed is None else int(seed)
@@ -361,6 +428,40 @@ def random_test_set(bearing: JournalBearing, reference: dict, spec: DatasetSpec,
 
 
 N_TEST_SLEEVES = 33  # sleeve levels of the test set: between the grid's, so the test checks interpolation in s
+
+
+def example_dataset(out_dir, test_set: bool = False) -> Path:
+    """The ``example_spec`` dataset of ``paper_bearing()`` (16 x 8 reference grid), for examples and smoke runs.
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Folder to write (as ``generate_dataset``, inline: no Dask cluster).
+    test_set : bool, default False
+        Write the random test set of the layout (``random_test_set``, 10 states) instead.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out_dir``.
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm.data import example_dataset, read_metadata
+    >>> folder = example_dataset(tempfile.mkdtemp())
+    >>> read_metadata(folder)["reference"]["coarse"]
+    [16, 8]
+    >>> shutil.rmtree(folder)
+    """
+    from fluidfilm.core.bearing import paper_bearing
+
+    reference = {"coarse": [16, 8], "dense": [16, 8], "eps_threshold": 0.9, "cavitation": "gumbel"}
+    if test_set:
+        random_test_set(paper_bearing(), reference, example_spec(), out_dir)
+    else:
+        generate_dataset(paper_bearing(), reference, example_spec(), out_dir, scheduler="inline", progress=False)
+    return Path(out_dir)
 
 
 def _random_states(spec: DatasetSpec, c: float, n: int, rng):

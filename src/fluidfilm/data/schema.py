@@ -63,7 +63,17 @@ def write_part(path: Path, cols: dict) -> str:
 
 
 class DatasetIntegrityError(ValueError):
-    """A dataset on disk is incomplete or damaged; the message names the file."""
+    """A dataset on disk is incomplete or damaged; the message names the file.
+
+    Examples
+    --------
+    >>> from fluidfilm.data import DatasetIntegrityError, verify_dataset
+    >>> try:
+    ...     verify_dataset("no/such/dataset")
+    ... except DatasetIntegrityError as err:
+    ...     print(err)
+    no/such/dataset is not a complete dataset (no _metadata.json); generate it first
+    """
 
 
 def verify_dataset(path) -> dict:
@@ -71,6 +81,31 @@ def verify_dataset(path) -> dict:
 
     Raises ``DatasetIntegrityError`` naming the first missing or damaged file,
     so nothing is ever trained on forces that are not the ones computed.
+
+    Parameters
+    ----------
+    path : path-like
+        The dataset's (or test set's) folder.
+
+    Returns
+    -------
+    dict
+        The metadata.
+
+    Raises
+    ------
+    DatasetIntegrityError
+        Naming the folder or file: no ``_metadata.json``, no checksums listed, a part missing or
+        damaged (its SHA-256 differs), or part files not in the manifest.
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm.data import example_dataset, verify_dataset
+    >>> folder = example_dataset(tempfile.mkdtemp())
+    >>> list(verify_dataset(folder)["parts"])
+    ['part-00000.parquet']
+    >>> shutil.rmtree(folder)
     """
     path = Path(path)
     meta_file = path / "_metadata.json"
@@ -99,7 +134,32 @@ def part_name(index: int) -> str:
 
 
 def read_metadata(path) -> dict:
-    """``_metadata.json`` of a complete dataset or test set; a clear error for an incomplete one."""
+    """``_metadata.json`` of a complete dataset or test set; a clear error for an incomplete one.
+
+    Parameters
+    ----------
+    path : path-like
+        The dataset's folder.
+
+    Returns
+    -------
+    dict
+        Bearing, reference grid policy, spec, columns, part checksums, sizes and timings.
+
+    Raises
+    ------
+    ValueError
+        Naming the folder, when it holds no ``_metadata.json`` (generation not finished).
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm.data import example_dataset, read_metadata
+    >>> folder = example_dataset(tempfile.mkdtemp())
+    >>> read_metadata(folder)["n_samples"]
+    128
+    >>> shutil.rmtree(folder)
+    """
     path = Path(path)
     meta_file = path / "_metadata.json"
     if not meta_file.exists():
@@ -108,7 +168,39 @@ def read_metadata(path) -> dict:
 
 
 def load_dataset(path, columns=TRAINING_COLUMNS) -> tuple[pd.DataFrame, dict]:
-    """The dataset's rows (``columns``; the sleeve column S comes along if present) and its metadata."""
+    """The dataset's rows (``columns``; the sleeve column S comes along if present) and its metadata.
+
+    Every part is checked against its recorded checksum first (``verify_dataset``).
+
+    Parameters
+    ----------
+    path : path-like
+        The dataset's folder.
+    columns : sequence of str, default ("X1", "X2", "V1", "V2", "F1", "F2", "eps")
+        Columns to read: positions [m], velocities [m/s], forces [N] in the (X1, X2) frame (+X2
+        along gravity), and eps.
+
+    Returns
+    -------
+    rows : pandas.DataFrame
+    meta : dict
+        The metadata (``read_metadata``).
+
+    Raises
+    ------
+    ValueError
+        For an incomplete dataset; ``DatasetIntegrityError`` naming a missing or damaged file.
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm.data import example_dataset, load_dataset
+    >>> folder = example_dataset(tempfile.mkdtemp())
+    >>> rows, meta = load_dataset(folder)
+    >>> rows.shape, list(rows.columns)
+    ((128, 7), ['X1', 'X2', 'V1', 'V2', 'F1', 'F2', 'eps'])
+    >>> shutil.rmtree(folder)
+    """
     meta = read_metadata(path)
     verify_dataset(path)  # checksums recorded at generation; names a damaged file
     extra = [c for c in EXTRA_INPUTS if c in meta.get("columns", ()) and c not in columns]
@@ -116,13 +208,55 @@ def load_dataset(path, columns=TRAINING_COLUMNS) -> tuple[pd.DataFrame, dict]:
 
 
 def load_test_set(path) -> pd.DataFrame:
-    """Every row of a held-out test set (checked against its manifest's checksums first)."""
+    """Every row of a held-out test set (checked against its manifest's checksums first).
+
+    Parameters
+    ----------
+    path : path-like
+        The test set's folder (``random_test_set``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        All columns (``COLUMNS``), one row per state.
+
+    Raises
+    ------
+    DatasetIntegrityError
+        Naming a missing or damaged file, or an incomplete test set.
+
+    Examples
+    --------
+    >>> import shutil, tempfile
+    >>> from fluidfilm.data import example_dataset, load_test_set
+    >>> folder = example_dataset(tempfile.mkdtemp(), test_set=True)
+    >>> load_test_set(folder).shape
+    (10, 10)
+    >>> shutil.rmtree(folder)
+    """
     verify_dataset(path)
     return pd.read_parquet(Path(path))
 
 
 def dataset_bearing(meta: dict) -> JournalBearing | ConicalBearing:
-    """The bearing a dataset was generated for (from its metadata)."""
+    """The bearing a dataset was generated for (from its metadata).
+
+    Parameters
+    ----------
+    meta : dict
+        The dataset's metadata (``read_metadata``).
+
+    Returns
+    -------
+    JournalBearing or ConicalBearing
+
+    Examples
+    --------
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.data import dataset_bearing
+    >>> dataset_bearing({"bearing": paper_bearing().to_dict()}) == paper_bearing()
+    True
+    """
     return bearing_from_dict(meta["bearing"])
 
 
@@ -133,5 +267,24 @@ def relative_force_errors(predicted: np.ndarray, truth: np.ndarray, floor_N: flo
 
 
 def training_domain(meta: dict) -> list[list[float]]:
-    """[eps_low, eps_high, v_max] of each velocity section of the dataset's layout."""
+    """[eps_low, eps_high, v_max] of each velocity section of the dataset's layout.
+
+    The rows of the surrogates' ``ValidityDomain.bands`` (v_max in m/s).
+
+    Parameters
+    ----------
+    meta : dict
+        Metadata with the layout under ``spec`` (as ``read_metadata`` gives it).
+
+    Returns
+    -------
+    list of [float, float, float]
+        One row per velocity section, in the layout's order.
+
+    Examples
+    --------
+    >>> from fluidfilm.data import training_domain
+    >>> training_domain({"spec": {"velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.2}]}})
+    [[0.0, 0.5, 0.2]]
+    """
     return [[s["eps_low"], s["eps_high"], s["v_max"]] for s in meta["spec"]["velocity_sections"]]

@@ -29,7 +29,17 @@ import numpy as np
 
 
 class DatasetConfigError(ValueError):
-    """A dataset config value is invalid; the message names the key."""
+    """A dataset config value is invalid; the message names the key.
+
+    Examples
+    --------
+    >>> from fluidfilm.data import DatasetConfigError, DatasetSpec
+    >>> try:
+    ...     DatasetSpec.from_cfg({"position_sections": []})
+    ... except DatasetConfigError as err:
+    ...     print(err)
+    dataset.position_sections must list at least one section
+    """
 
 
 def _num(cfg: Mapping, key: str, where: str) -> float:
@@ -107,6 +117,43 @@ class VelocitySection:
 
 @dataclass(frozen=True)
 class DatasetSpec:
+    """The layout of the graded force dataset: where the positions and velocities lie (frozen).
+
+    Built from a config mapping (``conf/dataset/*.yaml``) with ``from_cfg``, which checks every
+    value and raises ``DatasetConfigError`` naming the key (e.g. ``dataset.combine``).
+
+    Parameters
+    ----------
+    position_sections : tuple of PositionSection
+        Eccentricity ranges (eps_start, eps_stop, n_eps) times n_angle angles from +X2 towards +X1.
+    velocity_sections : tuple of VelocitySection
+        Per eccentricity band [eps_low, eps_high): velocity values within +-v_max [m/s].
+    combine : {"product", "zip"}
+        Every (V1, V2) pair of the values, or the values zipped with their reverse.
+    positions_per_chunk : int
+        Positions per part file (one unit of work).
+    n_test : int
+        Size of the held-out random test set.
+    test_seed : int
+        Its random seed.
+    sleeve_positions : tuple of float, default ()
+        Sleeve positions [m] of an active (conical) bearing; empty for a fixed bearing.
+
+    Examples
+    --------
+    >>> from fluidfilm.data import DatasetConfigError, DatasetSpec
+    >>> cfg = {"position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
+    ...        "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01,
+    ...                               "core_fraction": 0.0, "n_per_side": 2}],
+    ...        "positions_per_chunk": 8, "n_test": 10, "test_seed": 0}
+    >>> DatasetSpec.from_cfg(cfg).n_samples(clearance=120e-6)    # 8 positions x 16 (V1, V2) pairs
+    128
+    >>> DatasetSpec.from_cfg({**cfg, "combine": "cross"})
+    Traceback (most recent call last):
+    ...
+    fluidfilm.data.spec.DatasetConfigError: dataset.combine='cross' must be 'product' or 'zip'
+    """
+
     position_sections: tuple[PositionSection, ...]
     velocity_sections: tuple[VelocitySection, ...]
     combine: str
@@ -118,6 +165,7 @@ class DatasetSpec:
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_cfg(cls, cfg: Mapping) -> "DatasetSpec":
+        """The spec of a dataset config mapping; ``DatasetConfigError`` naming the first bad key."""
         where = "dataset"
         if "position_sections" not in cfg or not cfg["position_sections"]:
             raise DatasetConfigError(f"{where}.position_sections must list at least one section")
@@ -219,6 +267,27 @@ class DatasetSpec:
         return asdict(self)
 
 
+def example_spec() -> DatasetSpec:
+    """A tiny layout for examples and smoke runs: 8 positions at eps 0.1 and 0.5, 16 velocity pairs each.
+
+    Returns
+    -------
+    DatasetSpec
+        128 samples (a second or so with a 16 x 8 reference grid), a test set of 10.
+
+    Examples
+    --------
+    >>> from fluidfilm.data import example_spec
+    >>> example_spec().n_samples(clearance=120e-6)
+    128
+    """
+    return DatasetSpec.from_cfg({
+        "position_sections": [{"eps_start": 0.1, "eps_stop": 0.5, "n_eps": 2, "n_angle": 4}],
+        "velocity_sections": [{"eps_low": 0.0, "eps_high": 0.5, "v_max": 0.01, "core": 0.01, "core_fraction": 0.0,
+                               "n_per_side": 2}],
+        "positions_per_chunk": 8, "n_test": 10, "test_seed": 0})
+
+
 CAVITATION_MODELS = ("gumbel", "swift-stieber")
 
 
@@ -251,6 +320,23 @@ def check_reference(cfg: Mapping, where: str = "reference") -> dict:
 
 
 def config_hash(*parts) -> str:
-    """Stable hash of JSON-serialisable config parts."""
+    """Stable hash of JSON-serialisable config parts.
+
+    Parameters
+    ----------
+    *parts
+        JSON-serialisable values (mappings are hashed with sorted keys; other objects by ``str``).
+
+    Returns
+    -------
+    str
+        The first 16 hex digits of the SHA-256 of their JSON text.
+
+    Examples
+    --------
+    >>> from fluidfilm.data import config_hash
+    >>> config_hash({"a": 1, "b": 2}) == config_hash({"b": 2, "a": 1}), len(config_hash([1.0]))
+    (True, 16)
+    """
     blob = json.dumps(parts, sort_keys=True, default=str).encode()
     return hashlib.sha256(blob).hexdigest()[:16]

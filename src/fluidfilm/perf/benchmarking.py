@@ -26,6 +26,38 @@ def median_seconds(fn: Callable[[], object], repeats: int = 7, calls: int = 1, w
     The one timer of the workspace's speed figures. One untimed call first when ``warmup`` (numba
     compiles on the first call; a caller that warms up with other arguments passes ``warmup=False``).
     A median of repeats, because a busy machine adds time to some samples and never takes it away.
+
+    Parameters
+    ----------
+    fn : callable
+        Called with no arguments; its result is discarded.
+    repeats : int, default 7
+        Number of timed samples (>= 1).
+    calls : int, default 1
+        Back-to-back calls per sample (>= 1), for calls too short to time one by one.
+    warmup : bool, default True
+        Call ``fn`` once, untimed, before the samples.
+
+    Returns
+    -------
+    float
+        The median over the samples of the time per call [s].
+
+    Raises
+    ------
+    ValueError
+        For ``repeats`` or ``calls`` below 1 (both named).
+
+    Examples
+    --------
+    >>> import time
+    >>> from fluidfilm.perf import median_seconds
+    >>> 0.002 <= median_seconds(lambda: time.sleep(0.002), repeats=3) < 0.2
+    True
+    >>> median_seconds(lambda: None, repeats=0)
+    Traceback (most recent call last):
+    ...
+    ValueError: repeats and calls must be positive integers, got repeats=0, calls=1
     """
     if int(repeats) < 1 or int(calls) < 1:
         raise ValueError(f"repeats and calls must be positive integers, got repeats={repeats!r}, calls={calls!r}")
@@ -41,7 +73,19 @@ def median_seconds(fn: Callable[[], object], repeats: int = 7, calls: int = 1, w
 
 
 def machine() -> str:
-    """The CPU model, core count and OS of this machine (recorded next to every timing)."""
+    """The CPU model, core count and OS of this machine (recorded next to every timing).
+
+    Returns
+    -------
+    str
+        ``"<CPU model>, <n> cores, <OS> <release>"`` (the CPU from /proc/cpuinfo where there is one).
+
+    Examples
+    --------
+    >>> from fluidfilm.perf import machine
+    >>> "cores" in machine()
+    True
+    """
     import os
 
     cpu = platform.processor() or platform.machine()
@@ -58,7 +102,43 @@ def machine() -> str:
 
 def write_benchmark(name: str, title: str, header: Sequence[str], rows: Sequence[Sequence[object]],
                     notes: str = "", out_dir: Path | str = OUT_DIR) -> Path:
-    """Write one benchmark table (cells already formatted as text) with machine and date."""
+    """Write one benchmark table (cells already formatted as text) with machine and date.
+
+    Parameters
+    ----------
+    name : str
+        File name stem: the table goes to ``<out_dir>/<name>.json``.
+    title : str
+        One line saying what was timed.
+    header : sequence of str
+        Column titles.
+    rows : sequence of sequences
+        The cells, one sequence per row, each as long as ``header`` (written with ``str``).
+    notes : str, default ""
+        Text printed under the table.
+    out_dir : path-like, default ``reports/benchmarks``
+        Folder of the file (relative to the working directory).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written (atomically; its path is also printed).
+
+    Raises
+    ------
+    ValueError
+        Naming the benchmark and the row whose length differs from the header's.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from fluidfilm.perf import render, write_benchmark
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     path = write_benchmark("demo", "Demo timing", ["model", "us"], [["linear", "0.1"]], out_dir=tmp)
+    ...     print(render(path).splitlines()[2:5])
+    -> .../demo.json
+    ['| model | us |', '|---|---|', '| linear | 0.1 |']
+    """
     for row in rows:
         if len(row) != len(header):
             raise ValueError(f"benchmark {name!r}: row {list(row)} has {len(row)} cells, header has {len(header)}")
@@ -72,7 +152,28 @@ def write_benchmark(name: str, title: str, header: Sequence[str], rows: Sequence
 
 
 def render(path: Path) -> str:
-    """Markdown for one benchmark file: title, command, machine and date, the table, the notes."""
+    """Markdown for one benchmark file: title, command, machine and date, the table, the notes.
+
+    Parameters
+    ----------
+    path : path-like
+        A file written by ``write_benchmark``.
+
+    Returns
+    -------
+    str
+        The Markdown text, ending with a newline.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from fluidfilm.perf import render, write_benchmark
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     text = render(write_benchmark("demo", "Demo", ["a"], [["1"]], notes="Two runs.", out_dir=tmp))
+    -> .../demo.json
+    >>> text.splitlines()[-1]
+    'Two runs.'
+    """
     data = json.loads(Path(path).read_text())
     lines = [f"{data['title']} (`{data['command']}`, {data['date']}, {data['machine']}):", "",
              "| " + " | ".join(data["header"]) + " |", "|" + "---|" * len(data["header"])]

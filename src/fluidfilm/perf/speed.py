@@ -21,7 +21,34 @@ def _kernel_loop(kernel, params, x, v):
 
 
 def sample_states(clearance: float, n: int = 5000, eps_max: float = 0.8, v_max: float = 0.05, seed: int = 0):
-    """States typical of a trajectory: eps uniform in [0, eps_max], velocities within +-v_max."""
+    """States typical of a trajectory: eps uniform in [0, eps_max], velocities within +-v_max.
+
+    Parameters
+    ----------
+    clearance : float
+        Radial clearance c [m].
+    n : int, default 5000
+        Number of states.
+    eps_max : float, default 0.8
+        Largest eccentricity ratio.
+    v_max : float, default 0.05
+        Bound of each velocity component [m/s].
+    seed : int, default 0
+        Seed of the random generator (the same states on every call).
+
+    Returns
+    -------
+    x, v : ndarray, shape (n, 2)
+        Positions [m] and velocities [m/s], (X1, X2) frame; angles uniform over the circle.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fluidfilm.perf import sample_states
+    >>> x, v = sample_states(clearance=1e-4, n=100)
+    >>> x.shape, bool(np.hypot(*x.T).max() <= 0.8e-4), bool(np.abs(v).max() <= 0.05)
+    ((100, 2), True, True)
+    """
     rng = np.random.default_rng(seed)
     eps = eps_max * rng.random(n)
     ang = 2 * np.pi * rng.random(n)
@@ -31,7 +58,34 @@ def sample_states(clearance: float, n: int = 5000, eps_max: float = 0.8, v_max: 
 
 
 def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
-    """Median seconds per force evaluation of ``model.force_kernel`` over the states (x, v)."""
+    """Median seconds per force evaluation of ``model.force_kernel`` over the states (x, v).
+
+    The compiled kernel runs in a compiled loop (as ``simulate`` calls it); compiling is done before
+    the timing.
+
+    Parameters
+    ----------
+    model : ForceModel
+        Any force model (its ``force_kernel`` is timed).
+    x, v : ndarray, shape (n, 2)
+        States [m], [m/s] (e.g. from ``sample_states``).
+    repeats : int, default 7
+        Timed samples of the whole loop (``median_seconds``).
+
+    Returns
+    -------
+    float
+        Time per force evaluation [s].
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.perf import sample_states, time_per_force_eval
+    >>> solver = ReynoldsSolver(paper_bearing(), 16, 8)
+    >>> x, v = sample_states(solver.bearing.clearance, n=200)
+    >>> 0.0 < time_per_force_eval(solver, x, v, repeats=3) < 0.01
+    True
+    """
     kernel, params = model.force_kernel
     _kernel_loop(kernel, params, x[:2], v[:2])  # compile
     return median_seconds(lambda: _kernel_loop(kernel, params, x, v), repeats, warmup=False) / len(x)

@@ -17,7 +17,33 @@ from fluidfilm.rotor.batch import simulate_batch
 
 
 def monte_carlo_batch(clearance: float, n: int, mass: float = 2.5, seed: int = 0):
-    """(rotors, x0, v0) of n trajectories: imbalance 0-1e-3 kg m, side load +-30 N, eps0 < 0.5, |v0| < 0.01 m/s."""
+    """(rotors, x0, v0) of n trajectories: imbalance 0-1e-3 kg m, side load +-30 N, eps0 < 0.5, |v0| < 0.01 m/s.
+
+    Parameters
+    ----------
+    clearance : float
+        Radial clearance c [m].
+    n : int
+        Number of trajectories.
+    mass : float, default 2.5
+        Rotor mass per bearing [kg].
+    seed : int, default 0
+        Seed of the random generator.
+
+    Returns
+    -------
+    rotors : list of Rotor
+        Imbalance uniform in [0, 1e-3] kg m, a horizontal (X1) external force uniform in [-30, 30] N.
+    x0, v0 : ndarray, shape (n, 2)
+        Initial positions [m] (eps < 0.5) and velocities [m/s] (each component within +-0.01).
+
+    Examples
+    --------
+    >>> from fluidfilm.perf import monte_carlo_batch
+    >>> rotors, x0, v0 = monte_carlo_batch(clearance=1e-4, n=4)
+    >>> len(rotors), x0.shape, rotors[0].mass
+    (4, (4, 2), 2.5)
+    """
     rng = np.random.default_rng(seed)
     rotors = [Rotor(mass=mass, imbalance=float(u), external_force=(float(f), 0.0))
               for u, f in zip(1e-3 * rng.random(n), 30.0 * (2 * rng.random(n) - 1))]
@@ -30,7 +56,40 @@ def monte_carlo_batch(clearance: float, n: int, mass: float = 2.5, seed: int = 0
 
 def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batched: bool = True,
                             repeats: int = 1, seed: int = 0) -> dict:
-    """Median trajectories per second of ``model`` over ``repeats`` runs of n Monte Carlo trajectories."""
+    """Median trajectories per second of ``model`` over ``repeats`` runs of n Monte Carlo trajectories.
+
+    Parameters
+    ----------
+    model : ForceModel
+        The force model integrated.
+    n : int
+        Trajectories per run (``monte_carlo_batch``).
+    t_end : float
+        Rotor time of each trajectory [s], from t = 0.
+    dt : float, default 1e-5
+        RK4 step [s].
+    batched : bool, default True
+        One ``simulate_batch`` call for all n, or n ``simulate`` calls.
+    repeats : int, default 1
+        Timed runs (median).
+    seed : int, default 0
+        Seed of the Monte Carlo.
+
+    Returns
+    -------
+    dict
+        ``n``, ``batched``, ``t_end_s``, ``wall_s`` (median wall time of a run [s]),
+        ``trajectories_per_s`` and ``n_ok`` (trajectories that reached ``t_end``).
+
+    Examples
+    --------
+    >>> from fluidfilm import LinearBearing, paper_bearing
+    >>> from fluidfilm.perf import trajectories_per_second
+    >>> spring = LinearBearing(paper_bearing(), stiffness=1e6, damping=1e3)
+    >>> out = trajectories_per_second(spring, n=4, t_end=2e-3, batched=False)
+    >>> out["n_ok"], out["trajectories_per_s"] > 0
+    (4, True)
+    """
     rotors, x0, v0 = monte_carlo_batch(model.bearing.clearance, n, seed=seed)
     # compile outside the timing
     if batched:

@@ -165,15 +165,46 @@ def build_general_params(bearing: ConicalBearing, mesh: FilmMesh, sleeve: float,
 class ConicalReynoldsSolver(_GridSolver):
     """Finite-difference Reynolds solver of the conical bearing at a settable sleeve position.
 
-    >>> solver = ConicalReynoldsSolver(bearing, 40, 40)
-    >>> solver.set_sleeve(-0.2e-3)            # sleeve 0.2 mm towards the large end: clearance closes
-    >>> F = solver.forces(X, V)               # (..., 2) N, radial
-    >>> F3 = solver.forces_axial(X, V)        # (..., 3) N, radial and axial
+    The same ``forces``/``force_kernel`` interface as ``ReynoldsSolver`` (positions X [m],
+    velocities V [m/s], forces [N], (X1, X2) frame with +X2 along gravity), so the rotor integrator
+    and the controllers run it unchanged; ``forces_axial`` adds the axial force (..., 3), and
+    ``set_sleeve(s)`` moves the sleeve [m] (eccentricities are then relative to c_r(s)).
 
-    ``method``: ``"fast"`` (eigenbasis, matched cones), ``"general"`` (direct
-    block solve, any h(theta, z)) or ``"auto"`` (fast when it applies).
-    The same ``forces``/``force_kernel`` interface as ``ReynoldsSolver``, so
-    the rotor integrator and the controllers run it unchanged.
+    Parameters
+    ----------
+    bearing : ConicalBearing
+        Geometry, lubricant, speed and sleeve travel.
+    n_theta : int, default 40
+        Circumferential nodes.
+    n_z : int, default 40
+        Axial nodes, both ends included.
+    cavitation : {"gumbel", "none"}, default "gumbel"
+        Cavitation rule (Swift-Stieber is not available for the cone).
+    method : {"auto", "fast", "general"}, default "auto"
+        ``"fast"`` (axial eigenbasis, matched cones), ``"general"`` (direct block solve, any
+        h(theta, z)) or ``"auto"`` (fast when ``clearance_taper`` is 0).
+    sleeve : float, default 0.0
+        Initial sleeve displacement [m], inside the bearing's travel.
+
+    Raises
+    ------
+    ValueError
+        For a bearing that is not a ``ConicalBearing``, an unknown method or cavitation rule,
+        ``"fast"`` with tapered cones, or a sleeve outside the travel (each named).
+
+    Examples
+    --------
+    >>> from fluidfilm import ConicalBearing, ConicalReynoldsSolver
+    >>> cone = ConicalBearing(length=0.05, diameter_small=0.04, diameter_large=0.05, clearance=100e-6,
+    ...                       speed_rpm=3000, viscosity=6.53e-4, sleeve_min=-0.5e-3, sleeve_max=0.5e-3)
+    >>> solver = ConicalReynoldsSolver(cone, 16, 8)
+    >>> solver.forces([0.0, 50e-6], [0.0, 0.0]).round(2).tolist()          # [N]
+    [19.08, -9.55]
+    >>> solver.forces_axial([0.0, 50e-6], [0.0, 0.0]).round(2).tolist()    # (F1, F2, Fz) [N]
+    [19.08, -9.55, 2.63]
+    >>> solver.set_sleeve(-0.2e-3)            # 0.2 mm towards the large end: the clearance closes
+    >>> f"{solver.clearance:.3g}", solver.forces([0.0, 50e-6], [0.0, 0.0]).round(2).tolist()
+    ('8e-05', [43.68, -30.21])
     """
 
     def __init__(self, bearing: ConicalBearing, n_theta: int = 40, n_z: int = 40, cavitation: str = "gumbel",

@@ -31,7 +31,30 @@ class GradedParams(NamedTuple):
 
 def make_solver(bearing: JournalBearing | ConicalBearing, n_theta: int, n_z: int,
                 cavitation: str = "gumbel") -> ReynoldsSolver | ConicalReynoldsSolver:
-    """The finite-difference solver for this kind of bearing (cylindrical or conical)."""
+    """The finite-difference solver for this kind of bearing (cylindrical or conical).
+
+    Parameters
+    ----------
+    bearing : JournalBearing or ConicalBearing
+        The bearing.
+    n_theta : int
+        Circumferential nodes.
+    n_z : int
+        Axial nodes.
+    cavitation : str, default "gumbel"
+        Cavitation rule (see ``ReynoldsSolver``).
+
+    Returns
+    -------
+    ReynoldsSolver or ConicalReynoldsSolver
+
+    Examples
+    --------
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.reynolds import make_solver
+    >>> make_solver(paper_bearing(), 16, 8)
+    ReynoldsSolver(16x8, cavitation='gumbel')
+    """
     if isinstance(bearing, ConicalBearing):
         return ConicalReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation)
     return ReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation)
@@ -59,6 +82,34 @@ class GradedReynoldsModel(ReferenceModel):
     For a conical bearing (matched cones) the sub-solvers run the conical
     fast path and ``set_sleeve`` moves the sleeve of both; eccentricities are
     then relative to the current clearance c_r(s).
+
+    Parameters
+    ----------
+    bearing : JournalBearing or ConicalBearing
+        The bearing.
+    coarse : (int, int), default (30, 30)
+        (n_theta, n_z) below ``eps_threshold``.
+    dense : (int, int), default (55, 55)
+        (n_theta, n_z) at and above ``eps_threshold``.
+    eps_threshold : float, default 0.9
+        Eccentricity ratio where the dense grid starts, in (0, 1].
+    cavitation : str, default "gumbel"
+        Cavitation rule (see ``ReynoldsSolver``).
+
+    Raises
+    ------
+    ValueError
+        For an ``eps_threshold`` outside (0, 1], a conical bearing with tapered cones, or what
+        the sub-solvers refuse.
+
+    Examples
+    --------
+    >>> from fluidfilm import GradedReynoldsModel, paper_bearing
+    >>> model = GradedReynoldsModel(paper_bearing(), coarse=(16, 8), dense=(24, 12))
+    >>> [n.tolist() for n in model.grid_for([0.5, 0.95])]          # n_theta, n_z per eps
+    [[16, 24], [8, 12]]
+    >>> model.forces([0.0, 60e-6], [0.0, 0.0]).round(2).tolist()   # eps 0.5: the coarse grid [N]
+    [16.94, -7.68]
     """
 
     def __init__(self, bearing: JournalBearing | ConicalBearing, coarse: tuple[int, int] = (30, 30),
@@ -133,6 +184,7 @@ class GradedReynoldsModel(ReferenceModel):
         return out
 
     def forces(self, X, V) -> np.ndarray:
+        """Film force [N] at positions X [m] and velocities V [m/s], (..., 2), each state on its grid."""
         x, v, shape = as_state_pairs(X, V, self.clearance)
         out = np.empty_like(x)
         dense = x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] >= self.params.dense_radius * self.params.dense_radius

@@ -136,17 +136,52 @@ class _GridSolver(ReferenceModel):
 
 
 class ReynoldsSolver(_GridSolver):
-    """Finite-difference solution of the finite-length Reynolds equation.
+    """Finite-difference solution of the finite-length Reynolds equation of a journal bearing.
 
-    >>> solver = ReynoldsSolver(bearing, n_theta=30, n_z=30, cavitation="gumbel")
-    >>> F = solver.forces(X, V)          # (..., 2) N, the film's force on the journal
-    >>> p = solver.pressure(x, v)        # (n_theta, n_z) Pa at solver.theta x solver.z
+    ``forces(X, V)`` gives the film's force on the journal [N] for positions X [m] and
+    velocities V [m/s], shape (..., 2) each, in the (X1, X2) frame with +X2 along gravity;
+    ``pressure(x, v)`` the (n_theta, n_z) field [Pa] of one state at ``theta`` x ``z``.  A state
+    with eccentricity >= 1 or a non-finite value raises a ``ValueError`` naming it.
 
-    ``cavitation``: ``"gumbel"`` (half-Sommerfeld: negative pressures set to
-    zero after the linear solve; the paper's model, default),
-    ``"swift-stieber"`` (Reynolds condition as a complementarity problem,
-    projected SOR) or ``"none"`` (full Sommerfeld, negative pressures kept;
-    for verification).
+    Parameters
+    ----------
+    bearing : JournalBearing
+        Geometry, lubricant and speed.
+    n_theta : int, default 30
+        Circumferential nodes (periodic).
+    n_z : int, default 30
+        Axial nodes, both ends included.
+    cavitation : {"gumbel", "swift-stieber", "none"} or Cavitation, default "gumbel"
+        ``"gumbel"`` (half-Sommerfeld: negative pressures set to zero after the linear solve; the
+        paper's model), ``"swift-stieber"`` (Reynolds condition as a complementarity problem,
+        projected SOR) or ``"none"`` (full Sommerfeld, negative pressures kept; for verification).
+    sor_omega : float or None, default None
+        Relaxation factor of the projected SOR, in (0, 2); None: near the optimum for the grid.
+    sor_tol : float, default 1e-10
+        Convergence tolerance of the projected SOR (> 0).
+    sor_max_iter : int, default 200000
+        Iteration limit of the projected SOR.
+
+    Raises
+    ------
+    ValueError
+        For a bearing that is not a ``JournalBearing``, an unknown cavitation model, a grid too
+        small for the scheme, or SOR settings out of range (each named).
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> solver = ReynoldsSolver(paper_bearing(), n_theta=16, n_z=8)
+    >>> solver.forces([0.0, 60e-6], [0.0, 0.0]).round(2).tolist()   # eps = 0.5 along +X2 [N]
+    [16.94, -7.68]
+    >>> solver.forces([[0.0, 60e-6], [60e-6, 0.0]], [0.0, 0.0]).shape   # a batch
+    (2, 2)
+    >>> solver.pressure([0.0, 60e-6], [0.0, 0.0]).shape
+    (16, 8)
+    >>> solver.forces([0.0, 120e-6], [0.0, 0.0])
+    Traceback (most recent call last):
+    ...
+    ValueError: eccentricity ratio 1 >= 1 at X=(...) m: the journal touches the sleeve (clearance 0.00012 m)
     """
 
     def __init__(self, bearing: JournalBearing, n_theta: int = 30, n_z: int = 30,

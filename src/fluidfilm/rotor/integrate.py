@@ -49,7 +49,39 @@ OK, CONTACT, CONTACT_STAGE, NONFINITE = 0, 1, 2, 3
 
 @dataclass
 class Trajectory:
-    """A rotor trajectory: t (n,), x (n, 2) m, v (n, 2) m/s, and how it ended."""
+    """A rotor trajectory: t (n,), x (n, 2) m, v (n, 2) m/s, and how it ended.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,)
+        Recorded times [s].
+    x : ndarray, shape (n, 2)
+        Journal positions (X1, X2) [m], +X2 along gravity.
+    v : ndarray, shape (n, 2)
+        Journal velocities [m/s].
+    status : str
+        ``"ok"`` (reached the end time, possibly followed by "; <note>"), ``"contact: ..."`` or
+        ``"diverged: ..."``.
+    t_stop : float or None, default None
+        Time [s] at which the run stopped; None when it reached the end.
+    n_force_evals : int, default 0
+        Force evaluations of the run.
+    wall_time_s : float, default 0.0
+        Wall time of the compiled loop [s].
+    meta : dict, optional
+        Run settings (``dt``, ``t_end``, ``record_every``).
+    n_outside_domain : int, default 0
+        Force evaluations outside the model's training domain (0 for a reference model).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fluidfilm import Trajectory
+    >>> tr = Trajectory(t=np.array([0.0, 1e-3]), x=np.array([[0.0, 0.0], [0.0, 3e-5]]),
+    ...                 v=np.zeros((2, 2)), status="ok")
+    >>> tr.ok, tr.eccentricity(clearance=1e-4).tolist()
+    (True, [0.0, 0.3])
+    """
 
     t: np.ndarray
     x: np.ndarray
@@ -68,9 +100,11 @@ class Trajectory:
         return self.status == "ok" or self.status.startswith("ok;")
 
     def eccentricity(self, clearance: float) -> np.ndarray:
+        """|X| / ``clearance`` at every recorded time."""
         return np.hypot(self.x[:, 0], self.x[:, 1]) / clearance
 
     def to_npz(self, path) -> None:
+        """Write the trajectory to a compressed ``.npz`` file (atomically; ``from_npz`` reads it)."""
         from fluidfilm import io
 
         with io.atomic_path(path, suffix=".npz") as tmp:
@@ -82,6 +116,7 @@ class Trajectory:
 
     @classmethod
     def from_npz(cls, path) -> "Trajectory":
+        """A trajectory written by ``to_npz``."""
         d = np.load(path)
         t_stop = float(d["t_stop"])
         return cls(t=d["t"], x=d["x"], v=d["v"], status=str(d["status"]),
@@ -248,8 +283,58 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
              max_substeps: int = 256, t0: float = 0.0) -> Trajectory:
     """Integrate the rotor in ``model`` (a ``fluidfilm.core.force_model.ForceModel``: its compiled ``force_kernel``).
 
-    Starts at the bearing centre at rest unless ``x0``/``v0`` are given.
-    Returns every ``record_every``-th step.
+    Fixed-step RK4 of m dV/dt = F_film(X, V) + imbalance + m g (along +X2) + F_ext (module doc);
+    starts at the bearing centre at rest unless ``x0``/``v0`` are given.  The run stops early, with
+    ``status`` saying why and when, at contact (eps reaching ``eps_stop``) or a non-finite state.
+
+    Parameters
+    ----------
+    model : ForceModel
+        The bearing's force model.
+    rotor : Rotor
+        What the bearing carries (mass, imbalance, external force, gravity).
+    t_end : float
+        End time of the run [s] (target API of issue #26: an end time, so the run covers
+        [t0, t_end]; before the api branch it is the duration from t0).
+    dt : float, default 1e-5
+        RK4 step [s], at most the run's length.
+    x0, v0 : array_like, shape (2,), optional
+        Initial position [m] (eccentricity below ``eps_stop``) and velocity [m/s].
+    eps_stop : float, default 0.98
+        Eccentricity ratio in (0, 1) that ends the run as a contact.
+    record_every : int, default 1
+        Every ``record_every``-th step is recorded (a positive integer).
+    eps_substep : float, default 0.8
+        Eccentricity ratio above which steps are split into substeps (module doc).
+    max_substeps : int, default 256
+        Largest number of substeps per step.
+    t0 : float, default 0.0
+        Start time [s] (the imbalance phase and ramp run on absolute time).
+
+    Returns
+    -------
+    Trajectory
+        The recorded states, ``status`` ("ok", "contact: ...", "diverged: ..."), force evaluations
+        and wall time.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: a rotor that is not a ``Rotor``, a model that is not a force model,
+        times or settings that are not finite positive numbers of the right kind, an initial state
+        of the wrong shape, non-finite, or not below ``eps_stop``.
+
+    Examples
+    --------
+    A spring-damper under the rotor's weight settles at m g / K = 2.4525e-5 m:
+
+    >>> from fluidfilm import LinearBearing, Rotor, paper_bearing, simulate
+    >>> spring = LinearBearing(paper_bearing(), stiffness=1e6, damping=1e3)
+    >>> traj = simulate(spring, Rotor(mass=2.5), t_end=0.05, dt=1e-5, record_every=100)
+    >>> traj.status, len(traj.t), f"{traj.x[-1, 1]:.4g}"
+    ('ok', 51, '2.453e-05')
+    >>> simulate(spring, Rotor(mass=2.5, external_force=(0.0, 1e3)), t_end=0.05).status
+    'contact: eccentricity reached eps_stop=0.98 at t=0.0008075 s'
     """
     if not isinstance(rotor, Rotor):
         raise ValueError(f"rotor must be a Rotor, got {type(rotor).__name__}")

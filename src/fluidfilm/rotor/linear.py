@@ -29,6 +29,28 @@ def linear_force(params, x1, x2, v1, v2):
 
 @dataclass(frozen=True)
 class LinearBearing:
+    """An isotropic spring-damper force model, F = -K X - C V [N]: not a film, an exact check.
+
+    It has the force-model interface (``forces``, ``force_kernel``, ``bearing``, ...), so the
+    integrator runs it as any film model; its responses are known in closed form.
+
+    Parameters
+    ----------
+    bearing : JournalBearing
+        Gives the clearance (the radius the journal must stay inside) and the speed omega.
+    stiffness : float
+        K [N/m].
+    damping : float
+        C [N s/m].
+
+    Examples
+    --------
+    >>> from fluidfilm import LinearBearing, paper_bearing
+    >>> spring = LinearBearing(paper_bearing(), stiffness=1e6, damping=1e3)
+    >>> spring.forces([0.0, 1e-5], [0.01, 0.0]).tolist()        # -K X - C V [N]
+    [-10.0, -10.0]
+    """
+
     bearing: JournalBearing
     stiffness: float
     damping: float
@@ -58,6 +80,7 @@ class LinearBearing:
         return 0
 
     def forces(self, X, V) -> np.ndarray:
+        """-K X - C V [N] for positions X [m] and velocities V [m/s], (..., 2) each."""
         X = np.asarray(X, dtype=float)
         V = np.asarray(V, dtype=float)
         return -self.stiffness * X - self.damping * V

@@ -17,7 +17,35 @@ def settled(traj, t_settle: float) -> np.ndarray:
 
 
 def orbit_stats(traj, clearance: float, t_settle: float) -> dict:
-    """Span per axis (peak-to-peak / c), mean position / c and largest eccentricity of the settled orbit."""
+    """Span per axis (peak-to-peak / c), mean position / c and largest eccentricity of the settled orbit.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A rotor trajectory (``simulate``).
+    clearance : float
+        Radial clearance c [m] the lengths are divided by.
+    t_settle : float
+        Samples at t >= ``t_settle`` [s] form the settled orbit.
+
+    Returns
+    -------
+    dict
+        ``span1``, ``span2`` (peak-to-peak along X1, X2, / c), ``span`` (the larger), ``mean1``,
+        ``mean2`` (mean position / c), ``eps_max`` and ``settled``.  A run that stopped or has fewer
+        than two settled samples gives NaN spans and means, ``settled`` False and ``eps_max`` over
+        the whole run.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fluidfilm.rotor import Trajectory, orbit_stats
+    >>> t = np.linspace(0.0, 0.1, 1001)                         # a circle of radius 0.2 c about (0, 0.3 c)
+    >>> x = np.stack([2e-5 * np.cos(200 * np.pi * t), 3e-5 + 2e-5 * np.sin(200 * np.pi * t)], axis=1)
+    >>> s = orbit_stats(Trajectory(t, x, np.zeros_like(x), "ok"), clearance=1e-4, t_settle=0.05)
+    >>> round(s["span1"], 3), round(s["span2"], 3), round(s["mean2"], 3), round(s["eps_max"], 3)
+    (0.4, 0.4, 0.3, 0.5)
+    """
     mask = settled(traj, t_settle)
     if not traj.ok or mask.sum() < 2:
         return {"span1": math.nan, "span2": math.nan, "span": math.nan, "mean1": math.nan, "mean2": math.nan,
@@ -40,6 +68,39 @@ def compare_orbits(model_traj, ref_traj, clearance: float, t_settle: float) -> d
     - ``mean_offset_pct``: distance between the orbits' mean positions.
     A model whose run stopped (contact, divergence) where the reference's
     did not gets infinite distances.
+
+    Parameters
+    ----------
+    model_traj : Trajectory
+        The model's trajectory.
+    ref_traj : Trajectory
+        The reference's, from the same initial state and rotor.
+    clearance : float
+        Radial clearance c [m].
+    t_settle : float
+        Samples at t >= ``t_settle`` [s] form the settled orbits.
+
+    Returns
+    -------
+    dict
+        ``rms_pct``, ``span_err_pct``, ``hausdorff_pct``, ``mean_offset_pct`` [% of c].
+
+    Raises
+    ------
+    ValueError
+        When the reference trajectory did not finish (its status is named).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fluidfilm.rotor import Trajectory, compare_orbits
+    >>> t = np.linspace(0.0, 0.1, 1001)
+    >>> x = np.stack([2e-5 * np.cos(200 * np.pi * t), 3e-5 + 2e-5 * np.sin(200 * np.pi * t)], axis=1)
+    >>> ref = Trajectory(t, x, np.zeros_like(x), "ok")
+    >>> shifted = Trajectory(t, x + [1e-6, 0.0], np.zeros_like(x), "ok")   # 1 % of c along X1
+    >>> d = compare_orbits(shifted, ref, clearance=1e-4, t_settle=0.05)
+    >>> {k: round(v, 3) for k, v in d.items()}
+    {'rms_pct': 1.0, 'span_err_pct': 0.0, 'hausdorff_pct': 1.0, 'mean_offset_pct': 1.0}
     """
     if not ref_traj.ok:
         raise ValueError(f"reference trajectory did not finish: {ref_traj.status}")

@@ -32,6 +32,42 @@ class Rotor:
 
     A rotor on two equal bearings is expressed by what each carries (half
     the mass, imbalance and load), see ``Rotor.shared``.
+
+    Parameters
+    ----------
+    mass : float
+        Mass carried by the bearing [kg], > 0.
+    imbalance : float, default 0.0
+        Imbalance m_u*d [kg m] (at t = 0 when it ramps), >= 0.
+    external_force : (float, float), default (0.0, 0.0)
+        Constant external force (F1, F2) on the journal [N], besides gravity.
+    gravity : float, default 9.81
+        Acceleration of gravity along +X2 [m/s^2].
+    imbalance_direction : {1, -1}, default 1
+        Sense of rotation of the imbalance force (see above).
+    imbalance_final : float or None, default None
+        Imbalance at the end of the ramp [kg m]; None: constant.
+    ramp_time : float, default 0.0
+        Duration of the imbalance ramp [s]; > 0 where ``imbalance_final`` differs from ``imbalance``.
+
+    Raises
+    ------
+    ValueError
+        Naming the field: a mass <= 0, a negative imbalance, a non-finite value, an external force
+        that is not two numbers, a direction other than +-1, or a ramp without a duration.
+
+    Examples
+    --------
+    >>> from fluidfilm import Rotor
+    >>> rotor = Rotor(mass=2.5, imbalance=1e-4, external_force=(10.0, 0.0))
+    >>> [round(f, 3) for f in rotor.static_load()]          # (W1, W2) [N]: the weight on +X2
+    [10.0, 24.525]
+    >>> Rotor.shared(5.0, total_imbalance=2e-4, load_share=0.5).mass   # one of two equal bearings
+    2.5
+    >>> Rotor(mass=0.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: mass must be a positive finite number in kg, got 0.0
     """
 
     mass: float

@@ -279,7 +279,71 @@ def _stack_tables(tables: list[np.ndarray]) -> np.ndarray:
 
 
 class SurrogateForceModel:
-    """A trained network (or split set of networks) with the reference model's interface."""
+    """A trained network (or split set of networks) with the reference model's interface.
+
+    ``forces(X, V)`` takes positions X [m] and velocities V [m/s] (..., 2) in the (X1, X2) frame,
+    +X2 along gravity, and returns forces [N]; the compiled ``force_kernel`` runs in ``simulate``.
+    States outside the training domain are legal and counted (``n_outside_domain``, a
+    ``RuntimeWarning``); states outside the clearance raise a ``ValueError``.  Usually made by the
+    trainers and read back with ``load_surrogate``.
+
+    Parameters
+    ----------
+    bearing : JournalBearing or ConicalBearing
+        The bearing the network was trained for.
+    networks : list
+        One network per eccentricity region, each a list of (W (out, in), b) layers, or with
+        ``structure="damping"`` a pair (static layers, damping-matrix layers).
+    scalings : list of Scaling
+        One per network: its input and output scaling.
+    activation : {"tanh", "relu", "silu"}
+        Hidden-layer activation.
+    boundaries : sequence of float, default ()
+        Eccentricity ratios that split the regions, increasing strictly within (0, 1).
+    blend_width : float, default 0.0
+        Width in eps of the blend between neighbouring regions (0: a hard switch).
+    domain : array_like or None, default None
+        Rows (eps_low, eps_high, v_max [m/s]) of the training domain; None: no velocity bound.
+    eps_max : float, default 1.0
+        Largest eccentricity ratio of the training data.
+    name : str, default "surrogate"
+        Display name.
+    info : dict or None, default None
+        What the trainer recorded (shown in reports).
+    structure : {"plain", "damping"}, default "plain"
+        Output structure of the networks.
+
+    Raises
+    ------
+    ValueError
+        For an unknown activation or structure, counts of networks, boundaries and scalings that
+        do not match, boundaries out of order, or extra inputs on a bearing without a sleeve.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fluidfilm import ReynoldsSolver, SurrogateForceModel, paper_bearing
+    >>> from fluidfilm.perf import sample_states
+    >>> from fluidfilm.surrogate import Scaling
+    >>> b = paper_bearing()
+    >>> x, v = sample_states(b.clearance, n=200, v_max=0.01)
+    >>> scaling = Scaling.fit("standard", x, v, ReynoldsSolver(b, 16, 8).forces(x, v), b.clearance, b.omega,
+    ...                       b.force_scale)
+    >>> rng = np.random.default_rng(0)                 # an untrained 4-8-2 network, for the interface only
+    >>> layers = [(0.5 * rng.normal(size=(8, 4)), np.zeros(8)), (0.5 * rng.normal(size=(2, 8)), np.zeros(2))]
+    >>> model = SurrogateForceModel(b, [layers], [scaling], "tanh", name="tiny")
+    >>> model
+    SurrogateForceModel('tiny', 1 network(s), boundaries=[], 58 parameters)
+    >>> model.forces([0.0, 60e-6], [0.0, 0.0]).round(2).tolist()      # [N]
+    [4.63, -2.58]
+    >>> import tempfile
+    >>> from fluidfilm import load_surrogate
+    >>> folder = tempfile.mkdtemp()
+    >>> model.save(f"{folder}/tiny")                   # model.json and surrogate.npz
+    >>> again = load_surrogate(f"{folder}/tiny")
+    >>> again.name, bool(np.array_equal(again.forces(x, v), model.forces(x, v)))
+    ('tiny', True)
+    """
 
     def __init__(self, bearing: JournalBearing | ConicalBearing, networks: list, scalings: list[Scaling], activation: str,
                  boundaries=(), blend_width: float = 0.0, domain=None, eps_max: float = 1.0,
@@ -426,6 +490,8 @@ class SurrogateForceModel:
 
     # ------------------------------------------------------------------ evaluation
     def forces(self, X, V) -> np.ndarray:
+        """Film force [N] at positions X [m] and velocities V [m/s], (..., 2); counts (and warns of)
+        states outside the training domain."""
         x, v, shape = as_state_pairs(X, V, self.clearance)  # the shared domain contract (states.py)
         before = int(self._counter[0])
         out = np.empty_like(x)
@@ -459,6 +525,7 @@ class SurrogateForceModel:
 
     # ------------------------------------------------------------------ io
     def save(self, directory) -> None:
+        """Write ``model.json`` and ``surrogate.npz`` (with its SHA-256) into ``directory``."""
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
         arrays = {}
@@ -528,6 +595,33 @@ def load_surrogate(path) -> SurrogateForceModel:
     weights file whose SHA-256 differs from the one written at save time,
     arrays whose shapes disagree with the saved configuration, non-finite
     weights.
+
+    Parameters
+    ----------
+    path : path-like
+        The model's folder, holding ``model.json`` and ``surrogate.npz`` (``SurrogateForceModel.save``;
+        the pipeline writes them under ``models/``).
+
+    Returns
+    -------
+    SurrogateForceModel
+
+    Raises
+    ------
+    SurrogateFileError
+        A ``ValueError`` naming the file and the fault.
+
+    Examples
+    --------
+    A model saved and loaded again: see ``SurrogateForceModel``.  A folder without one:
+
+    >>> import tempfile
+    >>> from fluidfilm.surrogate import load_surrogate
+    >>> folder = tempfile.mkdtemp()
+    >>> load_surrogate(f"{folder}/none")
+    Traceback (most recent call last):
+    ...
+    fluidfilm.surrogate.inference.SurrogateFileError: .../none/model.json is missing: ... holds no saved surrogate (model.json and surrogate.npz)
     """
     d = Path(path)
     meta_file, npz = d / "model.json", d / "surrogate.npz"

@@ -94,6 +94,55 @@ def _centre_half_range(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @dataclass
 class Scaling:
+    """Input and output scaling of one force network (module doc), fitted with ``Scaling.fit``.
+
+    Parameters
+    ----------
+    kind : {"standard", "physics", "physics_v", "minmax"}
+        The scaling (module doc).
+    clearance : float
+        Radial clearance c [m].
+    omega : float
+        Shaft speed [rad/s].
+    force_scale : float
+        Film-force scale mu omega R L (R/c)^2 [N].
+    power : float
+        Exponent p of the (1 - eps^2)^p factor of the physics scalings.
+    in_mean, in_std : ndarray
+        Centre and spread of the raw network inputs.
+    out_mean, out_std : ndarray, shape (2,)
+        Centre and spread of the raw targets.
+    frame : {"cartesian", "polar", "whirl"}, default "cartesian"
+        Input and output frame.
+    extras : tuple of str, default ()
+        Extra inputs after the state (``("S",)``: the sleeve displacement [m]).
+    sleeve_gain : float, default 0.0
+        dc_r/dS (tan alpha) where the sleeve is an input of a physics scaling.
+
+    Raises
+    ------
+    ValueError
+        For the whirl frame with an affine kind or extra inputs; ``fit`` also for an unknown kind
+        or frame, or too many inputs for the compiled kernel.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.surrogate import Scaling
+    >>> bearing = paper_bearing()
+    >>> X = np.array([[0.0, 30e-6], [40e-6, 0.0], [0.0, -80e-6]])   # [m]
+    >>> V = np.array([[0.0, 0.0], [0.01, 0.0], [0.0, -0.02]])       # [m/s]
+    >>> F = ReynoldsSolver(bearing, 16, 8).forces(X, V)
+    >>> s = Scaling.fit("physics", X, V, F, bearing.clearance, bearing.omega, bearing.force_scale)
+    >>> s.kind, s.in_mean.shape, s.out_std.shape
+    ('physics', (4,), (2,))
+    >>> Scaling.fit("log", X, V, F, bearing.clearance, bearing.omega, bearing.force_scale)
+    Traceback (most recent call last):
+    ...
+    ValueError: unknown scaling 'log'; choose one of ('standard', 'physics', 'physics_v', 'minmax')
+    """
+
     kind: str
     clearance: float
     omega: float
