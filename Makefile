@@ -8,7 +8,10 @@
 # Other targets:
 #   make reproduce PROFILE=quick   the same dvc.yaml on the small profile, in a scratch copy
 #                                  ($(QUICK_DIR)); the workspace's own outputs are not touched
-#   make mlflow                    serve the workspace's MLflow runs on http://127.0.0.1:$(MLFLOW_PORT)
+#   make mlflow                    serve the workspace's MLflow runs on http://127.0.0.1:$(MLFLOW_PORT); open the
+#                                  runs table it prints, http://127.0.0.1:$(MLFLOW_PORT)/#/experiments/<id>/runs
+#                                  ?viewStateShareKey=summary: one row per model (accuracy, training time,
+#                                  speed-up); MLflow's home page is its GenAI overview
 #   make lint / test-slow / bench
 #   make ross-peer                 ROSS (external peer, its own .venv-ross) vs ours: benchmarks/bench_ross_peer.py
 #   make train-time-ci             the training-time study at 3x the pipeline's subsample (12,000 per

@@ -246,8 +246,21 @@ def timing(models: dict, x0, repeats: int = 5, h_rel: dict | None = None) -> pd.
 
 
 # --- figures ---------------------------------------------------------------------------------------
+# Axes span the reference models' values (the truth; a surrogate far off it is a finding, written on the
+# figure, not a reason to flatten every curve onto the axis): see figure_style.limit_with_outliers.
+def _is_reference(name: str) -> bool:
+    return name.startswith("reference")
+
+
+def _style(name: str) -> dict:
+    return dict(marker="o", lw=2, ms=5) if _is_reference(name) else dict(marker=".", lw=1)
+
+
 def plot_static(tables: pd.DataFrame):
+    """Static characteristics against the Sommerfeld number, one line per (cavitation, feed)."""
     import matplotlib.pyplot as plt
+
+    from fluidfilm.studies.figure_style import readable_log_ticks
     fig, ax = plt.subplots(1, 4, figsize=(18, 4))
     for (cav, feed), g in tables.groupby(["cavitation", "feed"]):
         lab = f"{cav}, feed {feed}"
@@ -255,13 +268,16 @@ def plot_static(tables: pd.DataFrame):
         ax[1].semilogx(g.sommerfeld, g.attitude_deg, marker=".", label=lab)
         ax[2].loglog(g.sommerfeld, g.power_W, marker=".", label=lab)
         ax[3].semilogx(g.sommerfeld, 1e6 * g.side_flow_m3s, marker=".", label=lab)
-    ax[0].set_ylabel("eccentricity ratio")
-    ax[1].set_ylabel("attitude angle [deg]")
+    ax[0].set_ylabel(r"eccentricity ratio $\varepsilon$")
+    ax[1].set_ylabel(r"attitude angle $\phi$ [deg]")
     ax[2].set_ylabel("power loss [W]")
-    ax[3].set_ylabel("side flow [cm^3/s]")
+    ax[3].set_ylabel(r"side flow [cm$^3$/s]")
+    ax[0].set_ylim(0, 1)
     for a in ax:
-        a.set_xlabel("Sommerfeld number S")
+        a.set_xlabel("Sommerfeld number $S$")
         a.grid(True, which="both", alpha=0.3)
+        readable_log_ticks(a, "x")
+    readable_log_ticks(ax[2], "y")
     ax[0].legend(fontsize=7)
     fig.suptitle("Static characteristics of the paper's bearing")
     fig.tight_layout()
@@ -269,44 +285,80 @@ def plot_static(tables: pd.DataFrame):
 
 
 def plot_coefficients(table: pd.DataFrame):
+    """The eight dimensionless coefficients along the equilibrium locus, per model; each panel spans the
+    reference models' values, a surrogate's values beyond it are marked at the edge."""
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(2, 4, figsize=(15, 7), sharex=True)
+
+    from fluidfilm.studies.figure_style import limit_with_outliers, reference_range
+    fig, axes = plt.subplots(2, 4, figsize=(15, 7.5), sharex=True)
+    models = list(dict.fromkeys(table.model))
+    colors = {name: f"C{k}" for k, name in enumerate(models)}
+    refs = table[table.model.map(_is_reference)]
     for ax, k in zip(axes.ravel(), coef.NAMES):
-        for name, g in table.groupby("model"):
-            ax.plot(g.eps, g[k], marker="o" if name.startswith("reference") else ".", label=name,
-                    lw=2 if name.startswith("reference") else 1)
-        ax.set_title(f"{k} (dimensionless)")
+        series = []
+        for name, g in table.groupby("model", sort=False):
+            ax.plot(g.eps, g[k], color=colors[name], label=name, **_style(name))
+            series.append((g.eps, g[k], name, colors[name]))
+        if not refs.empty:
+            lo, hi = reference_range(refs[k], pad=0.35)
+            limit_with_outliers(ax, lo, hi, [s for s in series if not _is_reference(s[2])])
+        sym = "K" if k.startswith("K") else "C"
+        ax.set_title(f"${sym}_{{{k[1:]}}}$" + (r"$\,c/W$" if sym == "K" else r"$\,c\,\omega/W$"))
         ax.grid(True, alpha=0.3)
     for ax in axes[1]:
-        ax.set_xlabel("eccentricity ratio (equilibrium)")
-    axes[0, 0].legend(fontsize=7)
-    fig.suptitle("Stiffness K c/W and damping C c omega/W along the equilibrium locus")
-    fig.tight_layout()
+        ax.set_xlabel(r"eccentricity ratio $\varepsilon$ (equilibrium)")
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8)
+    fig.suptitle(r"Dimensionless stiffness $K\,c/W$ and damping $C\,c\,\omega/W$ along the equilibrium locus"
+                 " (axes: the reference's range; triangles: values beyond it)")
+    fig.tight_layout(rect=(0, 0.04, 1, 1))
     return fig
 
 
 def plot_stability_map(table: pd.DataFrame, rotor_line: dict | None = None, checks: list[dict] | None = None):
+    """Critical mass and whirl frequency ratio against the Sommerfeld number, per model.
+
+    The critical mass axis spans the reference models' values (and the nonlinear checks); the whirl ratio
+    axis spans 0 to 1 (a whirl at onset is sub-synchronous).  A surrogate's values beyond either are
+    marked at the edge with the value written, instead of rescaling the axis.
+    """
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(1, 2, figsize=(12, 4.5))
-    for name, g in table.groupby("model"):
-        m = np.isfinite(g.critical_mass_bar)
-        ax[0].loglog(g.sommerfeld[m], g.critical_mass_bar[m], marker="o" if name.startswith("reference") else ".",
-                     label=name)
-        ax[1].semilogx(g.sommerfeld, g.whirl_ratio, marker="o" if name.startswith("reference") else ".", label=name)
+
+    from fluidfilm.studies.figure_style import limit_with_outliers, readable_log_ticks, reference_range
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.8))
+    models = list(dict.fromkeys(table.model))
+    colors = {name: f"C{k}" for k, name in enumerate(models)}
+    mass, whirl = [], []
+    for name, g in table.groupby("model", sort=False):
+        m = np.isfinite(g.critical_mass_bar) & (g.critical_mass_bar > 0)
+        ax[0].loglog(g.sommerfeld[m], g.critical_mass_bar[m], color=colors[name], label=name, **_style(name))
+        ax[1].semilogx(g.sommerfeld, g.whirl_ratio, color=colors[name], label=name, **_style(name))
+        if not _is_reference(name):
+            mass.append((g.sommerfeld[m], g.critical_mass_bar[m], name, colors[name]))
+            whirl.append((g.sommerfeld, g.whirl_ratio, name, colors[name]))
+    s_lo, s_hi = table.sommerfeld.min(), table.sommerfeld.max()
     if rotor_line:
-        s = np.geomspace(table.sommerfeld.min(), table.sommerfeld.max(), 50)
+        s = np.geomspace(s_lo, s_hi, 50)
         ax[0].loglog(s, rotor_line["k"] * s**2, "k--", lw=1, label="paper rotor as speed varies")
     for chk in checks or []:
         ax[0].plot(chk["sommerfeld"], chk["mass_bar"], "v" if chk["ratio"] < 1 else "^", ms=10,
-                   color="green" if chk["ratio"] < 1 else "red",
+                   color="green" if chk["ratio"] < 1 else "red", ls="none",
                    label=f"nonlinear {chk['factor']:.2f}x: {'decays' if chk['ratio'] < 1 else 'grows'}")
-    ax[0].set_xlabel("Sommerfeld number S")
-    ax[0].set_ylabel("critical mass m c omega^2 / W  (unstable above)")
-    ax[1].set_xlabel("Sommerfeld number S")
-    ax[1].set_ylabel("whirl frequency ratio at onset")
+    refs = table[table.model.map(_is_reference)]
+    if not refs.empty:
+        lo, hi = reference_range(refs.critical_mass_bar, pad=0.6, log=True,
+                                 include=[c["mass_bar"] for c in checks or []])
+        limit_with_outliers(ax[0], lo, hi, mass)
+    limit_with_outliers(ax[1], 0.0, 1.0, whirl)
+    ax[0].set_xlabel("Sommerfeld number $S$")
+    ax[0].set_ylabel(r"critical mass $\bar{m}\,c\,\omega^2/W$ (unstable above)")
+    ax[1].set_xlabel("Sommerfeld number $S$")
+    ax[1].set_ylabel(r"whirl frequency ratio $\omega_\mathrm{whirl}/\omega$ at onset")
     for a in ax:
+        a.set_xlim(s_lo / 1.3, s_hi * 1.3)
+        readable_log_ticks(a, "x")
         a.grid(True, which="both", alpha=0.3)
-        a.legend(fontsize=7)
+        a.legend(fontsize=7, loc="best")
     fig.suptitle("Stability map (Lund's criterion, rigid rotor)")
     fig.tight_layout()
     return fig

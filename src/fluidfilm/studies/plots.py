@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from fluidfilm.perf.benchmarking import median_seconds
+from fluidfilm.studies.figure_style import readable_log_ticks
 from fluidfilm.reynolds import ReynoldsSolver
 
 
@@ -118,19 +119,20 @@ def plot_grid_comparison(frame: pd.DataFrame, names: list[str], labels: dict[str
     for name in names:
         ax.semilogy(frame["eps"], frame[f"F_{name}"], label=labels.get(name, name))
     ax.semilogy(frame["eps"], frame[f"F_{reference}"], "k--", lw=0.8, label=labels.get(reference, reference))
-    ax.set_ylabel("|F| [N]")
+    ax.set_ylabel(r"$|F|$ [N]")
     ax.set_title("Fig. 2 - film reaction against eccentricity (journal at rest)")
-    ax.axvspan(0.9, frame["eps"].max(), color="0.9", label="eps > 0.9: the paper's dense-grid region")
+    ax.axvspan(0.9, frame["eps"].max(), color="0.9", label=r"$\varepsilon > 0.9$: the paper's dense-grid region")
     ax.legend()
     ax.grid(True, which="both", alpha=0.3)
+    readable_log_ticks(ax, "y")
     for name in names:
         ax_err.plot(frame["eps"], frame[f"err_{name}_pct"], label=labels.get(name, name))
     ax_err.axhline(0.0, color="k", lw=0.6)
     ax_err.axvspan(0.9, frame["eps"].max(), color="0.9")
-    ax_err.set_xlabel("eccentricity ratio eps")
+    ax_err.set_xlabel(r"eccentricity ratio $\varepsilon$")
     ax_err.set_ylabel(f"error vs {labels.get(reference, reference)} [%]")
     ax_err.grid(True, alpha=0.3)
-    fig.text(0.01, 0.005, "Journal displaced at rest, Gumbel cavitation. Grey band: eps > 0.9, where the paper "
+    fig.text(0.01, 0.005, "Journal displaced at rest, Gumbel cavitation. Grey band: $\\varepsilon$ > 0.9, where the paper "
              "switches to the dense grid\n(the coarse grid's error grows fast there). Dashed: grid-converged "
              "(Richardson) reference.", fontsize=7, va="bottom")
     fig.tight_layout(rect=(0, 0.04, 1, 1))
@@ -148,13 +150,13 @@ def plot_velocity_response(frame: pd.DataFrame):
         sub = frame[frame["direction"] == direction]
         for eps, g in sub.groupby("eps"):
             for row, comp in enumerate(("F1", "F2")):
-                axes[row, col].plot(g["v"], g[comp], label=f"eps = {eps:g}")
+                axes[row, col].plot(g["v"], g[comp], label=rf"$\varepsilon$ = {eps:g}")
         axes[1, col].set_xlabel(f"{direction} velocity [m/s]")
     for row, comp in enumerate(("F1", "F2")):
         for col in range(2):
             axes[row, col].set_yscale("symlog", linthresh=10.0)
             axes[row, col].grid(True, alpha=0.3)
-        axes[row, 0].set_ylabel(f"{comp} [N]")
+        axes[row, 0].set_ylabel(f"${comp[0]}_{comp[1]}$ [N]")
     axes[0, 0].legend(fontsize=8)
     fig.suptitle("Fig. 3 - film reaction against journal velocity")
     fig.tight_layout()
@@ -198,15 +200,15 @@ def plot_orbits(panels: dict, clearance: float, t_settle: float, title: str):
         ax.set_aspect("equal")
         ax.set_xlim(-1.05, 1.05)
         ax.set_ylim(1.05, -1.05)  # X2 (gravity) points down the page
-        ax.set_xlabel("X1 / c", fontsize=8)
-        ax.set_ylabel("X2 / c  (gravity: down)", fontsize=8)
+        ax.set_xlabel("$X_1/c$", fontsize=8)
+        ax.set_ylabel("$X_2/c$  (gravity: down)", fontsize=8)
         ax.tick_params(labelsize=7)
         ax.legend(fontsize=6, loc="upper left")
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
     fig.suptitle(title)
     fig.text(0.01, 0.005, "Journal-centre orbits in units of the radial clearance c; the grey circle is the clearance "
-             "circle (eps = 1). X2 points along gravity, drawn downwards (the X2 axis is inverted).\nThin: the "
+             "circle ($\\varepsilon$ = 1). X2 points along gravity, drawn downwards (the X2 axis is inverted).\nThin: the "
              "transient; thick: the settled orbit (t >= %g s); dot: the final position. Reference: wide grey band "
              "underneath the models." % t_settle, fontsize=7, va="bottom")
     fig.tight_layout(rect=(0, 0.05, 1, 1))
@@ -237,6 +239,7 @@ def plot_ensemble(table: pd.DataFrame, threshold_pct: float):
     ax.axhline(threshold_pct, color="k", lw=1, ls="--", label=f"satisfactory below {threshold_pct:g} % of c")
     ax.set_yscale("log")
     ax.set_ylim(floor, None)
+    readable_log_ticks(ax, "y")
     ax.set_xticks(x, cases)
     ax.set_xlabel("case (Fig. 4)")
     ax.set_ylabel("orbit distance from the reference [% of c]")
@@ -250,6 +253,11 @@ def plot_ensemble(table: pd.DataFrame, threshold_pct: float):
     bx.set_xticks(x, cases)
     bx.set_xlabel("case (Fig. 4)")
     bx.set_ylabel("force evaluations flagged [%]")
+    top = float(np.nanmax(100 * rows.flagged_share.to_numpy(float), initial=0.0)) if counted else 0.0
+    bx.set_ylim(0.0, max(1.0, 1.1 * top))  # a share: from 0, not around it
+    if top == 0.0:
+        bx.text(0.5, 0.5, "no force evaluation flagged in any case", transform=bx.transAxes, ha="center",
+                fontsize=9, color="0.35")
     bx.set_title("ensemble: members disagree; hybrid: answered by the reference", fontsize=9)
     bx.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     fig.suptitle("Seeds of the best surrogate, their ensemble and the hybrid with the reference")
@@ -271,16 +279,18 @@ def plot_equilibrium_locus(locus: pd.DataFrame, clearance: float):
     ax.set_aspect("equal")
     ax.set_xlim(-1.05, 1.05)
     ax.set_ylim(1.05, -1.05)
-    ax.set_xlabel("X1 / c")
-    ax.set_ylabel("X2 / c")
-    ax.set_title("equilibrium locus (load along +X2)")
+    ax.set_xlabel("$X_1/c$")
+    ax.set_ylabel("$X_2/c$ (gravity: down)")
+    ax.set_title("equilibrium locus (load along $+X_2$)")
     ax2.semilogx(locus["sommerfeld"], locus["eps"], label="eccentricity ratio")
     ax2b = ax2.twinx()
     ax2b.semilogx(locus["sommerfeld"], locus["attitude_deg"].abs(), "C1--", label="attitude angle")
-    ax2.set_xlabel("Sommerfeld number S")
-    ax2.set_ylabel("eps")
+    ax2.set_xlabel("Sommerfeld number $S$")
+    ax2.set_ylabel(r"eccentricity ratio $\varepsilon$")
+    ax2.set_ylim(0, 1)
     ax2b.set_ylabel("attitude angle [deg]")
     ax2.grid(True, which="both", alpha=0.3)
+    readable_log_ticks(ax2, "x")
     fig.tight_layout()
     return fig
 
@@ -320,16 +330,16 @@ def fig5_panels(runs: dict, clearance: float, out_dir, ramp: tuple[float, float]
         lc.set_array(r["t"][:-1])
         ax.add_collection(lc)
         cb = fig.colorbar(lc, ax=ax)
-        cb.set_label("t [s]")
+        cb.set_label("$t$ [s]")
         ax.set_aspect("equal")
         ax.set_xlim(-lim, lim)
         ax.set_ylim(lim, -lim)  # X2 (gravity) down the page
-        ax.set_xlabel("X1 [um]")
-        ax.set_ylabel("X2 [um]")
+        ax.set_xlabel(r"$X_1$ [µm]")
+        ax.set_ylabel(r"$X_2$ [µm]")
         ax.set_title(f"{letters.get(name, '')}) {titles.get(name, name)}: max amplitude "
-                     f"{1e6 * r['max_amplitude_m']:.0f} um", fontsize=9)
-        fig.text(0.01, 0.005, "Grey circles: the radial clearance c_r of each sleeve position used (dashed: the "
-                 "nominal c).\nX2 along gravity, drawn downwards. Colour: time along the imbalance ramp.",
+                     f"{1e6 * r['max_amplitude_m']:.0f} µm", fontsize=9)
+        fig.text(0.01, 0.005, "Grey circles: the radial clearance $c_r$ of each sleeve position used (dashed: the "
+                 "nominal $c$).\n$X_2$ along gravity, drawn downwards. Colour: time along the imbalance ramp.",
                  fontsize=6.5, va="bottom")
         fig.tight_layout(rect=(0, 0.06, 1, 1))
         path = out / f"fig5_{letters.get(name, 'x')}_{name}.png"
@@ -341,11 +351,11 @@ def fig5_panels(runs: dict, clearance: float, out_dir, ramp: tuple[float, float]
         t = np.array([h["t"] for h in r["history"]])
         a1.plot(t, [1e6 * h["amplitude"] for h in r["history"]], label=titles.get(name, name), lw=1)
         a2.step(t, [1e3 * h["sleeve"] for h in r["history"]], where="pre", label=titles.get(name, name), lw=1)
-    a1.set_ylabel("orbit amplitude [um]")
-    a1.set_title(f"imbalance ramp {ramp[0]:g} -> {ramp[1]:g} kg m", fontsize=9)
+    a1.set_ylabel("orbit amplitude [µm]")
+    a1.set_title(f"imbalance ramp {ramp[0]:g} → {ramp[1]:g} kg m", fontsize=9)
     a1.legend(fontsize=8)
     a2.set_ylabel("sleeve position [mm]")
-    a2.set_xlabel("t [s]")
+    a2.set_xlabel("$t$ [s]")
     fig.tight_layout()
     path = out / "fig5_amplitude.png"
     io.save_figure(fig, path, dpi=130)
@@ -384,6 +394,8 @@ def plot_grading_study(table: pd.DataFrame, title: str):
         ax.set_yscale("log")
         ax.set_xlabel(xlabel)
         ax.grid(True, which="both", alpha=0.3)
+        readable_log_ticks(ax, "x")
+        readable_log_ticks(ax, "y")
     axes[0].set_ylabel("relative force error [%]")
     axes[0].legend(fontsize=7)
     fig.suptitle(f"{title}: labels are the jobs' swept values (grading.* shortened), (n/7) the Fig. 4 cases "
@@ -417,8 +429,8 @@ def plot_error_map(maps: dict, title: str):
                              norm=LogNorm(vmin=max(np.nanmin(grid), 1e-3), vmax=max(vmax, 1e-2)))
         ax.set_xticks(np.arange(len(e_edges)), [f"{e:g}" for e in e_edges], fontsize=7)
         ax.set_yticks(np.arange(len(s_edges)), [f"{1000 * s:g}" for s in s_edges], fontsize=7)
-        ax.set_xlabel("eccentricity ratio eps")
-        ax.set_ylabel("journal speed |V| [mm/s]")
+        ax.set_xlabel(r"eccentricity ratio $\varepsilon$")
+        ax.set_ylabel(r"journal speed $|V|$ [mm/s]")
         ax.set_title(name, fontsize=9)
         fig.colorbar(mesh, ax=ax, label="99th percentile relative force error [%]")
     fig.suptitle(title)

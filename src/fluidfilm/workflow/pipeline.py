@@ -4,6 +4,11 @@
     python -m fluidfilm.workflow.pipeline run --profile quick --workdir DIR   # the small profile in a scratch copy
     python -m fluidfilm.workflow.pipeline serve --port 5000                   # MLflow UI on the workspace's store
 
+``serve`` prints the address to open: MLflow 3's home page is its GenAI overview, and an experiment
+opens on traces, so the runs are at ``http://127.0.0.1:5000/#/experiments/<id>/runs``; the printed
+address adds ``?viewStateShareKey=summary``, the view ``publish`` stores on the experiment: one
+``summary/<model>`` run per surrogate with its accuracy, training time and speed-ups as columns.
+
 Why a module and not a shell line: the stages must start the workspace's interpreter whatever is
 on the caller's PATH (dvc.yaml takes it from ``conf/pipeline/full.yaml``), the small profile must
 run the very same ``dvc.yaml`` without touching the full outputs (so it runs in a copy of the
@@ -22,6 +27,7 @@ import signal
 import subprocess
 import sys
 import time
+import urllib.parse
 import urllib.request
 from pathlib import Path
 
@@ -134,7 +140,7 @@ def where_things_are(workdir: Path) -> str:
         f"  stage timings   {prefix}{TIMING_FILE}",
         f"  MLflow runs     {prefix}mlflow.db          open with: "
         + ("make mlflow" if not prefix else f"(cd {rel} && .venv/bin/python -m fluidfilm.workflow.pipeline serve)")
-        + "   then http://127.0.0.1:5000",
+        + "   then the runs-table address it prints",
         "  DVC             .venv/bin/dvc metrics show ; .venv/bin/dvc plots show   (writes reports/dvc_plots/)",
         "  review notebook .venv/bin/jupyter execute --inplace notebooks/review.ipynb",
     ])
@@ -191,6 +197,35 @@ def cmd_publish(args: argparse.Namespace) -> int:
     return 0
 
 
+def runs_table_addresses(url: str, experiment: str) -> str:
+    """What to open in the browser: the experiment's runs table (on the summary view where the store has it),
+    read from the running server (``url``) so that the store is only ever opened by it."""
+    from fluidfilm.workflow.tracking import SUMMARY_VIEW, VIEW_TAG, runs_table_url
+
+    query = urllib.parse.urlencode({"experiment_name": experiment})
+    try:
+        with urllib.request.urlopen(f"{url}/api/2.0/mlflow/experiments/get-by-name?{query}", timeout=10) as r:
+            exp = json.load(r)["experiment"]
+    except OSError:  # HTTPError 404 included: no run logged yet
+        return (f"  no experiment {experiment!r} in this store yet: runs appear under {url}/#/experiments "
+                "once a stage has run")
+    lines = []
+    search = json.dumps({"experiment_ids": [exp["experiment_id"]], "max_results": 1,
+                         "filter": f"tags.`{VIEW_TAG}` = '{SUMMARY_VIEW}'"}).encode()
+    request = urllib.request.Request(f"{url}/api/2.0/mlflow/runs/search", data=search,
+                                     headers={"Content-Type": "application/json"})
+    with urllib.request.urlopen(request, timeout=10) as r:
+        has_summary = bool(json.load(r).get("runs"))
+    has_view = any(t.get("key") == f"mlflow.sharedViewState.{SUMMARY_VIEW}" for t in exp.get("tags", []))
+    if has_summary and has_view:
+        lines.append(f"  {'one row per model (accuracy, training time, speed-up):':<58}"
+                     f"{runs_table_url(url, exp['experiment_id'])}")
+    else:
+        lines.append("  no per-model summary runs yet: `make reproduce` (its publish step) writes them")
+    lines.append(f"  {f'all runs of {experiment!r}:':<58}{runs_table_url(url, exp['experiment_id'], view=None)}")
+    return "\n".join(lines)
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
     """The MLflow UI on this workspace's store; artifacts served by the server (portable links)."""
     from fluidfilm.workflow.tracking import relocate_artifacts
@@ -209,6 +244,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
             try:
                 urllib.request.urlopen(url + "/health", timeout=2)
                 print(f"MLflow is up: {url}", flush=True)
+                print(runs_table_addresses(url, args.experiment), flush=True)
                 break
             except OSError:
                 time.sleep(1)
@@ -239,6 +275,7 @@ def main(argv: list[str] | None = None) -> int:
     serve.add_argument("--host", default="127.0.0.1")
     serve.add_argument("--store", default="sqlite:///mlflow.db")
     serve.add_argument("--artifacts", default="./mlartifacts")
+    serve.add_argument("--experiment", default="fluidfilm", help="whose runs-table address to print")
     serve.set_defaults(func=cmd_serve)
     args = parser.parse_args(argv)
     return args.func(args)

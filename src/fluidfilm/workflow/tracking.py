@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import functools
+import json
 import os
 import sys
 from collections.abc import Mapping
@@ -38,6 +39,47 @@ EXPERIMENT_TAGS = {
         "*_s seconds; *_us microseconds; *_m metres; *_N newtons."),
 }
 WORKSPACE_TAG = "fluidfilm.workspace"
+
+# The runs table a researcher should meet first: one summary run per surrogate (tag fluidfilm.view =
+# summary) whose metrics answer the workspace's questions: accuracy, training time, speed-up.  MLflow 3
+# has no setting for an experiment's default view, but it opens a view stored as the experiment tag
+# ``mlflow.sharedViewState.<key>`` when the runs page's address carries ``?viewStateShareKey=<key>``
+# (what its "Share" button makes); ``runs_table_url`` builds that address.
+SUMMARY_VIEW = "summary"
+VIEW_TAG = "fluidfilm.view"
+SUMMARY_COLUMNS = {  # summary metric -> what it says (units as in the experiment's description)
+    "test_rel_err_median": "median relative force error on the held-out test set (fraction)",
+    "test_rel_err_p99": "99th-percentile relative force error on the held-out test set (fraction)",
+    "satisfactory_cases": "Fig. 4 cases whose orbit lies within 2 % of c of the reference (of 7)",
+    "train_time_s": "wall time of the model's training [s]",
+    "speedup_force_eval_vs_reference": "one force evaluation: reference time / surrogate time",
+    "speedup_trajectory": "one Fig. 4 trajectory: reference time / surrogate time",
+}
+# short names the comparison stage gives the models in reports/metrics.json
+_COMPARISON_NAMES = {"paper_single": "single", "paper_split": "split", "best": "best"}
+
+
+def summary_view_state() -> dict:
+    """The runs-table view stored on the experiment: the summary runs only, the ``SUMMARY_COLUMNS`` shown,
+    most accurate first.  Keys as MLflow's UI writes them (search facets and the table's UI state)."""
+    columns = [f"metrics.`{key}`" for key in SUMMARY_COLUMNS]
+    return {"searchFilter": f"tags.`{VIEW_TAG}` = '{SUMMARY_VIEW}'",
+            "orderByKey": "metrics.`test_rel_err_median`", "orderByAsc": True, "lifecycleFilter": "Active",
+            "selectedColumns": ["tags.`fluidfilm.model`", *columns]}
+
+
+def runs_table_url(base_url: str, experiment_id: str, view: str | None = SUMMARY_VIEW) -> str:
+    """Address of the experiment's runs table in the MLflow UI; with ``view``, opened on that stored view.
+
+    Examples
+    --------
+    >>> runs_table_url("http://127.0.0.1:5000", "1")
+    'http://127.0.0.1:5000/#/experiments/1/runs?viewStateShareKey=summary'
+    >>> runs_table_url("http://127.0.0.1:5000/", "1", view=None)
+    'http://127.0.0.1:5000/#/experiments/1/runs'
+    """
+    url = f"{base_url.rstrip('/')}/#/experiments/{experiment_id}/runs"
+    return f"{url}?viewStateShareKey={view}" if view else url
 
 
 def _sqlite_path(uri: str) -> Path | None:
@@ -99,7 +141,7 @@ def ensure_experiment(uri: str, name: str) -> str:
     exp = client.get_experiment_by_name(name)
     if exp is not None:
         return exp.experiment_id
-    tags = dict(EXPERIMENT_TAGS)
+    tags = dict(EXPERIMENT_TAGS) | {f"mlflow.sharedViewState.{SUMMARY_VIEW}": json.dumps(summary_view_state())}
     location = None
     if _sqlite_path(uri) is not None:
         tags[WORKSPACE_TAG] = str(Path.cwd().resolve())
@@ -401,10 +443,9 @@ def publish_workspace(tracking: Mapping, reports_dir: Path | str = "reports", mo
 
     The run carries the headline metrics (``reports/metrics.json``), the report, the stage timings, the
     training-time study, every figure and the DQN agent as artifacts, so that the MLflow UI shows the
-    whole reproduction in one place.  Returns the run id (None with tracking disabled).
+    whole reproduction in one place, and one summary run per model (``log_model_summaries``) for the
+    runs table's first view.  Returns the run id (None with tracking disabled).
     """
-    import json
-
     if not tracking or not tracking.get("enabled", True):
         return None
     import mlflow
@@ -446,7 +487,67 @@ def publish_workspace(tracking: Mapping, reports_dir: Path | str = "reports", mo
                 tags = {k: str(v) for k, v in rep.items() if k.startswith("test_rel_err")}
             client.create_model_version(registered, source=f"{active.info.artifact_uri}/models/{name}",
                                         run_id=active.info.run_id, tags=tags)
-        return active.info.run_id
+        run_id = active.info.run_id
+    log_model_summaries(tracking, metrics, model_root, models, source_run=run_id)
+    return run_id
+
+
+def model_summary(name: str, metrics: Mapping, report: Mapping) -> dict[str, float]:
+    """The ``SUMMARY_COLUMNS`` of one model: from its ``models/<name>/report.json`` metrics (``report``)
+    and the pipeline's headline metrics (``metrics``, reports/metrics.json); a value neither holds is left out.
+
+    Examples
+    --------
+    >>> model_summary("paper_split", {"speedup_trajectory_split": 9.1, "satisfactory_cases_split": 0},
+    ...               {"test_rel_err_median": 0.2, "train_time_s": 40.0})
+    {'test_rel_err_median': 0.2, 'satisfactory_cases': 0.0, 'train_time_s': 40.0, 'speedup_trajectory': 9.1}
+    """
+    short = _COMPARISON_NAMES.get(name, name)
+    headline = {"test_rel_err_median": f"test_rel_err_median_{name}", "test_rel_err_p99": f"test_rel_err_p99_{name}",
+                "satisfactory_cases": f"satisfactory_cases_{short}", "speedup_trajectory": f"speedup_trajectory_{short}"}
+    out = {}
+    for key in SUMMARY_COLUMNS:
+        value = report.get(key, metrics.get(headline.get(key, "")))
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and value == value:
+            out[key] = float(value)
+    return out
+
+
+def log_model_summaries(tracking: Mapping, metrics: Mapping, models_dir: Path | str,
+                        models: tuple[str, ...], source_run: str | None = None) -> list[str]:
+    """One run ``summary/<model>`` per trained model (tags ``fluidfilm.view = summary``, ``fluidfilm.model``)
+    whose metrics are ``model_summary``'s: the rows of the runs table's first view (``runs_table_url``).
+
+    The summaries of an earlier reproduction are re-tagged ``fluidfilm.view = superseded`` (kept, not shown
+    in that view), and the experiment's stored view is rewritten, so an experiment made before the view
+    existed gets it too.  Returns the new runs' ids.
+    """
+    if not tracking or not tracking.get("enabled", True):
+        return []
+    import mlflow
+
+    exp_id = ensure_experiment(tracking["uri"], tracking["experiment"])
+    client = mlflow.tracking.MlflowClient(tracking["uri"])
+    client.set_experiment_tag(exp_id, f"mlflow.sharedViewState.{SUMMARY_VIEW}", json.dumps(summary_view_state()))
+    for old in client.search_runs([exp_id], f"tags.`{VIEW_TAG}` = '{SUMMARY_VIEW}'", max_results=1000):
+        client.set_tag(old.info.run_id, VIEW_TAG, "superseded")
+    ids = []
+    for name in models:
+        report_file = Path(models_dir) / name / "report.json"
+        if not report_file.exists():
+            continue
+        values = model_summary(name, metrics, json.loads(report_file.read_text()).get("metrics", {}))
+        tags = {VIEW_TAG: SUMMARY_VIEW, "fluidfilm.model": name,
+                "mlflow.note.content": "Summary of model '%s': %s" % (name, "; ".join(
+                    f"{k}: {v}" for k, v in SUMMARY_COLUMNS.items()))}
+        if source_run:
+            tags["fluidfilm.source_run"] = source_run
+        row = client.create_run(exp_id, run_name=f"summary/{name}", tags=tags)
+        for key, value in values.items():
+            client.log_metric(row.info.run_id, key, value)
+        client.set_terminated(row.info.run_id)
+        ids.append(row.info.run_id)
+    return ids
 
 
 def _registered(client, name: str) -> bool:

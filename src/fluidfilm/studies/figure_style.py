@@ -1,0 +1,137 @@
+"""What every figure of the pipeline shares: readable log ticks, axes limited to the meaningful range with
+the points outside it marked at the edge, and the caption each figure has on the results page.
+
+``CAPTIONS`` (path under ``reports/`` -> caption) is the one place the captions live; the results-page
+renderer reads it.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+# path of the PNG under reports/ -> the caption the results page shows under it
+CAPTIONS: dict[str, str] = {
+    "figures/fig2_grid.png": (
+        "Fig. 2: film reaction |F| of the journal at rest against the eccentricity ratio ε for the paper's "
+        "coarse and dense grids, and their error against the grid-converged (Richardson) reference. Grey band: "
+        "ε > 0.9, where the paper switches to the dense grid."),
+    "figures/fig3_velocity.png": (
+        "Fig. 3: film reaction components F1, F2 against the journal's velocity along the line of centres "
+        "(radial, squeeze) and across it (tangential), one curve per eccentricity; symmetric-log force axis."),
+    "figures/fig4_reference.png": (
+        "Fig. 4, reference model: journal-centre orbits of the seven cases in units of the clearance c "
+        "(grey circle: ε = 1; gravity down the page); thin: transient, thick: settled orbit."),
+    "figures/fig4_comparison.png": (
+        "Fig. 4, surrogates against the reference: the same orbits for the single, split and best surrogates "
+        "drawn on the reference's wide grey band; a coloured line inside the band means agreement."),
+    "figures/equilibrium_locus_reference.png": (
+        "Static equilibria of the reference model for growing load: the journal-centre locus in units of c "
+        "(left) and the eccentricity ratio ε and attitude angle against the Sommerfeld number S (right)."),
+    "figures/ensemble.png": (
+        "Seeds of the best surrogate, their ensemble and the hybrid with the reference: orbit distance from the "
+        "reference per Fig. 4 case (left, log scale; dashed: the 2 % of c criterion) and the share of force "
+        "evaluations flagged (right)."),
+    "figures/error_map.png": (
+        "Where the best surrogate's force errors sit: 99th-percentile relative force error per (ε, |V|) bin "
+        "for held-out random states and for states along the reference orbits; n: states in the bin."),
+    "grading_study/figure.png": (
+        "Grading study: held-out and orbit force errors of each dataset grading against the dataset size and "
+        "the time the reference model took to make it; labels: the swept values, (n/7): Fig. 4 cases within "
+        "2 % of c."),
+    "ablation/figure.png": (
+        "Ablation of input scaling and eccentricity split at one dataset: held-out and orbit force errors per "
+        "job; (n/7): Fig. 4 cases within 2 % of c."),
+    "figures/fig5_a_dqn.png": (
+        "Fig. 5a: rotor orbit under a growing imbalance with the DQN agent moving the conical sleeve; colour: "
+        "time; grey circles: the clearance of each sleeve position used (dashed: nominal)."),
+    "figures/fig5_b_none.png": "Fig. 5b: the same imbalance ramp without control (sleeve fixed at the nominal clearance).",
+    "figures/fig5_c_mpc.png": "Fig. 5c: the same imbalance ramp under model predictive control of the sleeve.",
+    "figures/fig5_amplitude.png": (
+        "Fig. 5: orbit amplitude (top) and sleeve position (bottom) against time for the three controllers "
+        "along the imbalance ramp."),
+    "figures/characteristics_static.png": (
+        "Static characteristics of the paper's bearing against the Sommerfeld number S, for two cavitation "
+        "rules and two feed assumptions: eccentricity ratio, attitude angle, power loss and side flow."),
+    "figures/characteristics_coefficients.png": (
+        "Dimensionless stiffness K c/W and damping C c ω/W along the equilibrium locus for the reference "
+        "models and the surrogates; the axes span the reference's values, surrogate values beyond them are "
+        "marked at the axis edge with the extreme value written."),
+    "figures/characteristics_stability_map.png": (
+        "Stability map (Lund's criterion, rigid rotor): the critical dimensionless mass m̄ c ω²/W above which "
+        "the rotor whirls (left; dashed: the paper's rotor as its speed varies; triangles: nonlinear "
+        "trajectories just below and above the threshold) and the whirl frequency ratio at onset (right). "
+        "Values of a surrogate beyond the axes are marked at the edge with their value."),
+}
+
+
+def readable_log_ticks(ax, axis: str = "x") -> None:
+    """Label a log axis at most at a handful of ticks that cannot overprint: decades (10⁻², 10⁻¹, ...)
+    when the axis spans two or more of them, else 1-2-5 steps written as plain numbers; minor ticks
+    are never labelled (matplotlib labels them on short log axes, where they overprint).
+    Call after the data are drawn (the labels follow the axis' limits)."""
+    from matplotlib.ticker import FuncFormatter, LogFormatterSciNotation, LogLocator, NullFormatter
+
+    a = ax.xaxis if axis == "x" else ax.yaxis
+    lo, hi = sorted(a.get_view_interval())
+    if lo <= 0:
+        return
+    decades = math.log10(hi / lo)
+    if decades >= 2.0:
+        step = max(1, math.ceil(decades / 6))  # at most ~6 labelled decades
+        a.set_major_locator(LogLocator(base=10.0 ** step))
+        a.set_major_formatter(LogFormatterSciNotation())
+    else:
+        a.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        a.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}" if 1e-4 <= v < 1e6 else f"{v:.0e}"))
+    a.set_minor_locator(LogLocator(base=10.0, subs=tuple(np.arange(2, 10)), numticks=12))
+    a.set_minor_formatter(NullFormatter())
+
+
+def limit_with_outliers(ax, lo: float, hi: float, series: Sequence[tuple], fmt: str = "{:.3g}") -> list[dict]:
+    """Limit the y axis to [lo, hi] and mark each series' points beyond it at the edge they cross.
+
+    ``series``: (x, y, label, color) per drawn series.  Every point outside gets a triangle on the axis
+    edge (pointing out); each series and edge gets one note inside the axes, in the corner of that edge,
+    naming the series, how many points lie beyond and the extreme value.  Returns those notes' records
+    ({"label", "edge", "n", "value", "text"}), in the order drawn.
+    """
+    ax.set_ylim(lo, hi)
+    records: list[dict] = []
+    for x, y, label, color in series:
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        for edge, beyond, marker in (("top", y > hi, "^"), ("bottom", y < lo, "v")):
+            beyond &= np.isfinite(y)
+            if not beyond.any():
+                continue
+            ax.plot(x[beyond], np.full(beyond.sum(), hi if edge == "top" else lo), marker, color=color, ms=7,
+                    clip_on=False, zorder=5, ls="none")
+            worst = float(y[beyond].max() if edge == "top" else y[beyond].min())
+            n = int(beyond.sum())
+            text = (f"{marker} {label}: {n} point{'s' * (n > 1)} {'above' if edge == 'top' else 'below'}, "
+                    f"{'max' if edge == 'top' else 'min'} {fmt.format(worst)}")
+            k = sum(r["edge"] == edge for r in records)  # stack the notes of one edge
+            ax.text(0.02, 0.97 - 0.075 * k if edge == "top" else 0.03 + 0.075 * k, text, transform=ax.transAxes,
+                    ha="left", va="top" if edge == "top" else "bottom", fontsize=7, color=color, zorder=6,
+                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.85))
+            records.append({"label": label, "edge": edge, "n": n, "value": worst, "text": text})
+    if ax.get_yscale() == "log":
+        readable_log_ticks(ax, "y")
+    return records
+
+
+def reference_range(values, pad: float = 0.15, log: bool = False, include: Sequence[float] = ()) -> tuple[float, float]:
+    """The y range of the trusted curves (``values``, e.g. the reference model's), widened by ``pad`` of
+    its span (of its decades when ``log``) on both sides, and stretched to hold ``include``."""
+    v = np.asarray(list(np.ravel(values)) + list(include), float)
+    v = v[np.isfinite(v) & (v > 0 if log else True)]
+    if v.size == 0:
+        raise ValueError("reference_range: no finite values to take the range from")
+    if log:
+        a, b = math.log10(v.min()), math.log10(v.max())
+        span = max(b - a, 0.3)
+        return 10 ** (a - pad * span), 10 ** (b + pad * span)
+    a, b = float(v.min()), float(v.max())
+    span = max(b - a, 1e-12 + 0.1 * max(abs(a), abs(b)))
+    return a - pad * span, b + pad * span
