@@ -8,7 +8,8 @@ import inspect
 #: the packages whose ``__all__`` is the public API (studies, workflow and reporting are the workspace's
 #: own machinery, called by the entry points, not by users)
 PACKAGES = ("fluidfilm", "fluidfilm.core", "fluidfilm.reynolds", "fluidfilm.rotor", "fluidfilm.characteristics",
-            "fluidfilm.data", "fluidfilm.surrogate", "fluidfilm.control", "fluidfilm.perf")
+            "fluidfilm.data", "fluidfilm.surrogate", "fluidfilm.control", "fluidfilm.perf",
+            "fluidfilm.perf.speed", "fluidfilm.perf.throughput")
 
 
 def public_objects() -> dict[str, object]:

@@ -10,6 +10,8 @@ from numba import njit
 
 from fluidfilm.perf.benchmarking import median_seconds
 
+__all__ = ["sample_states", "time_per_force_eval"]
+
 
 @njit  # not cached: numba's on-disk cache cannot always pickle a specialisation on a function argument
 def _kernel_loop(kernel, params, x, v):
@@ -44,7 +46,7 @@ def sample_states(clearance: float, n: int = 5000, eps_max: float = 0.8, v_max: 
     Examples
     --------
     >>> import numpy as np
-    >>> from fluidfilm.perf import sample_states
+    >>> from fluidfilm.perf.speed import sample_states
     >>> x, v = sample_states(clearance=1e-4, n=100)
     >>> x.shape, bool(np.hypot(*x.T).max() <= 0.8e-4), bool(np.abs(v).max() <= 0.05)
     ((100, 2), True, True)
@@ -80,7 +82,7 @@ def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
     Examples
     --------
     >>> from fluidfilm import ReynoldsSolver, paper_bearing
-    >>> from fluidfilm.perf import sample_states, time_per_force_eval
+    >>> from fluidfilm.perf.speed import sample_states, time_per_force_eval
     >>> solver = ReynoldsSolver(paper_bearing(), 16, 8)
     >>> x, v = sample_states(solver.bearing.clearance, n=200)
     >>> 0.0 < time_per_force_eval(solver, x, v, repeats=3) < 0.01

@@ -15,6 +15,8 @@ from fluidfilm.perf.benchmarking import median_seconds
 from fluidfilm.rotor import Rotor, simulate
 from fluidfilm.rotor.batch import simulate_batch
 
+__all__ = ["monte_carlo_batch", "trajectories_per_second"]
+
 
 def monte_carlo_batch(clearance: float, n: int, mass: float = 2.5, seed: int = 0):
     """(rotors, x0, v0) of n trajectories: imbalance 0-1e-3 kg m, side load +-30 N, eps0 < 0.5, |v0| < 0.01 m/s.
@@ -39,7 +41,7 @@ def monte_carlo_batch(clearance: float, n: int, mass: float = 2.5, seed: int = 0
 
     Examples
     --------
-    >>> from fluidfilm.perf import monte_carlo_batch
+    >>> from fluidfilm.perf.throughput import monte_carlo_batch
     >>> rotors, x0, v0 = monte_carlo_batch(clearance=1e-4, n=4)
     >>> len(rotors), x0.shape, rotors[0].mass
     (4, (4, 2), 2.5)
@@ -84,7 +86,7 @@ def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batch
     Examples
     --------
     >>> from fluidfilm import LinearBearing, paper_bearing
-    >>> from fluidfilm.perf import trajectories_per_second
+    >>> from fluidfilm.perf.throughput import trajectories_per_second
     >>> spring = LinearBearing(paper_bearing(), stiffness=1e6, damping=1e3)
     >>> out = trajectories_per_second(spring, n=4, t_end=2e-3, batched=False)
     >>> out["n_ok"], out["trajectories_per_s"] > 0

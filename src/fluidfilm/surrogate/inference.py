@@ -323,7 +323,7 @@ class SurrogateForceModel:
     --------
     >>> import numpy as np
     >>> from fluidfilm import ReynoldsSolver, SurrogateForceModel, paper_bearing
-    >>> from fluidfilm.perf import sample_states
+    >>> from fluidfilm.perf.speed import sample_states
     >>> from fluidfilm.surrogate import Scaling
     >>> b = paper_bearing()
     >>> x, v = sample_states(b.clearance, n=200, v_max=0.01)
