@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -161,13 +162,30 @@ def short_bearing_table(l_over_d: float, grid, eps_values, d: float = 0.04, clea
     return pd.DataFrame(rows)
 
 
-def coefficient_table(models: dict, loads, h_rel: dict) -> pd.DataFrame:
-    """Equilibrium, eight coefficients and Lund's numbers of every model at the same loads (same S)."""
+def coefficient_table(models: dict, loads, h_rel: dict, on_error: str = "raise") -> pd.DataFrame:
+    """Equilibrium, eight coefficients and Lund's numbers of every model at the same loads (same S).
+
+    ``on_error``: what a load without an equilibrium does (``operating_point`` raises): ``"raise"``, or
+    ``"nan"``: a row of NaN for that model and load, with a RuntimeWarning naming both (a poor surrogate
+    in a study of several models must not stop the others, nor give numbers of a point that is none).
+    """
+    if on_error not in ("raise", "nan"):
+        raise ValueError(f"on_error must be 'raise' or 'nan', got {on_error!r}")
     rows = []
     for name, model in models.items():
         for w in loads:
-            op = stab.operating_point(model, static.load_along_gravity(float(w)),
-                                      h_rel.get(name, h_rel.get("default", 1e-4)))
+            try:
+                op = stab.operating_point(model, static.load_along_gravity(float(w)),
+                                          h_rel.get(name, h_rel.get("default", 1e-4)))
+            except ValueError as err:
+                if on_error == "raise":
+                    raise
+                warnings.warn(f"{name}: {err}; its row at {float(w):.6g} N is NaN", RuntimeWarning, stacklevel=2)
+                nan = float("nan")
+                rows.append({"model": name, "load_N": float(w), "sommerfeld": model.bearing.sommerfeld(float(w)),
+                             "eps": nan, "attitude_deg": nan,
+                             **{k: nan for k in coef.NAMES}, "whirl_ratio": nan, "critical_mass_bar": nan})
+                continue
             rows.append({"model": name, "load_N": float(w), "sommerfeld": op["sommerfeld"], "eps": op["eps"],
                          "attitude_deg": op["attitude_deg"], **{k: op[k] for k in coef.NAMES},
                          "whirl_ratio": op["whirl_ratio"], "critical_mass_bar": op["critical_mass_bar"]})

@@ -389,6 +389,7 @@ def validate_group(group: str, node: Any, where: str | None = None) -> Any:
         # the same validation as the library's: a bearing the dataclass refuses is refused here, before any work
         try:
             values = OmegaConf.to_container(merged)
+            assert isinstance(values, dict)  # a group's node is a mapping
             build({k: v for k, v in values.items() if v != MISSING})  # an optional key left out: the fallback
         except ValueError as err:
             raise SchemaError(f"'{where}': {err}") from None
