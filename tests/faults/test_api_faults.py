@@ -17,7 +17,6 @@ from fluidfilm.rotor import LinearBearing
 from fluidfilm.rotor.batch import simulate_batch
 from fluidfilm.surrogate.inference import SurrogateFileError
 
-from . import models
 
 B = paper_bearing()
 GOOD = dict(length=0.064, diameter=0.040, clearance=120e-6, speed_rpm=3000.0, viscosity=6.53e-4)
@@ -175,13 +174,6 @@ def test_simulate_and_simulate_batch_refuse_the_same_bad_argument_naming_it(kwar
 
 
 # --- model.json ---------------------------------------------------------------------------------------
-@pytest.fixture
-def saved(tmp_path):
-    m = models.paper_split()
-    m.save(tmp_path / "m")
-    return m, tmp_path / "m"
-
-
 def _edit(d, change):
     f = d / "model.json"
     meta = json.loads(f.read_text())

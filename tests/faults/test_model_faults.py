@@ -18,13 +18,6 @@ MODELS = models.all_models()
 
 
 # --------------------------------------------------------------------------- item 6
-@pytest.fixture
-def saved(tmp_path):
-    m = models.paper_split()
-    m.save(tmp_path / "m")
-    return m, tmp_path / "m"
-
-
 def _rewrite_npz(path, change):
     with np.load(path) as z:
         arrays = {k: z[k] for k in z.files}
