@@ -22,6 +22,7 @@ from fluidfilm import ReynoldsSolver, load_surrogate, paper_bearing
 from fluidfilm.perf.benchmarking import median_seconds
 from fluidfilm.characteristics import coefficients as coef
 from fluidfilm.characteristics.stability import operating_point
+from fluidfilm.characteristics.static import load_along_gravity
 from fluidfilm.reynolds.feed import GroovedReynoldsSolver
 
 
@@ -33,7 +34,7 @@ def main() -> None:
     repeats = 3 if args.quick else 15
     b = paper_bearing()
     ref = ReynoldsSolver(b, 30, 30)
-    x0 = operating_point(ref, 24.5)["X"]
+    x0 = operating_point(ref, load_along_gravity(24.5))["X"]
     models = {"reference 30x30 (gumbel)": (ref, 1e-4), "reference 120x120 (gumbel)": (ReynoldsSolver(b, 120, 120), 1e-4),
               "swift-stieber 60x31": (ReynoldsSolver(b, 60, 31, "swift-stieber"), 1e-4),
               "grooved 60x31 (swift-stieber)": (GroovedReynoldsSolver(b, 60, 31, groove_angle=math.pi), 1e-4)}

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
-from fluidfilm import ReynoldsSolver, io, load_surrogate
+from fluidfilm import ReynoldsSolver, io, load_along_gravity, load_surrogate
 from fluidfilm.workflow import tracking
 from fluidfilm.characteristics import stability as stab
 from fluidfilm.studies import characteristics as study
@@ -84,7 +84,7 @@ def main(cfg: DictConfig) -> None:
     loads = study.loads_for_eccentricities(ref, ch.kc_eps)
     models = {"reference": ref, "reference_converged": conv, **surrogates}
     h = {"default": ch.h_rel_reference}  # surrogates: exact Jacobian (no step)
-    kc = study.coefficient_table(models, loads, h)
+    kc = study.coefficient_table(models, loads, h, on_error="nan")  # a surrogate without an equilibrium: NaN
     io.write_csv(tables / "coefficients.csv", kc)
     # Errors against both references. The headline is the grid-converged one: the paper's 30 x 30 grid is
     # itself up to ~7 % (direct) / ~23 % (cross) off it above eps 0.7, and a surrogate, which learned that
@@ -100,7 +100,7 @@ def main(cfg: DictConfig) -> None:
         out[key] = {}
         for name in names:
             out[key][name] = study.coefficient_error_summary(err[(err.against == against) & (err.model == name)])
-    x0 = stab.operating_point(ref, study.loads_for_eccentricities(ref, [ch.step_study_eps])[0])["X"]
+    x0 = stab.operating_point(ref, load_along_gravity(study.loads_for_eccentricities(ref, [ch.step_study_eps])[0]))["X"]
     steps = study.step_table(ref, x0, ch.step_study_steps)
     steps_sur = {n: study.step_table(m, x0, ch.step_study_steps) for n, m in surrogates.items()}
     io.write_csv(tables / "step_study.csv", pd.concat([steps.assign(model="reference")] +
@@ -114,7 +114,8 @@ def main(cfg: DictConfig) -> None:
     thr = {}
     for name, m in models.items():
         try:
-            thr[name] = stab.threshold_speed(m, mass, load, tuple(ch.threshold.speed_bracket), h.get(name, h["default"]))
+            thr[name] = stab.threshold_speed(m, mass, load_along_gravity(load), tuple(ch.threshold.speed_bracket),
+                                             h.get(name, h["default"]))
         except ValueError as err:  # e.g. a poor surrogate unstable over the whole bracket: recorded, not fatal
             thr[name] = {"speed_rad_s": float("nan"), "speed_rpm": float("nan"), "note": str(err)}
     checks = []

@@ -49,10 +49,10 @@ def test_batch_with_contact_stops_only_that_trajectory():
     lin = LinearBearing(b, stiffness=1e6, damping=50.0)
     # a soft spring and a heavy static load drive trajectory 1 into the sleeve; 0 stays inside
     rotors = [Rotor(mass=2.5), Rotor(mass=2.5, external_force=(0.0, 400.0))]
-    batch = simulate_batch(lin, rotors, 0.02, 1e-5, record_every=5, t0=0.1)
+    batch = simulate_batch(lin, rotors, 0.12, 1e-5, record_every=5, t0=0.1)  # t_end: the end time
     assert batch.ok.tolist() == [True, False]
     for p in range(2):
-        _assert_same(batch, p, simulate(lin, rotors[p], 0.02, 1e-5, record_every=5, t0=0.1))
+        _assert_same(batch, p, simulate(lin, rotors[p], 0.12, 1e-5, record_every=5, t0=0.1))
 
 
 def _random_active_surrogate(seed=0):

@@ -152,7 +152,7 @@ def test_short_bearing_quadrature_matches_ocvirk_closed_form():
     for eps in (0.1, 0.5, 0.9):
         F = sb.force(b, [0.0, eps * C], [0.0, 0.0])
         assert np.hypot(*F) == pytest.approx(sb.load_capacity(b, eps), rel=1e-10)
-        assert static.attitude_deg([0.0, eps * C], F) == pytest.approx(math.degrees(sb.attitude_angle(eps)), abs=1e-8)
+        assert static.attitude_deg([0.0, eps * C], F) == pytest.approx(sb.attitude_angle_deg(eps), abs=1e-8)
 
 
 @pytest.mark.parametrize("eps", [0.1, 0.3, 0.5, 0.7, 0.9])
@@ -161,7 +161,7 @@ def test_reference_static_vs_ocvirk(eps):
     b = bearing(0.025)
     r = static.static_point(ReynoldsSolver(b, 240, 9, "gumbel"), eps)
     assert r["load_N"] == pytest.approx(sb.load_capacity(b, eps), rel=0.01)
-    assert r["attitude_deg"] == pytest.approx(math.degrees(sb.attitude_angle(eps)), rel=0.01)
+    assert r["attitude_deg"] == pytest.approx(sb.attitude_angle_deg(eps), rel=0.01)
 
 
 @pytest.mark.parametrize("eps", [0.2, 0.5, 0.8])
@@ -182,7 +182,7 @@ def test_reference_coefficients_vs_short_bearing(eps):
     """L/D = 0.01: all eight coefficients within 1 % of the closed forms (a coefficient near a zero
     crossing, Kxy about eps = 0.7, measured against the stiffness scale), and Lund's critical mass."""
     b = bearing(0.01)
-    op = stab.operating_point(ReynoldsSolver(b, 480, 9, "gumbel"), sb.load_capacity(b, eps))
+    op = stab.operating_point(ReynoldsSolver(b, 480, 9, "gumbel"), (0.0, sb.load_capacity(b, eps)))
     assert op["eps"] == pytest.approx(eps, abs=1e-3)
     ref = short_bearing_kc(op["eps"])
     kscale = max(abs(ref[k]) for k in coef.NAMES[:4])
@@ -204,7 +204,7 @@ def test_short_bearing_stable_above_known_eccentricity():
 # --- K/C steps, Lund vs eigenvalues, speed scaling ---------------------------------------------------
 def test_coefficient_step_plateau_paper_bearing():
     s = ReynoldsSolver(paper_bearing(), 60, 60, "gumbel")
-    op = stab.operating_point(s, 24.5)
+    op = stab.operating_point(s, static.load_along_gravity(24.5))
     rows = [coef.dimensionless(coef.reference_coefficients(s, op["X"], h), s.bearing, 24.5) for h in (1e-3, 1e-4, 1e-5)]
     scale = max(abs(rows[1][k]) for k in coef.NAMES)
     for k in coef.NAMES:
@@ -222,8 +222,8 @@ def test_lund_threshold_agrees_with_eigenvalues():
 def test_threshold_by_load_scaling_equals_rebuilding_at_speed():
     """The model used at its own speed with a scaled load gives the same point as a model built for the speed."""
     b = paper_bearing()
-    a = stab.operating_point(ReynoldsSolver(b, 30, 30), 24.5 * 3000 / 4500)
-    c = stab.operating_point(ReynoldsSolver(stab.at_speed(b, 4500), 30, 30), 24.5)
+    a = stab.operating_point(ReynoldsSolver(b, 30, 30), (0.0, 24.5 * 3000 / 4500))
+    c = stab.operating_point(ReynoldsSolver(stab.at_speed(b, 4500), 30, 30), (0.0, 24.5))
     assert a["eps"] == pytest.approx(c["eps"], rel=1e-7)
     for k in coef.NAMES:
         assert a[k] == pytest.approx(c[k], rel=1e-6, abs=1e-9)
@@ -246,7 +246,7 @@ def test_nonlinear_trajectories_bracket_the_threshold():
     orbit decays to the equilibrium, above it grows (reference model, Gumbel, 30x30)."""
     b = paper_bearing()
     make = lambda bb: ReynoldsSolver(bb, 30, 30)  # noqa: E731
-    th = stab.threshold_speed(make(b), 2.5, 2.5 * 9.81)
+    th = stab.threshold_speed(make(b), 2.5, static.load_along_gravity(2.5 * 9.81))
     below = stab.nonlinear_check(make, b, 2.5, 0.95 * th["speed_rpm"], n_periods=150)
     above = stab.nonlinear_check(make, b, 2.5, 1.05 * th["speed_rpm"], n_periods=150)
     assert below["ratio"] < 0.1

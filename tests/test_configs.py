@@ -238,3 +238,30 @@ def test_schema_refuses_a_mistyped_value_or_unknown_key_naming_it(override, name
         assert problems == []
     else:
         assert len(problems) == 1 and named in problems[0], problems
+
+
+def test_bearing_schema_is_the_library_dataclass():
+    """The bearing group's fields are written once, in core/bearing.py: the schema has exactly the
+    dataclass's fields with its types, plus the config's own ``name`` and ``kind``."""
+    from dataclasses import fields
+    from typing import get_type_hints
+
+    from fluidfilm.core.bearing import ConicalBearing, JournalBearing
+    from fluidfilm.workflow.config_schema import ConicalBearingSchema, JournalBearingSchema
+
+    for schema, cls in ((JournalBearingSchema, JournalBearing), (ConicalBearingSchema, ConicalBearing)):
+        got = {f.name: f.type for f in fields(schema)}
+        assert got == {"name": str, "kind": str, **get_type_hints(cls)}
+
+
+@pytest.mark.parametrize("override, named", [
+    ("bearing.clearance=0.016", "c/R < 0.1"),            # 0.8 R: the dataclass's own check, before any work
+    ("bearing.viscosity=-1.0", "viscosity must be a positive finite number, got -1.0"),
+    ("bearing.clearance=abc", "'bearing.clearance'"),     # the type, by OmegaConf
+])
+def test_bearing_config_gets_the_dataclass_validation(override, named):
+    from fluidfilm.workflow.config_schema import SchemaError, validate_group
+
+    cfg = _compose("fig2", [override])
+    with pytest.raises(SchemaError, match=named):
+        validate_group("bearing", OmegaConf.to_container(cfg.bearing, resolve=False))

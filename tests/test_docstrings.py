@@ -22,13 +22,6 @@ from public_api import public_objects
 
 PUBLIC = public_objects()
 
-# Documented on the api branch (issue #26: one equilibrium taking a load vector, load_along_gravity,
-# operating_point/bearing_characteristics/threshold_speed on the load vector), whose docstrings are written
-# there against the new signatures.  strict: once that branch is merged they pass, and this list must go.
-AWAITING_API_BRANCH = {"fluidfilm.rotor.equilibrium.equilibrium", "fluidfilm.rotor.equilibrium.equilibrium_locus",
-                       "fluidfilm.characteristics.static.equilibrium", "fluidfilm.characteristics.bearing_characteristics",
-                       "fluidfilm.characteristics.stability.operating_point",
-                       "fluidfilm.characteristics.stability.threshold_speed"}
 _UNDERLINE = re.compile(r"^-{3,}$")
 
 
@@ -169,8 +162,7 @@ def test_checker_accepts_a_complete_docstring_and_names_each_fault():
                               "no Examples section with a >>> line"]
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="api branch"))
-                                  if n in AWAITING_API_BRANCH else n for n in sorted(PUBLIC)])
+@pytest.mark.parametrize("name", sorted(PUBLIC))
 def test_docstring_matches_signature(name: str):
     found = problems(PUBLIC[name])
     assert not found, f"{name}: " + "; ".join(found)

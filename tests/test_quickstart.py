@@ -20,7 +20,7 @@ from fluidfilm import JournalBearing, ReynoldsSolver
 PROBE = """
 import json as _json
 _json.dump({"W": list(W), "eq": {k: eq[k] for k in ("eps", "X1", "X2", "attitude_deg")},
-            "threshold_rpm": threshold_speed(solver, mass=rotor.mass, load=W[1])["speed_rpm"],
+            "threshold_rpm": threshold_speed(solver, mass=rotor.mass, load=W)["speed_rpm"],
             "status": traj.status, "eps_max": float(traj.eccentricity(bearing.clearance).max()),
             "eps_min": float(traj.eccentricity(bearing.clearance).min())}, open("probe.json", "w"))
 """
@@ -58,9 +58,10 @@ def test_quickstart_runs_in_an_empty_folder_and_its_answers_hold(tmp_path):
     residual = ReynoldsSolver(bearing, n_theta=30, n_z=30).forces([eq["X1"], eq["X2"]], [0.0, 0.0]) + out["W"]
     assert np.hypot(*residual) < 1e-6 * np.hypot(*out["W"])
     assert np.isclose(np.hypot(eq["X1"], eq["X2"]) / bearing.clearance, eq["eps"], rtol=1e-9)
-    # the journal's surface turns from +X2 towards +X1 and drags the journal with it: the attitude is
-    # between 0 and 90 degrees in magnitude, the centre displaced towards +X1 under a load along +X2
-    assert 0.0 < abs(eq["attitude_deg"]) < 90.0 and eq["X1"] > 0.0 and eq["X2"] > 0.0
+    # the journal's surface turns from +X2 towards +X1 and drags the journal with it: the attitude,
+    # positive in the direction of rotation (docs/conventions.md), is between 0 and 90 degrees, the centre
+    # displaced towards +X1 under a load along +X2
+    assert 0.0 < eq["attitude_deg"] < 90.0 and eq["X1"] > 0.0 and eq["X2"] > 0.0
     # the rotor runs below its whirl threshold, so the orbit about the equilibrium stays small: the
     # nonlinear trajectory agrees with the linear stability answer
     assert out["threshold_rpm"] > bearing.speed_rpm

@@ -15,7 +15,8 @@ from importlib import metadata as _metadata
 
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict, paper_bearing
 from fluidfilm.reynolds import CAVITATION_MODELS, ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
-from fluidfilm.rotor import LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, simulate
+from fluidfilm.rotor import (LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, load_along_gravity,
+                             simulate)
 from fluidfilm.surrogate import SurrogateForceModel, load_surrogate
 
 try:  # one place for the version: pyproject.toml, read from the installed package's metadata
@@ -38,6 +39,7 @@ __all__ = [
     "LinearBearing",
     "equilibrium",
     "equilibrium_locus",
+    "load_along_gravity",
     "load_surrogate",
     "SurrogateForceModel",
     "__version__",

@@ -33,6 +33,16 @@ def snapshot(directory: Path) -> dict:
     return {str(p.relative_to(directory)): p.read_bytes() for p in sorted(directory.rglob("*")) if p.is_file()}
 
 
+@pytest.fixture
+def saved(tmp_path):
+    """A split surrogate saved to a fresh directory: (model, directory)."""
+    from .models import paper_split
+
+    m = paper_split()
+    m.save(tmp_path / "m")
+    return m, tmp_path / "m"
+
+
 @pytest.fixture(scope="session")
 def quick_spec():
     from fluidfilm.data import DatasetSpec

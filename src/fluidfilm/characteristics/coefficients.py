@@ -1,10 +1,19 @@
 """The eight linearised stiffness and damping coefficients of a film at an equilibrium.
 
-F(X0 + dX, dV) ~ F(X0, 0) - K dX - C dV,  i.e.  K_ij = -dF_i/dX_j,  C_ij = -dF_i/dV_j
+F(X0 + dX, dV) ~ F(X0, 0) - K dX - C dV,  i.e.  K[i, j] = -dF_i/dX_j,  C[i, j] = -dF_i/dV_j
 
-(index 1, 2 = the workspace's X1, X2 axes; X2 along gravity, so with a
-gravity load X2 is the load direction).  Dimensionless as is usual in the
-field: Kbar = K c / W, Cbar = C c omega / W, with W the static load.
+The frame, once for the whole workspace: the arrays ``K`` [N/m] and ``C``
+[N s/m] are indexed i, j = 0, 1 for X1, X2 (X1 horizontal, X2 along gravity,
+so with a gravity load X2 is the load direction; the journal turns from +X2
+towards +X1).  The dimensionless names follow the same axes, **x = X1
+(horizontal), y = X2 (along gravity and the load)**: ``Kxy`` = K[0, 1] c / W =
+-dF1/dX2 c / W, ``Cyx`` = C[1, 0] c omega / W, and so on
+(Kbar = K c / W, Cbar = C c omega / W, with W the static load).  Beware that
+the literature often puts x ALONG the load: Lund & Thomsen's tables
+(``published.LUND_THOMSEN_1978``) do, so their Kxy is our Kyx (K[1, 0]);
+``published.LUND_THOMSEN_INDEX`` maps their names to our K, C and the
+Lund & Thomsen comparison (``studies.characteristics.lund_thomsen_point``)
+reports in their frame under their names.
 
 Derivatives by central differences of ``model.forces`` for every model:
 position step ``h_rel * c``, velocity step ``h_rel * c * omega`` (the
@@ -30,11 +39,12 @@ NAMES = ("Kxx", "Kxy", "Kyx", "Kyy", "Cxx", "Cxy", "Cyx", "Cyy")
 
 
 def coefficients(model, x0, h_rel: float = 1e-4) -> dict:
-    """K (2, 2) [N/m] and C (2, 2) [N s/m] of ``model`` at position ``x0`` [m] (journal at rest)."""
+    """K (2, 2) [N/m] and C (2, 2) [N s/m] of ``model`` at position ``x0`` [m] (journal at rest), by central
+    differences; K[i, j] = -dF_i/dX_j, C[i, j] = -dF_i/dV_j, i, j = 0, 1 for X1, X2 (module doc)."""
     if not (np.isfinite(h_rel) and 0.0 < h_rel < 0.05):
         raise ValueError(f"h_rel must lie in (0, 0.05), got {h_rel!r}")
     b = model.bearing
-    c, om = b.clearance, b.omega
+    c, om = b.clearance, _turning(b)
     x0 = np.asarray(x0, dtype=float).reshape(2)
     dx = h_rel * c
     dv = h_rel * c * om
@@ -57,13 +67,24 @@ def coefficients(model, x0, h_rel: float = 1e-4) -> dict:
 
 
 def dimensionless(kc: dict, bearing, load: float | None = None) -> dict:
-    """{Kxx: Kbar, ..., Cyy: Cbar} with Kbar = K c / W, Cbar = C c omega / W."""
+    """{Kxx: Kbar, ..., Cyy: Cbar} with Kbar = K c / W, Cbar = C c omega / W; x = X1, y = X2 (so Kxy =
+    K[0, 1] c / W: the X1 force per X2 displacement; module doc).  ``load``: the magnitude W [N]
+    (default: that of the film force at the point)."""
     w = kc["load_N"] if load is None else float(load)
-    c, om = bearing.clearance, bearing.omega
+    if not (np.isfinite(w) and w > 0.0):
+        raise ValueError(f"the load scaling the coefficients must be a positive finite magnitude in N, got {w!r}")
+    c, om = bearing.clearance, _turning(bearing)
     k = kc["K"] * c / w
     cc = kc["C"] * c * om / w
     return {"Kxx": k[0, 0], "Kxy": k[0, 1], "Kyx": k[1, 0], "Kyy": k[1, 1],
             "Cxx": cc[0, 0], "Cxy": cc[0, 1], "Cyx": cc[1, 0], "Cyy": cc[1, 1]}
+
+
+def _turning(bearing) -> float:
+    """The shaft speed [rad/s], refused if zero: the velocity step and Cbar scale with it."""
+    if not bearing.omega > 0.0:
+        raise ValueError(f"K and C need a turning shaft; the bearing's speed_rpm={bearing.speed_rpm!r}")
+    return bearing.omega
 
 
 def step_study(model, x0, steps=(1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5)) -> list[dict]:

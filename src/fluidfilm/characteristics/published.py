@@ -115,6 +115,11 @@ def short_bearing_kc(eps: float) -> dict:
 # L/D -> rows (S, eps, phi_deg, Kxx, Kxy, Kyx, Kyy, Bxx, Bxy, Byy); x along the load (LUND_THOMSEN_1978 doc)
 LUND_THOMSEN_COLUMNS = ("S", "eps", "phi", "Kxx", "Kxy", "Kyx", "Kyy", "Bxx", "Bxy", "Byy")
 LUND_THOMSEN_COEFFICIENTS = LUND_THOMSEN_COLUMNS[3:]  # the seven printed (Byx = Bxy)
+#: Lund & Thomsen's frame: x ALONG the load (our X2), y horizontal (our X1); their names are not ours
+LUND_THOMSEN_FRAME = "Lund & Thomsen's axes: x along the load (= X2 here), y horizontal (= X1 here)"
+#: their coefficient -> (matrix, i, j) of this workspace's K, C (index 0 = X1, 1 = X2): Kxy(L&T) = K[1, 0]
+LUND_THOMSEN_INDEX = {"Kxx": ("K", 1, 1), "Kxy": ("K", 1, 0), "Kyx": ("K", 0, 1), "Kyy": ("K", 0, 0),
+                      "Bxx": ("C", 1, 1), "Bxy": ("C", 1, 0), "Byy": ("C", 0, 0)}
 LUND_THOMSEN_1978 = {
     0.5: [
         (6.430, 0.071, 81.89, 1.55, 14.41, -6.60, 1.88, 28.75, 1.89, 13.31),

@@ -38,8 +38,23 @@ def load_capacity(bearing, eps: float) -> float:
             * math.sqrt(16.0 * eps**2 + math.pi**2 * (1.0 - eps**2)))
 
 
-def attitude_angle(eps: float) -> float:
-    """Ocvirk's attitude angle [rad]."""
+def attitude_angle_deg(eps: float) -> float:
+    """Ocvirk's attitude angle [deg] at eccentricity ratio ``eps``.
+
+    From the load line to the line of centres, positive in the direction of
+    rotation (the convention of every ``attitude_deg`` in the workspace).
+
+    Examples
+    --------
+    >>> round(attitude_angle_deg(0.5), 2)
+    53.68
+    """
+    return math.degrees(attitude_angle_rad(eps))
+
+
+def attitude_angle_rad(eps: float) -> float:
+    """Ocvirk's attitude angle in radians (for solvers: the start of ``static.equilibrium``); users read
+    ``attitude_angle_deg``."""
     _check_eps(eps)
     return math.atan2(math.pi * math.sqrt(1.0 - eps**2), 4.0 * eps)
 

@@ -29,7 +29,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from fluidfilm.characteristics import coefficients as coef
-from fluidfilm.characteristics.static import equilibrium
+from fluidfilm.characteristics.static import check_magnitude, equilibrium, load_along_gravity, load_vector
 
 
 def lund(d: dict) -> dict:
@@ -75,26 +75,92 @@ def eigen_growth(d: dict, mass_bar: float) -> tuple[float, float]:
     return float(lam[k].real), float(abs(lam[k].imag))
 
 
-def operating_point(model, load: float, h_rel: float = 1e-4) -> dict:
-    """Equilibrium under a load ``load`` [N] along +X2 (gravity), its K/C and Lund's numbers."""
-    eq = equilibrium(model, (0.0, load))
+def operating_point(model, load, h_rel: float = 1e-4) -> dict:
+    """Equilibrium under ``load``, its K/C and Lund's stability numbers.
+
+    Parameters
+    ----------
+    model : force model
+        Anything with ``.forces(X, V)`` and ``.bearing``.
+    load : array_like, shape (2,)
+        The load vector (W1, W2) [N]; ``load_along_gravity(W)`` for a magnitude along +X2.
+    h_rel : float
+        Relative finite-difference step where the model has no exact derivatives.
+
+    Returns
+    -------
+    dict
+        The equilibrium's keys (``eps``, ``X``, ``X1``, ``X2``, ``attitude_deg``, ``residual``,
+        ``load_N`` = |W|, ``sommerfeld``), ``K`` [N/m] and ``C`` [N s/m] with K[i, j] = -dF_i/dX_j
+        (``coefficients`` module), the dimensionless ``Kxx``..``Cyy`` (x = X1, y = X2) and Lund's
+        ``K0``, ``whirl_ratio``, ``critical_mass_bar``.
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> op = operating_point(ReynoldsSolver(paper_bearing(), 30, 30), load_along_gravity(24.5))
+    >>> round(op["eps"], 2), op["K"].shape
+    (0.59, (2, 2))
+    """
+    eq = equilibrium(model, load)
     kc = coef.reference_coefficients(model, eq["X"], h_rel)
-    d = coef.dimensionless(kc, model.bearing, load)
+    d = coef.dimensionless(kc, model.bearing, eq["load_N"])
     return {"eps": eq["eps"], "attitude_deg": eq["attitude_deg"], "sommerfeld": eq["sommerfeld"],
-            "load_N": load, "X": eq["X"], "K": kc["K"], "C": kc["C"], **d, **lund(d)}
+            "load_N": eq["load_N"], "X": eq["X"], "X1": eq["X1"], "X2": eq["X2"], "residual": eq["residual"],
+            "K": kc["K"], "C": kc["C"], **d, **lund(d)}
 
 
-def threshold_speed(model, mass: float, load: float, speed_bracket=(0.05, 20.0), h_rel: float = 1e-4) -> dict:
-    """Onset speed of oil whirl [rad/s] for a rigid rotor of ``mass`` [kg] per bearing carrying ``load`` [N].
+def threshold_speed(model, mass: float, load, speed_bracket=(0.05, 20.0), h_rel: float = 1e-4) -> dict:
+    """Onset speed of oil whirl for a rigid rotor of ``mass`` [kg] per bearing carrying ``load``.
 
     Uses ``model`` only at its own speed (see module doc): at trial speed
-    omega the load seen by the model is W omega_ref/omega.  The bracket is
-    in multiples of the model's speed.  Returns the speed, eps, whirl
-    ratio and critical mass there; ``speed_rad_s`` is inf if the rotor is
-    stable over the whole bracket.
+    omega the load seen by the model is W omega_ref/omega.
+
+    Parameters
+    ----------
+    model : force model
+        Anything with ``.forces(X, V)`` and ``.bearing``.
+    mass : float
+        Rotor mass per bearing [kg].
+    load : array_like, shape (2,)
+        The load vector (W1, W2) [N] (``load_along_gravity(mass * g)`` for the weight alone).
+    speed_bracket : (low, high)
+        The speeds searched, in multiples of the model's speed, 0 < low < high.
+    h_rel : float
+        Relative finite-difference step where the model has no exact derivatives.
+
+    Returns
+    -------
+    dict
+        ``speed_rad_s``, ``speed_rpm``, and there ``eps``, ``whirl_ratio``,
+        ``critical_mass_bar``, ``sommerfeld``; ``speed_rad_s`` is inf if the
+        rotor is stable over the whole bracket.
+
+    Raises
+    ------
+    ValueError
+        For a bad mass, load or bracket (the message names it), or when the
+        rotor is already unstable at the bracket's low end.
+
+    Examples
+    --------
+    The paper's bearing under a 2.5 kg rotor whirls from about 6,700 rpm, at half the shaft speed:
+
+    >>> from fluidfilm import ReynoldsSolver, load_along_gravity, paper_bearing
+    >>> out = threshold_speed(ReynoldsSolver(paper_bearing(), 30, 30), mass=2.5, load=load_along_gravity(2.5 * 9.81))
+    >>> round(out["speed_rpm"], -2), round(out["whirl_ratio"], 2)
+    (6700.0, 0.49)
     """
-    if not (math.isfinite(mass) and mass > 0.0):
-        raise ValueError(f"mass must be positive and finite, got {mass!r}")
+    mass = check_magnitude("mass", mass, "kg")
+    W = load_vector(load)
+    w = float(np.hypot(*W))
+    try:
+        lo_f, hi_f = (float(v) for v in speed_bracket)
+    except (TypeError, ValueError):
+        raise ValueError(f"speed_bracket must be two numbers (low, high), got {speed_bracket!r}") from None
+    if not (math.isfinite(lo_f) and math.isfinite(hi_f) and 0.0 < lo_f < hi_f):
+        raise ValueError(f"speed_bracket must be (low, high) multiples of the model's speed with 0 < low < high, "
+                         f"got {tuple(speed_bracket)!r}")
     b = model.bearing
     om_ref = b.omega
     c = b.clearance
@@ -102,28 +168,28 @@ def threshold_speed(model, mass: float, load: float, speed_bracket=(0.05, 20.0),
 
     def point(om):
         if om not in cache:
-            cache[om] = operating_point(model, load * om_ref / om, h_rel)
+            cache[om] = operating_point(model, W * om_ref / om, h_rel)  # as (W om_ref) / om: same rounding as before
         return cache[om]
 
     def f(log_om):
         om = math.exp(log_om)
         pt = point(om)
-        mbar = mass * c * om**2 / load
+        mbar = mass * c * om**2 / w
         mc = pt["critical_mass_bar"]
         return math.log(mbar / mc) if math.isfinite(mc) else -50.0
 
-    lo, hi = math.log(speed_bracket[0] * om_ref), math.log(speed_bracket[1] * om_ref)
+    lo, hi = math.log(lo_f * om_ref), math.log(hi_f * om_ref)
     flo, fhi = f(lo), f(hi)
     if fhi < 0.0:
         return {"speed_rad_s": math.inf, "speed_rpm": math.inf}
     if flo > 0.0:
-        raise ValueError(f"rotor already unstable at {speed_bracket[0]} x the model speed; widen speed_bracket")
+        raise ValueError(f"rotor already unstable at {lo_f} x the model speed; widen speed_bracket")
     root = brentq(f, lo, hi, xtol=1e-10)
     om = math.exp(root)
     pt = point(om)
     return {"speed_rad_s": om, "speed_rpm": om * 60.0 / (2.0 * math.pi), "eps": pt["eps"],
             "whirl_ratio": pt["whirl_ratio"], "critical_mass_bar": pt["critical_mass_bar"],
-            "sommerfeld": b.sommerfeld(load) * om / om_ref}
+            "sommerfeld": b.sommerfeld(w) * om / om_ref}
 
 
 def at_speed(bearing, speed_rpm: float):
@@ -144,7 +210,7 @@ def nonlinear_check(make_model, bearing, mass: float, speed_rpm: float, perturba
     model = make_model(b)
     rotor = Rotor(mass=mass)
     load = mass * rotor.gravity
-    eq = equilibrium(model, (0.0, load))
+    eq = equilibrium(model, load_along_gravity(load))
     x_eq = eq["X"]
     c = b.clearance
     period = 2.0 * math.pi / b.omega

@@ -85,10 +85,12 @@ def film_solver(bearing, cavitation: str = "gumbel", feed="none", n_theta: int =
 
 
 def attitude_deg(x, force) -> float:
-    """Angle [deg] between the load line (-F, the load the film carries) and the line of centres X."""
+    """Attitude angle [deg]: from the load line (-F, the load the film carries) to the line of centres X,
+    positive in the direction of rotation (from +X2 towards +X1), in (-180, 180]."""
     w = -np.asarray(force, dtype=float)
     x = np.asarray(x, dtype=float)
-    return math.degrees(math.atan2(abs(x[0] * w[1] - x[1] * w[0]), x @ w))
+    # angles in this frame are atan2(v1, v2); sin of (angle of x - angle of w) is x1 w2 - x2 w1
+    return math.degrees(math.atan2(x[0] * w[1] - x[1] * w[0], x @ w))
 
 
 def static_point(solver, eps: float) -> dict:
@@ -186,40 +188,149 @@ def eccentricity_at_sommerfeld(solver, s: float, eps_lo: float = 0.01, eps_hi: f
     return brentq(g, eps_lo, eps_hi, xtol=1e-10)
 
 
+def load_along_gravity(W) -> tuple[float, float]:
+    """The load vector (0, W) [N] of a magnitude ``W`` [N] along gravity (+X2).
+
+    Every public function that takes a load takes a vector (W1, W2) in N;
+    this helper turns the usual magnitude into one.
+
+    Parameters
+    ----------
+    W : float
+        Load magnitude [N], positive and finite.
+
+    Returns
+    -------
+    tuple of float
+        ``(0.0, W)``.
+
+    Raises
+    ------
+    ValueError
+        If ``W`` is not a positive finite number (the message names it).
+
+    Examples
+    --------
+    >>> load_along_gravity(24.5)
+    (0.0, 24.5)
+    """
+    return (0.0, check_magnitude("load W", W, "N"))
+
+
+def check_magnitude(name: str, value, unit: str) -> float:
+    """``value`` as a float if it is a positive finite number (not a bool); else ValueError naming ``name``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} must be a positive finite number in {unit}, got {value!r}")
+    v = float(value)
+    if not (math.isfinite(v) and v > 0.0):
+        raise ValueError(f"{name} must be a positive finite number in {unit}, got {value!r}")
+    return v
+
+
+def load_vector(load) -> np.ndarray:
+    """``load`` as a finite non-zero vector (W1, W2) [N]; a scalar is refused with a pointer to the helper."""
+    if np.ndim(load) == 0:
+        raise ValueError(f"load must be a vector (W1, W2) in N, got the scalar {load!r}; for a magnitude W "
+                         "along gravity pass fluidfilm.load_along_gravity(W)")
+    if np.shape(load) != (2,) or any(isinstance(v, (bool, np.bool_)) for v in load):
+        raise ValueError(f"load must be a vector (W1, W2) in N, got {load!r}")
+    W = np.asarray(load, dtype=float)
+    if not (np.isfinite(W).all() and np.hypot(*W) > 0.0):
+        raise ValueError(f"load must be a finite non-zero vector (W1, W2) in N, got {tuple(W.tolist())}")
+    return W
+
+
 def _polar(eps, psi, c):
+    """Position at eccentricity ratio eps and angle psi (from +X2 towards +X1, the direction of rotation)."""
     return c * eps * np.array([math.sin(psi), math.cos(psi)])
 
 
-def equilibrium(model, load, eps_max: float = 0.995, tol: float = 1e-12) -> dict:
+#: keys every equilibrium returns (``equilibrium``); ``X`` is the position as an array, X1, X2 its parts
+EQUILIBRIUM_KEYS = ("eps", "X", "X1", "X2", "attitude_deg", "residual", "load_N", "sommerfeld",
+                    "short_bearing_start_eps")
+
+
+def equilibrium(model, load, guess: tuple[float, float] | None = None, eps_max: float = 0.995,
+                tol: float = 1e-12, residual_tol: float = 1e-6) -> dict:
     """Journal position where the film force of ``model`` (at rest) balances ``load`` = (W1, W2) [N].
 
-    A trust-region least-squares solve (scipy) in polar unknowns (eps, psi),
-    eps bounded in [0, eps_max], started from the short-bearing (Ocvirk)
-    solution at the same Sommerfeld number scaled to the bearing's L/D,
-    with fall-back starts if that one does not converge.  Robust to eps ~ 0.95.
+    The one equilibrium solver of the workspace (``fluidfilm.equilibrium``,
+    ``fluidfilm.rotor.equilibrium`` and ``characteristics.equilibrium`` are
+    this function).  A trust-region least-squares solve (scipy) of
+    F_film(X, 0) + W = 0 in polar unknowns (eps, psi), eps bounded in
+    [0, eps_max], started from ``guess`` if given, then from the
+    short-bearing (Ocvirk) solution at the same Sommerfeld number, then from
+    fall-back starts.  Robust to eps ~ 0.95.
+
+    Parameters
+    ----------
+    model : force model
+        Anything with ``.forces(X, V)`` and ``.bearing`` (a ``JournalBearing``).
+    load : array_like, shape (2,)
+        The load vector (W1, W2) [N] the film carries; for a magnitude W along
+        gravity use ``load_along_gravity(W)`` = (0, W).
+    guess : (eps, psi), optional
+        A start (eccentricity ratio, position angle [rad] from +X2 towards +X1),
+        e.g. the previous point of a continuation.
+    eps_max : float
+        Upper bound of the eccentricity ratio searched.
+    tol : float
+        ``xtol``, ``ftol`` and ``gtol`` of ``scipy.optimize.least_squares``.
+    residual_tol : float
+        Largest accepted |F_film + W| / |W| at the solution.
+
+    Returns
+    -------
+    dict
+        ``eps``; ``X`` (array [m]) and its components ``X1``, ``X2``;
+        ``attitude_deg``, the angle [deg] from the load line to the line of
+        centres (bearing centre to journal centre), positive in the direction
+        of rotation (from +X2 towards +X1), as in Raimondi & Boyd and Hamrock
+        (about +60 deg for a lightly loaded bearing, falling towards 0 as eps -> 1);
+        ``residual`` |F_film + W| / |W|; ``load_N`` |W|; ``sommerfeld``;
+        ``short_bearing_start_eps``.
+
+    Raises
+    ------
+    ValueError
+        For a load that is not a finite non-zero vector, or when no
+        equilibrium is found: the solution sits at the bound ``eps_max`` (the
+        film cannot carry the load inside the clearance) or its residual
+        exceeds ``residual_tol``; the message names the load.
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> eq = equilibrium(ReynoldsSolver(paper_bearing(), 30, 30), load_along_gravity(24.5))
+    >>> round(eq["eps"], 2), eq["attitude_deg"] > 0, eq["residual"] < 1e-8
+    (0.59, True, True)
     """
-    W = np.asarray(load, dtype=float).reshape(2)
+    W = load_vector(load)
     w = float(np.hypot(*W))
-    if not (math.isfinite(w) and w > 0.0):
-        raise ValueError(f"load must be a finite non-zero vector in N, got {tuple(W)}")
     b = model.bearing
+    if not b.speed_rpm > 0.0:
+        raise ValueError(f"no equilibrium under the load {tuple(W.tolist())} N: the bearing's speed_rpm="
+                         f"{b.speed_rpm!r}, and a film that does not turn (a pure squeeze film) carries no static load")
     c = b.clearance
     psi_load = math.atan2(W[0], W[1])
     zero = np.zeros(2)
     # short-bearing start: Ocvirk's eps at this load (it under-predicts the finite bearing's capacity,
-    # so its eps is an upper bound; the attitude lags the load by phi against the rotation)
+    # so its eps is an upper bound; the line of centres leads the load by phi in the direction of rotation)
     s = b.sommerfeld(w)
     try:
         e0 = min(shortbearing.eccentricity_at_sommerfeld(b, s), 0.97)
     except ValueError:
         e0 = 0.5
-    phi0 = shortbearing.attitude_angle(max(e0, 1e-6))
+    phi0 = shortbearing.attitude_angle_rad(max(e0, 1e-6))
 
     def residual(q):
         return (np.asarray(model.forces(_polar(q[0], q[1], c), zero)) + W) / w
 
+    starts = [(e0, psi_load + phi0), (0.7 * e0, psi_load + phi0), (0.5, psi_load + 0.8), (0.85, psi_load + 0.5)]
+    if guess is not None:
+        starts.insert(0, (float(guess[0]), float(guess[1])))
     best = None
-    for start in [(e0, psi_load + phi0), (0.7 * e0, psi_load + phi0), (0.5, psi_load + 0.8), (0.85, psi_load + 0.5)]:
+    for start in starts:
         sol = least_squares(residual, x0=list(start), bounds=([0.0, -np.inf], [eps_max, np.inf]),
                             xtol=tol, ftol=tol, gtol=tol, method="trf")
         if best is None or sol.cost < best.cost:
@@ -230,5 +341,13 @@ def equilibrium(model, load, eps_max: float = 0.995, tol: float = 1e-12) -> dict
     eps, psi = float(best.x[0]), float(best.x[1])
     X = _polar(eps, psi, c)
     F = np.asarray(model.forces(X, zero))
-    return {"eps": eps, "X": X, "attitude_deg": attitude_deg(X, F), "residual": float(np.hypot(*(F + W)) / w),
-            "load_N": w, "sommerfeld": s, "short_bearing_start_eps": e0}
+    res = float(np.hypot(*(F + W)) / w)
+    at_bound = eps >= eps_max * (1.0 - 1e-9)
+    if at_bound or not res <= residual_tol:
+        why = (f"the solve ended at the eccentricity bound eps_max={eps_max}: the film cannot carry it there"
+               if at_bound else f"the best position found (eps={eps:.4g}) does not balance it")
+        raise ValueError(f"no equilibrium under the load {tuple(W.tolist())} N (|W| = {w:.6g} N) for "
+                         f"{getattr(model, 'name', type(model).__name__)}: {why} (residual |F + W|/|W| = "
+                         f"{res:.3g}, tolerance {residual_tol:g})")
+    return {"eps": eps, "X": X, "X1": float(X[0]), "X2": float(X[1]), "attitude_deg": attitude_deg(X, F),
+            "residual": res, "load_N": w, "sommerfeld": s, "short_bearing_start_eps": e0}

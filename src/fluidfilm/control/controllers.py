@@ -138,7 +138,7 @@ class ModelPredictiveController:
             c_r = self.model.clearance
             if np.hypot(*env.x) >= sc.eps_stop * c_r:
                 continue
-            tr = simulate(self.model, rotor, self.horizon * sc.control_interval, sc.dt, x0=env.x, v0=env.v,
+            tr = simulate(self.model, rotor, env.t + self.horizon * sc.control_interval, sc.dt, x0=env.x, v0=env.v,
                           eps_stop=sc.eps_stop, record_every=sc.record_every, t0=env.t)
             if not tr.ok:
                 costs[a] = env.weights.contact_penalty

@@ -306,7 +306,7 @@ class ActiveBearingEnv(gym.Env):
             self.model.set_sleeve(self.sleeve_positions[a])
             if sc.settle_time > 0:
                 # a whole number of revolutions ending at t = 0, so the imbalance phase is continuous
-                tr = simulate(self.model, self.rotor_with(sc.imbalance_start), sc.settle_time, sc.dt,
+                tr = simulate(self.model, self.rotor_with(sc.imbalance_start), 0.0, sc.dt,
                               eps_stop=sc.eps_stop, record_every=sc.record_every, t0=-sc.settle_time)
                 if not tr.ok:
                     raise RuntimeError(f"settling run failed: {tr.status}")
@@ -366,7 +366,7 @@ class ActiveBearingEnv(gym.Env):
             tr = None
             terminated = True
         else:
-            tr = simulate(self.model, self._ramp, sc.control_interval, sc.dt, x0=self.x, v0=self.v,
+            tr = simulate(self.model, self._ramp, self.t + sc.control_interval, sc.dt, x0=self.x, v0=self.v,
                           eps_stop=sc.eps_stop, record_every=sc.record_every, t0=self.t)
             terminated = not tr.ok  # contact or divergence
         if tr is not None:

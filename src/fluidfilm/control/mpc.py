@@ -74,7 +74,7 @@ class BatchedMPC:
         kw = dict(eps_stop=sc.eps_stop, record_every=self.record_every, eps_substep=self.eps_substep, t0=env.t)
         if self.batched:
             sleeve = self.model.sleeve
-            out = simulate_batch(self.model, rotor, t_h, self.dt, env.x, env.v,
+            out = simulate_batch(self.model, rotor, env.t + t_h, self.dt, env.x, env.v,
                                  settings=[self.model.setting_for(positions[a]) for a in feasible], **kw)
             self.model.set_sleeve(sleeve)
             runs = [(out.ok[i], out.x[i, :out.n_recorded[i]]) for i in range(len(feasible))]
@@ -82,7 +82,7 @@ class BatchedMPC:
             runs = []
             for a in feasible:
                 self.model.set_sleeve(positions[a])
-                tr = simulate(self.model, rotor, t_h, self.dt, x0=env.x, v0=env.v, **kw)
+                tr = simulate(self.model, rotor, env.t + t_h, self.dt, x0=env.x, v0=env.v, **kw)
                 runs.append((tr.ok, tr.x))
         for a, (ok, xs) in zip(feasible, runs):
             if not ok:

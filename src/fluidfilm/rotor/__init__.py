@@ -3,14 +3,14 @@
 - ``model``        ``Rotor``: what one bearing carries (mass, imbalance, external load)
 - ``integrate``    ``simulate``: one compiled RK4 loop for every force model
 - ``linear``       ``LinearBearing``: an isotropic spring-damper force model (analytic checks)
-- ``equilibrium``  static equilibrium position and the equilibrium locus
+- ``equilibrium``  static equilibrium position (``characteristics.static.equilibrium``) and the locus
 - ``metrics``      settled-orbit statistics and model-vs-reference distances
 """
-from fluidfilm.rotor.equilibrium import equilibrium, equilibrium_locus
+from fluidfilm.rotor.equilibrium import equilibrium, equilibrium_locus, load_along_gravity
 from fluidfilm.rotor.integrate import Trajectory, simulate
 from fluidfilm.rotor.linear import LinearBearing
 from fluidfilm.rotor.metrics import compare_orbits, orbit_stats
 from fluidfilm.rotor.model import Rotor
 
-__all__ = ["Rotor", "simulate", "Trajectory", "LinearBearing", "equilibrium", "equilibrium_locus",
+__all__ = ["Rotor", "simulate", "Trajectory", "LinearBearing", "equilibrium", "equilibrium_locus", "load_along_gravity",
            "orbit_stats", "compare_orbits"]

@@ -36,7 +36,8 @@ import numpy as np
 from numba import njit
 
 from fluidfilm.core.force_model import BatchSettable, ForceModel
-from fluidfilm.rotor.integrate import CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration, _uncached, run_loop
+from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration, _uncached, check_run_args,
+                                       run_loop)
 from fluidfilm.rotor.model import Rotor
 
 
@@ -178,7 +179,8 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     ``settings`` (N, k): per-trajectory values of the model's control setting
     (for a surrogate of the active bearing, ``model.setting_for(sleeve)``
     rows); the model's own setting is restored afterwards.  Arguments
-    otherwise as ``simulate``.
+    otherwise as ``simulate``, checked by the same function: ``t_end`` is the
+    END TIME [s] of the run (absolute), which goes from ``t0`` to ``t_end``.
     """
     if not isinstance(model, ForceModel):
         raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel); "
@@ -194,17 +196,7 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         rotor_list = rotor_list * n
     if len(rotor_list) != n:
         raise ValueError(f"{len(rotor_list)} rotors for a batch of {n} trajectories")
-    for name, value in (("t_end", t_end), ("dt", dt)):
-        if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"{name} must be a positive finite time in s, got {value!r}")
-    if dt > t_end:
-        raise ValueError(f"dt={dt!r} s is longer than t_end={t_end!r} s")
-    if not 0.0 < eps_stop < 1.0:
-        raise ValueError(f"eps_stop must lie in (0, 1), got {eps_stop!r}")
-    if not 0.0 < eps_substep < 1.0:
-        raise ValueError(f"eps_substep must lie in (0, 1), got {eps_substep!r}")
-    if int(record_every) < 1:
-        raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
+    n_steps = check_run_args(t_end, dt, t0, eps_stop, eps_substep, record_every, max_substeps)
     x0 = _rows(x0, n, "x0")
     v0 = _rows(v0, n, "v0")
     setting = model.setting_array if isinstance(model, BatchSettable) else None
@@ -231,7 +223,6 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         consts[p] = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega, float(rotor.imbalance_direction),
                      rotor.external_force[0], rotor.external_force[1] + rotor.mass * rotor.gravity, c[p] ** 2,
                      u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0)
-    n_steps = int(round(t_end / dt))
     record_every = int(record_every)
     n_out = n_steps // record_every + 2
     out_x = np.full((n, n_out, 2), np.nan)
@@ -273,4 +264,4 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
                       RuntimeWarning, stacklevel=2)
     return BatchTrajectory(t=t_grid, x=out_x, v=out_v, n_recorded=n_rec, status=texts, t_stop=t_stop_out,
                            n_force_evals=n_evals, wall_time_s=wall,
-                           meta={"dt": dt, "t_end": t_end, "record_every": record_every})
+                           meta={"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every})

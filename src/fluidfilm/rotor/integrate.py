@@ -278,6 +278,35 @@ def _library_types(kernel, params) -> bool:
         type(params).__module__.split(".")[0] in ("fluidfilm", "builtins") and not _holds_functions(params)
 
 
+def _is_real(value) -> bool:
+    return not isinstance(value, (bool, np.bool_)) and isinstance(value, (int, float, np.integer, np.floating))
+
+
+def check_run_args(t_end, dt, t0, eps_stop, eps_substep, record_every, max_substeps) -> int:
+    """The checks of ``simulate`` and ``simulate_batch`` (one place): each argument by name, a bool or a
+    string refused as not a number.  Returns the number of steps, round((t_end - t0) / dt)."""
+    if not (_is_real(t0) and math.isfinite(t0)):
+        raise ValueError(f"t0 must be a finite time in s, got {t0!r}")
+    if not (_is_real(dt) and math.isfinite(dt) and dt > 0.0):
+        raise ValueError(f"dt must be a positive finite time in s, got {dt!r}")
+    if not (_is_real(t_end) and math.isfinite(t_end) and t_end > t0):
+        raise ValueError(f"t_end must be a finite end time in s after t0={t0!r} (t_end is the time the run ends, "
+                         f"not its duration), got {t_end!r}")
+    if dt > t_end - t0:
+        raise ValueError(f"dt={dt!r} s is longer than the run from t0={t0!r} s to t_end={t_end!r} s")
+    for name, value in (("eps_stop", eps_stop), ("eps_substep", eps_substep)):
+        if not _is_real(value):
+            raise ValueError(f"{name} must be a number, got {value!r}")
+    if not 0.0 < eps_stop < 1.0:
+        raise ValueError(f"eps_stop must lie in (0, 1), got {eps_stop!r}")
+    if not 0.0 < eps_substep < 1.0:
+        raise ValueError(f"eps_substep must lie in (0, 1), got {eps_substep!r}")
+    for name, value in (("record_every", record_every), ("max_substeps", max_substeps)):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    return int(round((t_end - t0) / dt))
+
+
 def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
              eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
              max_substeps: int = 256, t0: float = 0.0) -> Trajectory:
@@ -294,8 +323,8 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     rotor : Rotor
         What the bearing carries (mass, imbalance, external force, gravity).
     t_end : float
-        End time of the run [s] (target API of issue #26: an end time, so the run covers
-        [t0, t_end]; before the api branch it is the duration from t0).
+        The END TIME [s] of the run (absolute, not a duration): the run goes from ``t0`` to
+        ``t_end`` in round((t_end - t0) / dt) steps.
     dt : float, default 1e-5
         RK4 step [s], at most the run's length.
     x0, v0 : array_like, shape (2,), optional
@@ -345,24 +374,7 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     bearing = model.bearing
     # an active bearing reports the clearance of its current control setting
     c = float(model.clearance)
-    for name, value in (("t_end", t_end), ("dt", dt)):
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) or not (
-                math.isfinite(value) and value > 0.0):
-            raise ValueError(f"{name} must be a positive finite time in s, got {value!r}")
-    if dt > t_end:
-        raise ValueError(f"dt={dt!r} s is longer than t_end={t_end!r} s")
-    for name, value in (("eps_stop", eps_stop), ("eps_substep", eps_substep)):
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
-            raise ValueError(f"{name} must be a number, got {value!r}")
-    if not 0.0 < eps_stop < 1.0:
-        raise ValueError(f"eps_stop must lie in (0, 1), got {eps_stop!r}")
-    if not 0.0 < eps_substep < 1.0:
-        raise ValueError(f"eps_substep must lie in (0, 1), got {eps_substep!r}")
-    for name, value in (("record_every", record_every), ("max_substeps", max_substeps)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ValueError(f"{name} must be a positive integer, got {value!r}")
-    if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
-        raise ValueError(f"t0 must be a finite time in s, got {t0!r}")
+    n_steps = check_run_args(t_end, dt, t0, eps_stop, eps_substep, record_every, max_substeps)
     for name, value in (("x0", x0), ("v0", v0)):
         if value is not None and np.shape(value) != (2,):
             raise ValueError(f"{name} must be a pair ({name[0].upper()}1, {name[0].upper()}2), got shape {np.shape(value)}")
@@ -372,7 +384,6 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         raise ValueError(f"initial state must be finite, got x0={tuple(x0)}, v0={tuple(v0)}")
     if np.hypot(*x0) >= eps_stop * c:
         raise ValueError(f"initial eccentricity {np.hypot(*x0) / c:.4g} is not below eps_stop={eps_stop}")
-    n_steps = int(round(t_end / dt))
     record_every = int(record_every)
     n_out = n_steps // record_every + 2
     out_t = np.empty(n_out)
@@ -403,4 +414,4 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
                       RuntimeWarning, stacklevel=2)
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
                       t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=wall,
-                      meta={"dt": dt, "t_end": t_end, "record_every": record_every}, n_outside_domain=n_outside)
+                      meta={"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every}, n_outside_domain=n_outside)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -113,16 +114,16 @@ def lund_thomsen_table(grid, l_over_d=None, only_two_typings: bool = False, h_re
 
 def lund_thomsen_point(solver, sommerfeld: float, h_rel: float = 1e-4) -> dict:
     """Equilibrium (eps, attitude phi [deg]) and the seven printed coefficients of a bearing model at a
-    Sommerfeld number, load along +X2, in Lund & Thomsen's frame and units: x along the load (our X2), y
-    horizontal (our X1), so Kxy(L&T) = K[1, 0] here; K = k c / W, B = b c omega / W."""
+    Sommerfeld number, load along +X2, in Lund & Thomsen's frame, names and units
+    (``pub.LUND_THOMSEN_FRAME``: x along the load = our X2, y horizontal = our X1, so their Kxy is our
+    K[1, 0], ``pub.LUND_THOMSEN_INDEX``); K = k c / W, B = b c omega / W."""
     b = solver.bearing
     load = load_at_sommerfeld(b, sommerfeld)
-    eq = static.equilibrium(solver, (0.0, load))
+    eq = static.equilibrium(solver, static.load_along_gravity(load))
     kc = coef.reference_coefficients(solver, eq["X"], h_rel)
-    k = kc["K"] * b.clearance / load
-    c = kc["C"] * b.clearance * b.omega / load
-    return {"eps": eq["eps"], "phi": eq["attitude_deg"], "Kxx": k[1, 1], "Kxy": k[1, 0], "Kyx": k[0, 1],
-            "Kyy": k[0, 0], "Bxx": c[1, 1], "Bxy": c[1, 0], "Byy": c[0, 0]}
+    scaled = {"K": kc["K"] * b.clearance / load, "C": kc["C"] * b.clearance * b.omega / load}
+    return {"eps": eq["eps"], "phi": eq["attitude_deg"],
+            **{name: scaled[m][i, j] for name, (m, i, j) in pub.LUND_THOMSEN_INDEX.items()}}
 
 
 def lund_thomsen_err_pct(value: float, published: dict, name: str) -> float:
@@ -142,10 +143,10 @@ def short_bearing_table(l_over_d: float, grid, eps_values, d: float = 0.04, clea
     for eps in eps_values:
         st = static.static_point(solver, eps)
         w = sb.load_capacity(b, eps)
-        op = stab.operating_point(solver, w)
+        op = stab.operating_point(solver, static.load_along_gravity(w))
         ref = short_bearing_kc(op["eps"])
         row = {"eps": eps, "load_err_pct": 100 * (st["load_N"] / w - 1),
-               "attitude_err_deg": st["attitude_deg"] - math.degrees(sb.attitude_angle(eps))}
+               "attitude_err_deg": st["attitude_deg"] - sb.attitude_angle_deg(eps)}
         kscale = max(abs(ref[k]) for k in coef.NAMES[:4])
         cscale = max(abs(ref[k]) for k in coef.NAMES[4:])
         for k in coef.NAMES:
@@ -161,12 +162,30 @@ def short_bearing_table(l_over_d: float, grid, eps_values, d: float = 0.04, clea
     return pd.DataFrame(rows)
 
 
-def coefficient_table(models: dict, loads, h_rel: dict) -> pd.DataFrame:
-    """Equilibrium, eight coefficients and Lund's numbers of every model at the same loads (same S)."""
+def coefficient_table(models: dict, loads, h_rel: dict, on_error: str = "raise") -> pd.DataFrame:
+    """Equilibrium, eight coefficients and Lund's numbers of every model at the same loads (same S).
+
+    ``on_error``: what a load without an equilibrium does (``operating_point`` raises): ``"raise"``, or
+    ``"nan"``: a row of NaN for that model and load, with a RuntimeWarning naming both (a poor surrogate
+    in a study of several models must not stop the others, nor give numbers of a point that is none).
+    """
+    if on_error not in ("raise", "nan"):
+        raise ValueError(f"on_error must be 'raise' or 'nan', got {on_error!r}")
     rows = []
     for name, model in models.items():
         for w in loads:
-            op = stab.operating_point(model, float(w), h_rel.get(name, h_rel.get("default", 1e-4)))
+            try:
+                op = stab.operating_point(model, static.load_along_gravity(float(w)),
+                                          h_rel.get(name, h_rel.get("default", 1e-4)))
+            except ValueError as err:
+                if on_error == "raise":
+                    raise
+                warnings.warn(f"{name}: {err}; its row at {float(w):.6g} N is NaN", RuntimeWarning, stacklevel=2)
+                nan = float("nan")
+                rows.append({"model": name, "load_N": float(w), "sommerfeld": model.bearing.sommerfeld(float(w)),
+                             "eps": nan, "attitude_deg": nan,
+                             **{k: nan for k in coef.NAMES}, "whirl_ratio": nan, "critical_mass_bar": nan})
+                continue
             rows.append({"model": name, "load_N": float(w), "sommerfeld": op["sommerfeld"], "eps": op["eps"],
                          "attitude_deg": op["attitude_deg"], **{k: op[k] for k in coef.NAMES},
                          "whirl_ratio": op["whirl_ratio"], "critical_mass_bar": op["critical_mass_bar"]})

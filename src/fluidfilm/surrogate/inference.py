@@ -21,6 +21,9 @@ in the trajectory's status.
 """
 from __future__ import annotations
 
+import dataclasses
+import difflib
+import hashlib
 import json
 import math
 import warnings
@@ -550,11 +553,105 @@ class SurrogateForceModel:
                 # checked on load: a damaged or swapped weights file is refused, naming it
                 "weights_sha256": weights_sha256,
                 "array_shapes": {k: list(np.shape(v)) for k, v in arrays.items()}}
+        # and model.json itself, key by key (so a hand edit is refused naming the key); with weights_sha256
+        # among them this covers the whole model directory
+        meta["content_sha256"] = {k: _content_sha256(v) for k, v in meta.items()}
         io.write_json(d / "model.json", meta)
 
 
 class SurrogateFileError(ValueError):
     """A saved surrogate is missing, damaged or inconsistent; the message names the file and the fault."""
+
+
+def _content_sha256(value) -> str:
+    """SHA-256 of a JSON value in canonical form (sorted keys, no spaces): what model.json records per key,
+    the same before writing and after reading back (floats round-trip exactly)."""
+    return hashlib.sha256(json.dumps(value, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
+#: model.json: key -> (JSON type(s) it must have, required); the file written by ``save``.  Optional keys:
+#: written by every save since they were introduced, absent from older files (which still load)
+MODEL_JSON_SCHEMA: dict[str, tuple[Any, bool]] = {
+    "name": (str, True), "activation": (str, True), "structure": (str, False),
+    "boundaries": (list, True), "blend_width": ((int, float), True), "domain": (list, True),
+    "eps_max": ((int, float), True), "n_layers": (list, True), "n_layers_damping": (list, False),
+    "scalings": (list, True), "bearing": (dict, True), "info": (dict, False),
+    "weights_sha256": (str, False), "array_shapes": (dict, False), "content_sha256": (dict, False),
+}
+_SCALING_KEYS = {f.name: f.default is dataclasses.MISSING for f in dataclasses.fields(Scaling)}
+_OPTIONAL_SCALING_KEYS = ("frame", "extras")  # from_dict fills these for files older than them
+
+
+def _unknown(key: str, known) -> str:
+    close = difflib.get_close_matches(key, list(known), n=1)
+    return f"unknown key {key!r}" + (f" (did you mean {close[0]!r}?)" if close else "") + \
+        f"; model.json keys are {sorted(known)}"
+
+
+def _check_meta(meta_file: Path, meta) -> None:
+    """``meta`` (model.json parsed) against ``MODEL_JSON_SCHEMA`` and its recorded per-key checksums."""
+    def bad(msg):
+        return SurrogateFileError(f"{meta_file}: {msg}")
+
+    if not isinstance(meta, dict):
+        raise bad(f"holds a JSON {type(meta).__name__}, expected an object of keys (what save() writes)")
+    for key in meta:
+        if key not in MODEL_JSON_SCHEMA:
+            raise bad(_unknown(key, MODEL_JSON_SCHEMA))
+    for key, (kind, required) in MODEL_JSON_SCHEMA.items():
+        if key not in meta:
+            if required:
+                raise bad(f"lacks the key {key!r}")
+            continue
+        value = meta[key]
+        if isinstance(value, bool) or not isinstance(value, kind):
+            raise bad(f"key {key!r} must be a JSON {_json_kind(kind)}, got {value!r}")
+    n = len(meta["scalings"])
+    for key in ("n_layers", "n_layers_damping"):
+        counts = meta.get(key, [0] * n)
+        if len(counts) != n or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 0 for k in counts):
+            raise bad(f"key {key!r} must list one layer count (an integer >= 0) per network ({n}), got {counts!r}")
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in meta["boundaries"]):
+        raise bad(f"key 'boundaries' must be a list of numbers, got {meta['boundaries']!r}")
+    if len(meta["boundaries"]) != n - 1:
+        raise bad(f"key 'boundaries' lists {len(meta['boundaries'])} split boundaries for {n} networks (needs {n - 1})")
+    if not all(isinstance(row, list) and len(row) == 3 for row in meta["domain"]):
+        raise bad(f"key 'domain' must be a list of [eps_low, eps_high, v_max] rows, got {meta['domain']!r}")
+    for r, scal in enumerate(meta["scalings"]):
+        if not isinstance(scal, dict):
+            raise bad(f"scalings[{r}] must be an object, got {scal!r}")
+        for key in scal:
+            if key not in _SCALING_KEYS:
+                raise bad(f"scalings[{r}]: " + _unknown(key, _SCALING_KEYS))
+        for key, required in _SCALING_KEYS.items():
+            if required and key not in scal and key not in _OPTIONAL_SCALING_KEYS:
+                raise bad(f"scalings[{r}] lacks the key {key!r}")
+    bearing = meta["bearing"]
+    kind = ConicalBearing if bearing.get("kind") == "conical" else JournalBearing
+    allowed = {f.name for f in dataclasses.fields(kind)} | {"kind", "name"}
+    for key in bearing:
+        if key not in allowed:
+            raise bad("bearing: " + _unknown(key, allowed).replace("model.json keys", "bearing keys"))
+    try:
+        bearing_from_dict(bearing)
+    except ValueError as err:
+        raise bad(f"bearing: {err}") from None
+    recorded = meta.get("content_sha256")
+    if recorded is None:
+        return  # a file written before model.json was checksummed: loads on the schema alone
+    for key in sorted(set(recorded) | set(meta) - {"content_sha256"}):
+        if key not in meta:
+            raise bad(f"the key {key!r} recorded at save time is missing; restore the file or retrain the model")
+        if key not in recorded or _content_sha256(meta[key]) != recorded[key]:
+            raise bad(f"the key {key!r} was changed after the model was saved (its SHA-256 differs from the one "
+                      "recorded in content_sha256); a hand-edited model.json is not trusted: restore the file "
+                      "or retrain the model")
+
+
+def _json_kind(kind) -> str:
+    names = {str: "string", list: "list", dict: "object", int: "number", float: "number"}
+    kinds = kind if isinstance(kind, tuple) else (kind,)
+    return " or ".join(sorted({names[k] for k in kinds}))
 
 
 def _check_network(npz: Path, meta: dict, arrays) -> None:
@@ -592,6 +689,10 @@ def load_surrogate(path) -> SurrogateForceModel:
     """Load a saved surrogate (a ``models/<name>/`` directory) as a force model.
 
     Refuses, naming the file and the fault: a missing or unreadable file, a
+    ``model.json`` that breaks ``MODEL_JSON_SCHEMA`` (not an object, a key
+    missing, misspelt or of the wrong type, an invalid bearing) or whose
+    content differs from the per-key SHA-256 recorded at save time (the key
+    is named; files saved before that record load on the schema alone), a
     weights file whose SHA-256 differs from the one written at save time,
     arrays whose shapes disagree with the saved configuration, non-finite
     weights.
@@ -632,6 +733,7 @@ def load_surrogate(path) -> SurrogateForceModel:
         meta = json.loads(meta_file.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as err:
         raise SurrogateFileError(f"{meta_file} is not valid JSON ({err}); the file is damaged") from None
+    _check_meta(meta_file, meta)
     recorded = meta.get("weights_sha256")
     if recorded is not None and io.file_sha256(npz) != recorded:
         raise SurrogateFileError(f"{npz} is damaged or was replaced: its SHA-256 differs from the one recorded "

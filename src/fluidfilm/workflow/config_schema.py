@@ -15,8 +15,10 @@ imports no Hydra.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields, is_dataclass
-from typing import Any, Optional
+from dataclasses import dataclass, field, fields, is_dataclass, make_dataclass
+from typing import Any, Optional, get_type_hints
+
+from fluidfilm.core import bearing as core_bearing
 
 #: OmegaConf's marker of a value that must be given (the same string as ``omegaconf.MISSING``)
 MISSING: Any = "???"
@@ -28,34 +30,22 @@ def optional() -> Any:
 
 
 # --- bearing -----------------------------------------------------------------------------------
-@dataclass
-class JournalBearingSchema:
-    name: str = MISSING
-    length: float = MISSING                # m
-    diameter: float = MISSING              # m
-    clearance: float = MISSING             # m, radial
-    speed_rpm: float = MISSING
-    viscosity: float = MISSING             # Pa s
-    density: float = MISSING               # kg/m^3
-    supply_pressure: float = MISSING       # Pa gauge
-    kind: str = optional()                 # "journal" where given
+def _bearing_schema(cls: type, kind_required: bool) -> type:
+    """The bearing group's schema derived from the library's dataclass (its fields and type annotations,
+    written once in ``core/bearing.py``), plus the config's ``name`` and ``kind``.  Every field is
+    required in the YAML, also those with a default in the dataclass (the YAML is the one place of
+    values); ``validate_group`` then runs the dataclass's own checks on the values."""
+    hints = get_type_hints(cls)
+    specs: list[Any] = [("name", str, field(default=MISSING))]
+    specs += [(f.name, hints[f.name], field(default=MISSING)) for f in fields(cls)]
+    specs.append(("kind", str, field(default=MISSING) if kind_required else optional()))
+    return make_dataclass(f"{cls.__name__}Schema", specs)
 
 
-@dataclass
-class ConicalBearingSchema:
-    name: str = MISSING
-    kind: str = MISSING                    # "conical"
-    length: float = MISSING
-    diameter_small: float = MISSING
-    diameter_large: float = MISSING
-    clearance: float = MISSING
-    speed_rpm: float = MISSING
-    viscosity: float = MISSING
-    density: float = MISSING
-    supply_pressure: float = MISSING
-    clearance_taper: float = MISSING
-    sleeve_min: float = MISSING
-    sleeve_max: float = MISSING
+JournalBearingSchema = _bearing_schema(core_bearing.JournalBearing, kind_required=False)  # kind "journal" if given
+ConicalBearingSchema = _bearing_schema(core_bearing.ConicalBearing, kind_required=True)   # kind: "conical"
+#: the group whose values the library's own dataclass checks too (bearing_from_dict)
+_BUILDERS = {"bearing": core_bearing.bearing_from_dict}
 
 
 # --- the Reynolds reference -----------------------------------------------------------------------
@@ -394,7 +384,22 @@ def validate_group(group: str, node: Any, where: str | None = None) -> Any:
     missing = _required_missing(schema, merged, where + ".")
     if missing:
         raise SchemaError(f"required key(s) left out: {', '.join(missing)}")
+    build = _BUILDERS.get(group)
+    if build is not None and not _has_interpolation(merged):
+        # the same validation as the library's: a bearing the dataclass refuses is refused here, before any work
+        try:
+            values = OmegaConf.to_container(merged)
+            assert isinstance(values, dict)  # a group's node is a mapping
+            build({k: v for k, v in values.items() if v != MISSING})  # an optional key left out: the fallback
+        except ValueError as err:
+            raise SchemaError(f"'{where}': {err}") from None
     return merged
+
+
+def _has_interpolation(cfg: Any) -> bool:
+    from omegaconf import OmegaConf
+
+    return any(OmegaConf.is_interpolation(cfg, k) for k in cfg)
 
 
 _BY_NAME = {name: obj for name, obj in dict(globals()).items() if isinstance(obj, type) and is_dataclass(obj)}
