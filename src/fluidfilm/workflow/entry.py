@@ -60,6 +60,13 @@ def current_job() -> Job:
     return _JOB
 
 
+def _set_job(job: Job | None) -> None:
+    # a module-level function, so that a job run in a launcher's worker process (joblib pickles the task by
+    # value) sets this module's job there, not a copy of the name
+    global _JOB
+    _JOB = job
+
+
 def plain(cfg) -> dict:
     """The composed config as plain, resolved containers."""
     from omegaconf import OmegaConf
@@ -188,12 +195,12 @@ def _job(study: str) -> Job:
 
 def _task(study: ModuleType, name: str) -> Callable:
     def task(cfg):
-        global _JOB
         from fluidfilm.workflow import tracking
         from fluidfilm.workflow.config_check import ConfigError, check_config
 
         check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
-        _JOB = job = _job(name)
+        job = _job(name)
+        _set_job(job)
         if hasattr(study, "check"):  # the study's own keys (ranges, non-empty lists), named when wrong
             try:
                 study.check(cfg)
@@ -220,9 +227,11 @@ def _task(study: ModuleType, name: str) -> Callable:
             return record.value if record.value is not None else dict(record.metrics)
         return record
 
-    # Hydra names the job (and its log file) after the task's module: the study's own name
+    # Hydra names the job (and its log file) after the task's module: the study's own name.  The qualified
+    # name must not be one the study module has (``run``): a launcher that pickles the task would then send
+    # the study's bare ``run`` by reference, without this wrapper
     task.__module__ = study.__name__
-    task.__qualname__ = task.__name__ = "run"
+    task.__qualname__ = task.__name__ = "entry_task"
     return task
 
 
