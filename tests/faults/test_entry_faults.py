@@ -85,6 +85,9 @@ def test_the_guard_redirects_a_run_by_hand_and_lets_the_owning_stage_write(tmp_p
     with pytest.raises(SystemExit):  # a foreach stage's outputs are tracked too
         guard_outputs({"out_dir": "models"}, {"out_dir": ["best_s2"]}, _job(tmp_path, multirun=True), root=tmp_path)
     assert guard_outputs({"out_dir": "models"}, {"out_dir": ["mine"]}, _job(tmp_path), root=tmp_path) == []
+    monkeypatch.setenv("FLUIDFILM_UPDATE_TRACKED", "1")  # the explicit flag of a command outside the pipeline
+    cfg = {"out_dir": "reports/figures"}
+    assert guard_outputs(cfg, written, _job(tmp_path), root=tmp_path) == [] and cfg["out_dir"] == "reports/figures"
 
 
 def test_a_run_by_hand_never_writes_the_pipelines_tracked_outputs():
@@ -132,13 +135,68 @@ def test_ctrl_c_of_fig3_leaves_the_old_set_and_no_new_csv_beside_it(tmp_path):
     for n in FIG3_SET:
         (tmp_path / n).write_text("stale")
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    runs = ROOT / "outputs" / "fig3_velocity"
+    before = set(runs.iterdir()) if runs.exists() else set()
     proc = subprocess.Popen([sys.executable, "experiments/fig3_velocity.py", "n_v=50001", f"out_dir={tmp_path}"],
                             cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             preexec_fn=interruptible)
-    time.sleep(12)  # well into the 400 000 solves
+    deadline = time.time() + 120  # until Hydra has made the job's folder: the study is starting
+    while time.time() < deadline and not any((d / ".hydra" / "config.yaml").exists()
+                                             for d in (set(runs.iterdir()) if runs.exists() else set()) - before):
+        time.sleep(0.05)
+    time.sleep(3)  # well into the 400 000 solves
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err[-2000:]
     assert err.strip().splitlines()[-1].startswith("interrupted: the Fig. 3 velocity study")
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(FIG3_SET)
     assert {(tmp_path / n).read_text() for n in FIG3_SET} == {"stale"}
+
+
+@pytest.mark.parametrize("group", [False, True], ids=["main_process", "process_group"])
+def test_ctrl_c_of_a_local_dask_run_is_one_line_without_worker_tracebacks(tmp_path, group):
+    """SIGINT to the main process alone, or to the whole group as a terminal's Ctrl-C: the workers
+    (which ignore SIGINT; the main process closes the cluster) print no KeyboardInterrupt of their own."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    proc = subprocess.Popen([sys.executable, "experiments/make_dataset.py", "dataset=quick", "dask.scheduler=local",
+                             "dask.n_workers=2", "progress=false", f"out_dir={tmp_path / 'ds'}",
+                             f"test_dir={tmp_path / 'ts'}"], cwd=ROOT, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=interruptible, start_new_session=True)
+    deadline = time.time() + 300
+    while time.time() < deadline and len(list((tmp_path / "ds").glob("part-*.parquet"))) < 2:
+        time.sleep(0.05)
+    if group:
+        os.killpg(proc.pid, signal.SIGINT)
+    else:
+        proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err[-3000:]
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err and "AssertionError" not in err, err[-3000:]
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert lines[-1].startswith("interrupted: dataset generation") and len(lines) <= 3, lines
+
+
+def test_every_stage_may_write_what_its_study_writes(monkeypatch):
+    """Run as its own stage (``DVC_STAGE``), no pipeline command is refused or redirected: each study's
+    outputs lie in its stage's ``outs`` (or in no stage's)."""
+    import importlib
+
+    import test_dvc_deps as deps
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    from fluidfilm.workflow import entry
+
+    monkeypatch.chdir(ROOT)
+    for name, stage in deps.STAGES.items():
+        script, overrides = deps._entry_point(stage)
+        study = importlib.import_module(f"fluidfilm.studies.{script.stem}")
+        GlobalHydra.instance().clear()
+        with initialize_config_dir(config_dir=str(ROOT / "conf"), version_base="1.3"):
+            cfg = compose(config_name=script.stem, overrides=overrides, return_hydra_config=True)
+        job = Job(study=script.stem, choices=dict(cfg.hydra.runtime.choices), task_overrides=overrides,
+                  multirun=False, output_dir=Path("outputs/x"), sweep_dir="", stage=name)
+        entry._set_job(job)
+        written = study.outputs(cfg) if hasattr(study, "outputs") else getattr(study, "OUTPUTS", {})
+        assert guard_outputs(cfg, written, job) == [], name
+    entry._set_job(None)

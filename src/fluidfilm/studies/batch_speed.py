@@ -18,7 +18,7 @@ def run(cfg) -> dict:
     for n in cfg.batch_sizes:
         reps = int(cfg.repeats_small) if n == 1 else 1
         for name, model in models.items():
-            row = {"model": name, "n": int(n)}
+            row: dict = {"model": name, "n": int(n)}
             if name == "surrogate" or n <= cfg.reference_one_by_one_max_n:
                 r = trajectories_per_second(model, n, cfg.t_end, cfg.dt, batched=False, repeats=reps)
                 row["one_by_one_per_s"] = r["trajectories_per_s"]

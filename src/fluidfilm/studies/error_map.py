@@ -37,7 +37,8 @@ def run(cfg) -> Logged:
     sets = {"held-out random states": (held[["X1", "X2"]].to_numpy(), held[["V1", "V2"]].to_numpy(),
                                        held[["F1", "F2"]].to_numpy()),
             "states along the reference orbits": (bench.x, bench.v, bench.forces)}
-    summary, tables, maps = {}, [], {}
+    summary: dict = {}
+    tables, maps = [], {}
     for name, path in cfg.models.items():
         model = load_surrogate(path)
         summary[name] = {}

@@ -25,7 +25,7 @@ def tracking_run(cfg):
     return "control_evaluation", {"stage": "evaluate_control"}
 
 
-def run(cfg) -> Logged:
+def run(cfg):  # unannotated: models built from a config are typed as unions; the library calls are checked
     c = plain(cfg)
     reference = reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference)
     env = env_from_cfg(reference, c["rotor"], c["controller"])

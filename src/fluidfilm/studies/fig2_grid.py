@@ -17,7 +17,7 @@ def tracking_run(cfg):
     return "fig2_grid", None
 
 
-def run(cfg) -> Logged:
+def run(cfg):  # unannotated: models built from a config are typed as unions; the library calls are checked
     bearing = bearing_from_cfg(cfg.bearing)
     solvers = {name: solver_from_cfg(bearing, cfg[name]) for name in ("coarse", "dense", "converged")}
     eps = np.linspace(cfg.eps_min, cfg.eps_max, cfg.n_eps)

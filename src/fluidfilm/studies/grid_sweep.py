@@ -14,7 +14,7 @@ def tracking_run(cfg):
             {"study": "grid_sweep", "sweep_dir": job.sweep_dir if job.multirun else ""})
 
 
-def run(cfg) -> Logged:
+def run(cfg):  # unannotated: models built from a config are typed as unions; the library calls are checked
     bearing = bearing_from_cfg(cfg.bearing)
     solver = solver_from_cfg(bearing, cfg.solver)
     converged = solver_from_cfg(bearing, cfg.converged)

@@ -48,7 +48,7 @@ def run(cfg) -> Logged:
     io.write_csv(Path(cfg.figure_dir) / f"equilibrium_locus_{cfg.model_name}.csv", locus)
     io.save_figure(plot_equilibrium_locus(locus, bearing.clearance),
                    Path(cfg.figure_dir) / f"equilibrium_locus_{cfg.model_name}.png", dpi=130)
-    metrics = {}
+    metrics: dict = {}
     for r in rows:
         metrics |= {f"span_{r['case']}": r["span"], f"eps_max_{r['case']}": r["eps_max"],
                     f"wall_time_s_{r['case']}": r["wall_time_s"],

@@ -12,7 +12,9 @@ In the spirit of lightning-hydra-template's ``task_wrapper``, failure and loggin
 4. the study's outputs (``OUTPUTS``, or ``outputs(cfg)``) are checked against the pipeline's tracked outputs
    (every ``outs`` of dvc.yaml, and the git-tracked files under reports/): only the DVC stage that makes one
    (``DVC_STAGE``, which ``dvc repro`` exports to every command it runs) writes it; a run by hand writes
-   under its own output folder instead and says where; a run as another stage is refused;
+   under its own output folder instead and says where (``FLUIDFILM_UPDATE_TRACKED=1``: writes them, for
+   the Makefile's commands that update a committed report outside the pipeline); a run as another stage,
+   or a sweep job, is refused;
 5. the MLflow run, where the study has one (``tracking_run(cfg)``): opened around the study, ended
    FINISHED / FAILED / KILLED, and the study's returned ``tracking.Logged`` record logged into it;
 6. Ctrl-C: one line, exit status 130 (``io.run_interruptible``); every output is written atomically.
@@ -35,6 +37,9 @@ from fluidfilm import io
 
 ROOT = Path(__file__).resolve().parents[3]  # the workspace: conf/, dvc.yaml, experiments/
 STAGE_ENV = "DVC_STAGE"  # dvc/stage/run.py: set for every stage command `dvc repro` runs
+# the explicit "yes, update the committed report" of a command outside the pipeline (the Makefile's
+# train-time-ci / train-time-full-scale write git-tracked reports no stage makes)
+UPDATE_ENV = "FLUIDFILM_UPDATE_TRACKED"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -147,6 +152,8 @@ def guard_outputs(cfg, written: Mapping[str, list[str]], job: Job, root: Path = 
             continue
         stages = sorted({s for _, s in hits})
         if job.stage is not None and job.stage in stages:
+            continue
+        if job.stage is None and not job.multirun and os.environ.get(UPDATE_ENV) == "1":
             continue
         shown = ", ".join(sorted(str(t.relative_to(root)) if root in t.parents else str(t) for t, _ in hits)[:3])
         makers_text = " / ".join(s for s in stages if s != "git") or "git (a committed report)"
