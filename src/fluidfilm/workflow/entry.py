@@ -200,7 +200,7 @@ def _job(study: str) -> Job:
                sweep_dir=str(hc.sweep.dir) if multirun else "", stage=os.environ.get(STAGE_ENV) or None)
 
 
-def _task(study: ModuleType, name: str) -> Callable:
+def _task(study: ModuleType, name: str, root: Path) -> Callable:
     def task(cfg):
         from fluidfilm.workflow import tracking
         from fluidfilm.workflow.config_check import ConfigError, check_config
@@ -213,10 +213,10 @@ def _task(study: ModuleType, name: str) -> Callable:
                 study.check(cfg)
             except ConfigError as err:
                 _refuse(f"configuration refused: {err}")
-        check_inputs(cfg, getattr(study, "INPUTS", ()))
+        check_inputs(cfg, getattr(study, "INPUTS", ()), root)
         outputs = getattr(study, "outputs", None)
         written = outputs(cfg) if callable(outputs) else getattr(study, "OUTPUTS", {})
-        for line in guard_outputs(cfg, written, job):
+        for line in guard_outputs(cfg, written, job, root):
             print(line, flush=True)
         run_spec = getattr(study, "tracking_run", None)
         try:
@@ -247,9 +247,13 @@ def main(study: ModuleType, what: str, resume: str = "run the same command again
     import hydra
 
     name = study.__name__.rsplit(".", 1)[-1]
-    conf = ROOT / "conf"
+    # the workspace of the entry point that runs (a scratch copy of it, too: the pipeline's quick profile),
+    # else the one this package lies in
+    script = Path(sys.argv[0]).resolve()
+    root = script.parents[1] if script.parent.name == "experiments" and (script.parents[1] / "conf").is_dir() else ROOT
+    conf = root / "conf"
     if not (conf / f"{name}.yaml").exists():
         raise FileNotFoundError(f"no config {conf / name}.yaml for the study {study.__name__}")
     sys.argv = _overrides_with_own_dirs(sys.argv, name)
-    entry = hydra.main(config_path=str(conf), config_name=name, version_base="1.3")(_task(study, name))
+    entry = hydra.main(config_path=str(conf), config_name=name, version_base="1.3")(_task(study, name, root))
     io.run_interruptible(entry, what, resume)
