@@ -100,7 +100,7 @@ ROSS_PINS       := benchmarks/ross_peer_constraints.txt
 # resumes at the next seed (cache/train_time_ci).
 .PHONY: train-time-ci
 train-time-ci: setup
-	$(PY) experiments/train_time.py samples_per_seed=12000 seeds_max=1000 budget_s=36000 ranking_check.enabled=false \
+	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/train_time.py samples_per_seed=12000 seeds_max=1000 budget_s=36000 ranking_check.enabled=false \
 	    cache_dir=cache/train_time_ci out=reports/train_time_ci.json
 	$(PY) -m fluidfilm.reporting.readme
 
@@ -108,7 +108,7 @@ train-time-ci: setup
 # mini-batch Adam under the same division and stopping rule (Levenberg-Marquardt would take hours per network).
 .PHONY: train-time-full-scale
 train-time-full-scale: setup
-	$(PY) experiments/train_time.py main_study=false full_scale.enabled=true \
+	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/train_time.py main_study=false full_scale.enabled=true \
 	    cache_dir=cache/train_time_full_scale out=reports/train_time_full_scale.json
 	$(PY) -m fluidfilm.reporting.readme
 

@@ -15,12 +15,12 @@ CONF = Path(__file__).resolve().parents[1] / "conf"
 PRIMARY = sorted(p.stem for p in CONF.glob("*.yaml"))
 # which primary config composes each group, and under which key it lands
 GROUPS = {
-    "bearing": ("fig2", "bearing"), "solver": ("grid_sweep", "solver"), "reference": ("make_dataset", "reference"),
-    "tracking": ("train", "tracking"), "dataset": ("make_dataset", "dataset"), "dask": ("make_dataset", "dask"),
-    "model": ("train", "model"), "split": ("train", "split"), "scaling": ("train", "scaling"),
-    "trainer": ("train", "trainer"), "experiment": ("train", None), "rotor": ("trajectories", "rotor"),
+    "bearing": ("fig2_grid", "bearing"), "solver": ("grid_sweep", "solver"), "reference": ("make_dataset", "reference"),
+    "tracking": ("train_surrogate", "tracking"), "dataset": ("make_dataset", "dataset"), "dask": ("make_dataset", "dask"),
+    "model": ("train_surrogate", "model"), "split": ("train_surrogate", "split"), "scaling": ("train_surrogate", "scaling"),
+    "trainer": ("train_surrogate", "trainer"), "experiment": ("train_surrogate", None), "rotor": ("trajectories", "rotor"),
     "integrator": ("trajectories", "integrator"), "case": ("trajectories", "cases.a"),
-    "metrics": ("compare", "metrics"), "controller": ("control", "controller"), "protocol": ("train", "protocol"),
+    "metrics": ("compare", "metrics"), "controller": ("train_controller", "controller"), "protocol": ("train_surrogate", "protocol"),
     "characteristics": ("characteristics", "characteristics"),
 }
 
@@ -231,7 +231,7 @@ def test_schema_refuses_a_mistyped_value_or_unknown_key_naming_it(override, name
     from fluidfilm.workflow.config_check import schema_problems
 
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
-        cfg = compose(config_name="train", overrides=["protocol=adam", override], return_hydra_config=True)
+        cfg = compose(config_name="train_surrogate", overrides=["protocol=adam", override], return_hydra_config=True)
         choices = dict(cfg.hydra.runtime.choices)  # what HydraConfig.get() gives a running job
     problems = schema_problems(cfg, choices)
     if named is None:
@@ -262,6 +262,6 @@ def test_bearing_schema_is_the_library_dataclass():
 def test_bearing_config_gets_the_dataclass_validation(override, named):
     from fluidfilm.workflow.config_schema import SchemaError, validate_group
 
-    cfg = _compose("fig2", [override])
+    cfg = _compose("fig2_grid", [override])
     with pytest.raises(SchemaError, match=named):
         validate_group("bearing", OmegaConf.to_container(cfg.bearing, resolve=False))

@@ -117,12 +117,15 @@ def _composed_configs(script: Path, overrides: list[str]) -> set[Path]:
     from hydra import compose, initialize_config_dir
     from hydra.core.global_hydra import GlobalHydra
 
-    m = re.search(r'config_name="([^"]+)"', script.read_text())
-    assert m, f"{script.name}: no @hydra.main(config_name=...)"
+    name = script.stem  # the entry point, its config and its study share one name (fluidfilm.workflow.entry)
+    assert (ROOT / "conf" / f"{name}.yaml").exists(), f"{script.name}: no conf/{name}.yaml"
     GlobalHydra.instance().clear()
     with initialize_config_dir(config_dir=str(ROOT / "conf"), version_base="1.3"):
-        cfg = compose(config_name=m.group(1), overrides=overrides, return_hydra_config=True)
-    files = {ROOT / "conf" / f"{m.group(1)}.yaml"}
+        cfg = compose(config_name=name, overrides=overrides, return_hydra_config=True)
+    files = {ROOT / "conf" / f"{name}.yaml"}
+    # a primary config that composes another primary config (the controller's three entry points)
+    files |= {ROOT / "conf" / f"{d}.yaml" for d in (yaml.safe_load(files.copy().pop().read_text()) or {})
+              .get("defaults", []) if isinstance(d, str) and (ROOT / "conf" / f"{d}.yaml").exists()}
     for group, choice in cfg.hydra.runtime.choices.items():
         if choice is None:
             continue

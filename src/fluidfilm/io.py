@@ -89,6 +89,65 @@ def save_figure(fig, path, **kwargs) -> None:
         fig.savefig(tmp, format=Path(path).suffix.lstrip(".") or "png", **kwargs)
 
 
+class OutputSet:
+    """Files written as one set (``output_set``): each is staged in a temporary file beside its destination
+    and all are moved into place together when the block ends without an error."""
+
+    def __init__(self):
+        self._staged: list[tuple[Path, Path]] = []
+
+    def _stage(self, path) -> Path:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+        self._staged.append((Path(tmp), path))  # first, so that an error below still removes it
+        os.close(fd)
+        os.chmod(tmp, 0o666 & ~_UMASK)
+        return Path(tmp)
+
+    def write_text(self, path, text: str) -> None:
+        self._stage(path).write_text(text)
+
+    def write_json(self, path, obj) -> None:
+        self.write_text(path, json.dumps(obj, indent=2, sort_keys=True) + "\n")
+
+    def write_csv(self, path, frame) -> None:
+        frame.to_csv(self._stage(path), index=False)
+
+    def save_figure(self, fig, path, **kwargs) -> None:
+        fig.savefig(self._stage(path), format=Path(path).suffix.lstrip(".") or "png", **kwargs)
+
+
+@contextlib.contextmanager
+def output_set():
+    """Write a study's outputs as one set: an error or Ctrl-C before the end leaves every old file as it was
+    and no new one beside it.
+
+    The moves into place run with SIGINT blocked (a Ctrl-C then arrives right after them), so the set is
+    replaced whole; a crash of the machine in those few renames is the one window left.
+    """
+    import signal
+    import threading
+
+    staged = OutputSet()
+    try:
+        yield staged
+    except BaseException:
+        for tmp, _ in staged._staged:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+        raise
+    main = threading.current_thread() is threading.main_thread()
+    if main:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        for tmp, path in staged._staged:
+            os.replace(tmp, path)
+    finally:
+        if main:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def run_interruptible(main, what: str, resume: str) -> None:
     """Run an entry point's ``main``; Ctrl-C ends it with one line instead of a traceback.
 

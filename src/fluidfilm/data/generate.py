@@ -188,6 +188,25 @@ def _damaged_parts(out: Path, state: dict) -> list[str]:
 
 
 @contextlib.contextmanager
+def _workers_ignore_sigint():
+    """Start processes that ignore SIGINT: a terminal's Ctrl-C reaches the whole process group, and each
+    Dask worker would print its own KeyboardInterrupt tracebacks while this process, which closes the
+    cluster itself, prints the one line that matters.  An ignored SIGINT survives the workers' spawn (a
+    handler would not); this process ignores it only while the cluster starts."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+@contextlib.contextmanager
 def _dask_client(scheduler: str, n_workers: int | None):
     import logging
 
@@ -198,8 +217,9 @@ def _dask_client(scheduler: str, n_workers: int | None):
         logging.getLogger(name).setLevel(logging.WARNING)
     if scheduler == "local":
         n = n_workers or os.cpu_count() or 1
-        with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-                Client(cluster) as client:
+        with _workers_ignore_sigint():
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+        with cluster, Client(cluster) as client:
             yield client
     else:
         with Client(scheduler) as client:

@@ -372,3 +372,78 @@ def binned_errors(rel: np.ndarray, eps: np.ndarray, speed: np.ndarray, eps_edges
                              "n_states": int(m.sum()), "median": float(np.median(r)),
                              "p99": float(np.quantile(r, 0.99)), "max": float(r.max())})
     return pd.DataFrame(rows)
+
+
+# --- the study run by experiments/grading_study.py (conf/grading_study.yaml), one job of a sweep ---
+
+INPUTS = ("testset_dir", "reference_trajectories_dir")
+
+
+def _job_name() -> tuple[str, dict]:
+    """(the job's name, its swept values): ``key=value,...`` of the keys the sweep varies, or "single"."""
+    from fluidfilm.workflow import sweeps
+    from fluidfilm.workflow.entry import current_job
+
+    keys = os.environ.get(sweeps.SWEEP_KEYS_ENV)  # set by the sweep callback in the launching process
+    swept = sweeps.swept_values(current_job().task_overrides, keys.split(",") if keys else [])
+    return ",".join(f"{k}={v}" for k, v in swept.items()) or "single", swept
+
+
+def tracking_run(cfg):
+    return f"grading {_job_name()[0]}", {"study": cfg.title}
+
+
+def run(cfg):
+    """Generate (or reuse) the dataset of one grading, train a surrogate on it, judge it; ``result.json`` in the
+    job's output folder, the flat metrics to the job's MLflow run."""
+    import shutil
+
+    from fluidfilm.data import load_test_set
+    from fluidfilm.data.spec import check_reference
+    from fluidfilm.reynolds import ReynoldsSolver
+    from fluidfilm.surrogate.fit import fit_surrogate, training_digest
+    from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+    from fluidfilm.workflow.entry import current_job, plain
+    from fluidfilm.workflow.tracking import Logged
+
+    name, swept = _job_name()
+    c = plain(cfg)
+    # everything is checked, and what the surrogate is judged on is read or computed, before the long work
+    bearing = bearing_from_cfg(cfg.bearing)
+    reference_policy = check_reference(c["reference"])
+    spec = DatasetSpec.from_cfg(apply_grading(c["dataset"], c["grading"]))
+    cases = {k: cfg.cases[k] for k in sorted(cfg.cases)}
+    judges = Judges(held_out=load_test_set(cfg.testset_dir),
+                    orbits=OrbitBenchmark.from_dir(reference_from_cfg(bearing, cfg.reference),
+                                                   cfg.reference_trajectories_dir, cases),
+                    stiffness=(StiffnessBenchmark.from_reference(ReynoldsSolver(bearing, *cfg.kc_reference_grid),
+                                                                 cfg.kc_eps) if cfg.kc_eps else None),
+                    rotor=cfg.rotor, cases=cases, integrator=cfg.integrator, threshold_pct=cfg.metrics.threshold_pct,
+                    floor_N=cfg.error_floor_N, evaluate_cases=cfg.evaluate_cases)
+    print(f"job {name}: {spec.n_samples(bearing.clearance):,} samples planned", flush=True)
+    path, meta, reused = cached_dataset(bearing, reference_policy, spec, cfg.cache_dir, scheduler=cfg.dask.scheduler,
+                                        n_workers=cfg.dask.n_workers, progress=cfg.progress)
+    digest = training_digest(c["model"], c["split"], c["scaling"], c["trainer"], c["seed"], path.name)
+    model, report = fit_surrogate(path, c["model"], c["split"], c["scaling"], c["trainer"], None, seed=cfg.seed,
+                                  name=name, ckpt_root=Path(cfg.checkpoint_dir) / digest,
+                                  val_fraction=cfg.trainer.val_fraction, batch_size=cfg.trainer.batch_size,
+                                  workers=cfg.trainer.workers)
+    result = {
+        "job": name, "swept": swept, "sweep_id": os.environ.get(SWEEP_ID_ENV), "grading": c["grading"],
+        "dataset": {"n_samples": int(meta["n_samples"]), "generation_s": float(meta["generation_seconds_total"]),
+                    "reused": reused, "path": str(path), "spec": spec.to_dict()},
+        "training": {"train_time_s": report["train_time_s"], "epochs": c["trainer"]["max_epochs"],
+                     "networks": report["networks"]},
+        **judges.judge(model),
+        "config": {k: c[k] for k in ("model", "split", "scaling", "trainer", "seed")},
+    }
+    io.write_json(current_job().output_dir / "result.json", result)
+    # the checkpoint is there to resume an interrupted job, not to skip the training of a later one
+    shutil.rmtree(Path(cfg.checkpoint_dir) / digest, ignore_errors=True)
+    row = flat_metrics(result)
+    print(f"job {name}: {row['n_samples']:,} samples ({'cached' if reused else 'made'} in {row['generation_s']:.1f} s), "
+          f"trained {row['train_time_s']:.0f} s; held-out median {100 * row['held_out_rel_err_median']:.2f} %, "
+          f"p99 {100 * row['held_out_rel_err_p99']:.1f} %; along the orbits median "
+          f"{100 * row['orbit_states_rel_err_median']:.2f} %, p99 {100 * row['orbit_states_rel_err_p99']:.1f} %"
+          + (f", {row['n_satisfactory']}/7 cases" if "n_satisfactory" in row else ""), flush=True)
+    return Logged({k: float(v) for k, v in row.items() if v is not None}, value=row)

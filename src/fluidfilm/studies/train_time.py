@@ -228,3 +228,90 @@ def ranking(s: Mapping) -> dict:
     """Which structure trains faster (mean time) and which is more accurate (median validation error)."""
     return {"faster": "split" if s["train_time_reduction_pct"] > 0 else "single",
             "more_accurate": "split" if s["val_rel_rmse_split_median"] < s["val_rel_rmse_single_median"] else "single"}
+
+
+# --- the study run by experiments/train_time.py (conf/train_time.yaml) ---
+
+INPUTS = ("dataset_dir",)
+OUTPUTS = {"out": [""]}
+
+
+def tracking_run(cfg):
+    return "train_time", None
+
+
+def check(cfg) -> None:
+    from fluidfilm.workflow.config_check import ConfigError
+
+    if not (cfg.main_study or cfg.full_scale.enabled):
+        raise ConfigError("main_study=false and full_scale.enabled=false: nothing to run")
+
+
+def run(cfg):
+    """The paper's training-time comparison (see ``experiments/train_time.py``); returns the MLflow record."""
+    from fluidfilm.surrogate.training import read_dataset
+    from fluidfilm.workflow import tracking
+    from fluidfilm.workflow.entry import plain
+
+    check(cfg)
+    c = plain(cfg)
+    protocol = c["protocol"]
+    boundaries = list(cfg.boundaries)
+    frame, meta = read_dataset(cfg.dataset_dir)
+    out: dict = {"train_time_protocol": protocol["name"], "protocol": protocol, "boundaries": boundaries,
+                 "dataset_samples": len(frame), "machine": machine(), "date": time.strftime("%Y-%m-%d")}
+    head: dict = {"runs": []}
+    if cfg.main_study:
+        print(f"training-time study: protocol {protocol['name']}, {cfg.samples_per_seed:,} of {len(frame):,} samples "
+              f"per seed, at least {cfg.seeds_min} seeds", flush=True)
+        head = study(frame, meta, protocol, boundaries, cfg.samples_per_seed, cfg.seeds_min, cfg.seeds_max,
+                     cfg.ci_half_width_target_pct, cfg.n_jobs, cfg.bootstrap_resamples, cfg.budget_s,
+                     cache_dir=cfg.cache_dir)
+        out.update({k: v for k, v in head.items() if k != "runs"})
+        out.update(ranking=ranking(head),
+                   # the old report's name for "every run stopped by its rule"
+                   all_reached_target=head["train_time_converged"], target_val_rel_rmse=None,
+                   max_epochs=protocol["max_epochs"], n_seeds=head["train_time_seeds"])
+        rc = cfg.ranking_check
+        if rc.enabled:
+            print(f"ranking check: {rc.samples_per_seed:,} samples per seed, {rc.seeds} seeds", flush=True)
+            check_run = study(frame, meta, protocol, boundaries, rc.samples_per_seed, rc.seeds, rc.seeds, 0.0,
+                              cfg.n_jobs, cfg.bootstrap_resamples, math.inf, seed_offset=1000, cache_dir=cfg.cache_dir)
+            out["ranking_check"] = {k: v for k, v in check_run.items() if k != "runs"} | {
+                "ranking": ranking(check_run), "same_ranking": ranking(check_run) == ranking(head),
+                # the point estimates' signs say little when both intervals hold 0; overlapping intervals say the
+                # two sizes are not measurably different
+                "consistent": bool(
+                    check_run["train_time_reduction_ci95_low"] <= head["train_time_reduction_ci95_high"]
+                    and head["train_time_reduction_ci95_low"] <= check_run["train_time_reduction_ci95_high"]),
+                "runs": check_run["runs"]}
+    fs = cfg.full_scale
+    if fs.enabled:
+        proto_fs = dict(protocol) | c["full_scale"]["protocol"]
+        print(f"full-scale run: protocol {proto_fs['name']} on all {len(frame):,} samples", flush=True)
+        full = study(frame, meta, proto_fs, boundaries, len(frame), 1, 1, 0.0, 1, cfg.bootstrap_resamples, math.inf,
+                     seed_offset=2000, cache_dir=cfg.cache_dir)
+        out["full_scale"] = {k: v for k, v in full.items() if k != "runs"} | {
+            "ranking": ranking(full), "protocol": proto_fs, "runs": full["runs"]}
+    out["runs"] = head["runs"]
+    io.write_json(cfg.out, out)
+    metrics = {k: float(v) for k, v in out.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+    if "train_time_converged" in out:
+        metrics["train_time_converged"] = float(out["train_time_converged"])
+    if "full_scale" in out:
+        metrics |= {f"full_scale.{k}": float(v) for k, v in out["full_scale"].items()
+                    if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)}
+    # one child run per seed and structure: its networks' epochs, times and errors
+    parent = tracking.active_run()
+    for r in head["runs"]:
+        for which in ("single", "split"):
+            nets = {}
+            for k, n in enumerate(r[which]["networks"]):
+                nets.update({f"net{k}.epochs": n["epochs"], f"net{k}.train_time_s": n["train_time_s"],
+                             f"net{k}.val_rel_rmse": n["val_rel_rmse"],
+                             f"net{k}.test_rel_rmse": n["test_rel_rmse"] or math.nan,
+                             f"net{k}.train_rel_rmse": n["train_rel_rmse"]})
+            tracking.log_child_run(parent, f"train_time seed {r['seed']} {which}", nets,
+                                   params={"seed": r["seed"], "structure": which}, uri=cfg.tracking.uri)
+    print({k: v for k, v in out.items() if k not in ("runs", "ranking_check", "full_scale", "protocol")})
+    return tracking.Logged(metrics, [str(cfg.out)])

@@ -63,20 +63,29 @@ def job_name(base: str, task_overrides: Iterable[str], group_choices: Mapping[st
     return f"{base}-{suffix}" if suffix else base
 
 
-def tracked_outputs(root) -> set[Path]:
-    """Every ``outs`` path of the DVC pipeline in ``root/dvc.yaml`` (resolved), or nothing without one."""
+def pipeline_outputs(root) -> dict[Path, str]:
+    """Every ``outs`` path of the DVC pipeline in ``root/dvc.yaml`` (resolved) -> the stage that makes it, a
+    ``foreach`` stage expanded as DVC names it (``train_best_seeds@1``); empty without a dvc.yaml."""
     import yaml
 
     f = Path(root) / "dvc.yaml"
     if not f.exists():
-        return set()
-    stages = (yaml.safe_load(f.read_text()) or {}).get("stages", {})
-    out = set()
-    for stage in stages.values():
-        for o in stage.get("outs", []) or []:
-            path = next(iter(o)) if isinstance(o, Mapping) else o
-            out.add((Path(root) / path).resolve())
+        return {}
+    out: dict[Path, str] = {}
+    for name, stage in ((yaml.safe_load(f.read_text()) or {}).get("stages") or {}).items():
+        expanded = [(name, stage)] if "foreach" not in stage else [
+            (f"{name}@{item}", yaml.safe_load(yaml.safe_dump(stage["do"]).replace("${item}", str(item))))
+            for item in stage["foreach"]]
+        for stage_name, body in expanded:
+            for o in body.get("outs", []) or []:
+                path = next(iter(o)) if isinstance(o, Mapping) else o
+                out[(Path(root) / path).resolve()] = stage_name
     return out
+
+
+def tracked_outputs(root) -> set[Path]:
+    """Every ``outs`` path of the DVC pipeline in ``root/dvc.yaml`` (resolved), or nothing without one."""
+    return set(pipeline_outputs(root))
 
 
 def guard_tracked(path, root, multirun: bool) -> None:

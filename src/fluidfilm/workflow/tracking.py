@@ -218,6 +218,38 @@ def run(tracking: Mapping | None, run_name: str, params: Mapping | None = None,
         mlflow.end_run(status="FINISHED")
 
 
+@dataclasses.dataclass
+class Logged:
+    """What a study hands back to the entry wrapper for its MLflow run (``fluidfilm.workflow.entry``).
+
+    ``metrics``: name -> number, logged once at the end (a non-number or a bool is skipped);
+    ``artifacts``: files or folders, or ``(folder, artifact_path)`` pairs; ``value``: what the Hydra job
+    returns (a sweep's job return), by default the metrics.
+    """
+
+    metrics: Mapping = dataclasses.field(default_factory=dict)
+    artifacts: list = dataclasses.field(default_factory=list)
+    value: object = None
+
+
+def log_record(record: Logged) -> None:
+    """Log a study's record to the active run (nothing without one)."""
+    log_metrics({k: float(v) for k, v in record.metrics.items()
+                 if isinstance(v, (int, float)) and not isinstance(v, bool)})
+    for a in record.artifacts:
+        path, where = a if isinstance(a, tuple) else (a, None)
+        if Path(path).is_dir():
+            log_artifacts(path, artifact_path=where)
+        else:
+            log_artifact(path)
+
+
+def active_run():
+    """The active MLflow run, or None (tracking disabled, or no run open)."""
+    mlflow = _active()
+    return None if mlflow is None else mlflow.active_run()
+
+
 def _active():
     import mlflow
 
@@ -307,9 +339,10 @@ def child_logger_factory(parent, tracking: Mapping, name: str):
     return logger_for
 
 
-def sb3_learning_curves():
+def sb3_learning_curves(log: bool = True):
     """A stable-baselines3 callback: episode returns (from the Monitor wrapper, kept in ``.returns``)
-    and SB3's training scalars, logged to the active MLflow run."""
+    and SB3's training scalars, logged to the active MLflow run (``log=False``: returns kept, nothing
+    logged, e.g. where the training's wall time is what is measured)."""
     import numpy as np
     from stable_baselines3.common.callbacks import BaseCallback
 
@@ -323,11 +356,12 @@ def sb3_learning_curves():
                 ep = info.get("episode")
                 if ep is not None:
                     self.returns.append((self.num_timesteps, float(ep["r"])))
-                    log_metric("episode_return", float(ep["r"]), step=self.num_timesteps)
+                    if log:
+                        log_metric("episode_return", float(ep["r"]), step=self.num_timesteps)
             return True
 
         def _on_rollout_end(self) -> None:
-            if _active() is None:
+            if not log or _active() is None:
                 return
             vals = {k.replace("/", "_"): float(v) for k, v in self.model.logger.name_to_value.items()
                     if isinstance(v, (int, float, np.floating))}

@@ -1,23 +1,20 @@
-"""Rotor calibration: orbit spans of the imbalance cases over rotor mass, load share and imbalance sense.
+"""Rotor calibration: orbit spans of the imbalance cases over rotor mass, load share and imbalance sense
+(``experiments/rotor_calibration.py``, reports/rotor_calibration.csv)."""
+from __future__ import annotations
 
-    python experiments/calibrate_rotor.py    # reports/rotor_calibration.csv
-"""
 import itertools
 
-import hydra
 import numpy as np
 import pandas as pd
-from omegaconf import DictConfig
 
 from fluidfilm import io
-from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.rotor.cases import case_summary, run_case
-from fluidfilm.workflow.config_check import check_config
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+
+OUTPUTS = {"out": [""]}
 
 
-@hydra.main(config_path="../conf", config_name="calibrate_rotor", version_base="1.3")
-def main(cfg: DictConfig) -> None:
-    check_config(cfg)  # a mistyped value or an unknown key is refused here, before any work
+def run(cfg) -> None:
     bearing = bearing_from_cfg(cfg.bearing)
     model = reference_from_cfg(bearing, cfg.reference)
     rows = []
@@ -37,7 +34,3 @@ def main(cfg: DictConfig) -> None:
     table = pd.DataFrame(rows).sort_values("rms_span_misfit")
     io.write_csv(cfg.out, table)
     print(table.head(5).to_string(index=False))
-
-
-if __name__ == "__main__":
-    io.run_interruptible(main, "the rotor-mass calibration", "run the same command again")

@@ -1,0 +1,45 @@
+"""Trajectories per second of the reference and the best surrogate, one by one and batched
+(``experiments/batch_speed.py``, reports/batch_speed.json)."""
+from __future__ import annotations
+
+from fluidfilm import io, load_surrogate
+from fluidfilm.perf.throughput import trajectories_per_second
+from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.workflow.entry import plain
+
+INPUTS = ("surrogate_dir",)
+OUTPUTS = {"out_json": [""]}
+
+
+def run(cfg) -> dict:
+    models = {"reference": reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference),
+              "surrogate": load_surrogate(cfg.surrogate_dir)}
+    rows = []
+    for n in cfg.batch_sizes:
+        reps = int(cfg.repeats_small) if n == 1 else 1
+        for name, model in models.items():
+            row: dict = {"model": name, "n": int(n)}
+            if name == "surrogate" or n <= cfg.reference_one_by_one_max_n:
+                r = trajectories_per_second(model, n, cfg.t_end, cfg.dt, batched=False, repeats=reps)
+                row["one_by_one_per_s"] = r["trajectories_per_s"]
+            r = trajectories_per_second(model, n, cfg.t_end, cfg.dt, batched=True, repeats=reps)
+            row["batched_per_s"] = r["trajectories_per_s"]
+            row["n_ok"] = r["n_ok"]
+            rows.append(row)
+            print(f"{name:>10} N={n:5d}: one by one {row.get('one_by_one_per_s', float('nan')):10.1f}/s, "
+                  f"batched {row['batched_per_s']:10.1f}/s ({row['n_ok']}/{n} ok)")
+    by = {(r["model"], r["n"]): r for r in rows}
+    n_max, n_min = max(cfg.batch_sizes), min(cfg.batch_sizes)
+    ref1 = by[("reference", n_min)]["one_by_one_per_s"]
+    ratios = {str(n): {"batched": by[("surrogate", n)]["batched_per_s"] / by[("reference", n)]["batched_per_s"],
+                       "surrogate_batched_vs_reference_alone": by[("surrogate", n)]["batched_per_s"] / ref1,
+                       "batching_gain_surrogate": by[("surrogate", n)]["batched_per_s"]
+                       / by[("surrogate", n)]["one_by_one_per_s"]}
+              for n in cfg.batch_sizes}
+    out = {"rows": rows, "ratios": ratios, "config": plain(cfg),
+           "trajectories_per_s_batch_speedup": ratios[str(n_max)]["batched"],
+           "trajectories_per_s_single_speedup": by[("surrogate", n_min)]["one_by_one_per_s"] / ref1}
+    io.write_json(cfg.out_json, out)
+    print(f"surrogate / reference at N={n_max} (both batched): {out['trajectories_per_s_batch_speedup']:.1f}x; "
+          f"one trajectory alone: {out['trajectories_per_s_single_speedup']:.1f}x")
+    return out
