@@ -5,14 +5,13 @@ used to check the integrator against analytic responses.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from fluidfilm.core.bearing import JournalBearing
-from fluidfilm.core.force_model import WHOLE_FILM, ValidityDomain
+from fluidfilm.core.force_model import ReferenceModel
 
 
 class LinearParams(NamedTuple):
@@ -27,35 +26,25 @@ def linear_force(params, x1, x2, v1, v2):
     return -k * x1 - c * v1, -k * x2 - c * v2
 
 
-@dataclass(frozen=True)
-class LinearBearing:
-    bearing: JournalBearing
-    stiffness: float
-    damping: float
+class LinearBearing(ReferenceModel):
+    """F = -K X - C V on ``bearing`` (its clearance bounds the journal): ``stiffness`` K [N/m], ``damping`` C [N s/m].
+
+    A physics-based model in the protocol's sense (``ReferenceModel``: valid everywhere, nothing counted).
+    """
 
     name = "linear"
+
+    def __init__(self, bearing: JournalBearing, stiffness: float, damping: float):
+        self._bearing = bearing
+        self.stiffness = stiffness
+        self.damping = damping
+
+    def __repr__(self) -> str:
+        return f"LinearBearing(bearing={self._bearing!r}, stiffness={self.stiffness!r}, damping={self.damping!r})"
 
     @property
     def force_kernel(self):
         return linear_force, LinearParams(float(self.stiffness), float(self.damping))
-
-    @property
-    def clearance(self) -> float:
-        return float(self.bearing.clearance)
-
-    @property
-    def validity(self) -> ValidityDomain:
-        return WHOLE_FILM
-
-    def reset_domain_counter(self) -> None:
-        """Nothing to count: a linear law holds everywhere."""
-
-    def domain_report(self) -> str | None:
-        return None
-
-    @property
-    def n_outside_domain(self) -> int:
-        return 0
 
     def forces(self, X, V) -> np.ndarray:
         X = np.asarray(X, dtype=float)
