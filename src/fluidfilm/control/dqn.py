@@ -9,8 +9,9 @@ from collections.abc import Mapping
 from pathlib import Path
 
 
-def episode_returns_callback():
-    """A stable-baselines3 callback that keeps the episode returns (from the Monitor wrapper) in ``.returns``."""
+def episode_returns_class():
+    """The class of ``episode_returns_callback`` (stable-baselines3 is imported when asked for), for callbacks
+    that do more with each return: a subclass extends ``on_episode`` (the workflow's MLflow curves)."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class EpisodeReturns(BaseCallback):
@@ -22,10 +23,19 @@ def episode_returns_callback():
             for info in self.locals.get("infos", []):
                 ep = info.get("episode")
                 if ep is not None:
-                    self.returns.append((self.num_timesteps, float(ep["r"])))
+                    self.on_episode(self.num_timesteps, float(ep["r"]))
             return True
 
-    return EpisodeReturns()
+        def on_episode(self, timestep: int, ret: float) -> None:
+            """One finished episode's return at ``timestep``: kept in ``.returns``."""
+            self.returns.append((timestep, ret))
+
+    return EpisodeReturns
+
+
+def episode_returns_callback():
+    """A stable-baselines3 callback that keeps the episode returns (from the Monitor wrapper) in ``.returns``."""
+    return episode_returns_class()()
 
 
 def train_dqn(env, cfg: Mapping, seed: int = 0, progress: bool = False, callback=None):

@@ -269,20 +269,15 @@ def sb3_learning_curves():
     """A stable-baselines3 callback: episode returns (from the Monitor wrapper, kept in ``.returns``)
     and SB3's training scalars, logged to the active MLflow run."""
     import numpy as np
-    from stable_baselines3.common.callbacks import BaseCallback
 
-    class MlflowCurves(BaseCallback):
-        def __init__(self):
-            super().__init__()
-            self.returns: list[tuple[int, float]] = []
+    from fluidfilm.control.dqn import episode_returns_class
 
-        def _on_step(self) -> bool:
-            for info in self.locals.get("infos", []):
-                ep = info.get("episode")
-                if ep is not None:
-                    self.returns.append((self.num_timesteps, float(ep["r"])))
-                    log_metric("episode_return", float(ep["r"]), step=self.num_timesteps)
-            return True
+    episode_returns = episode_returns_class()
+
+    class MlflowCurves(episode_returns):
+        def on_episode(self, timestep: int, ret: float) -> None:
+            super().on_episode(timestep, ret)
+            log_metric("episode_return", ret, step=timestep)
 
         def _on_rollout_end(self) -> None:
             if _active() is None:
