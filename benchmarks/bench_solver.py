@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import time
 
 import numba
 import numpy as np
@@ -24,17 +23,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from fluidfilm import ReynoldsSolver, paper_bearing
-
-
-def median_time(fn, repeats: int, calls: int) -> float:
-    fn()
-    samples = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(calls):
-            fn()
-        samples.append((time.perf_counter() - t0) / calls)
-    return float(np.median(samples))
+from fluidfilm.perf.benchmarking import median_seconds
 
 
 def scipy_force(bearing, n_theta, n_z, x, v):
@@ -89,14 +78,14 @@ def main() -> None:
     table = []
     for n in (30, 55, 60):
         s = ReynoldsSolver(b, n, n)
-        t_api = median_time(lambda: s.forces(x, v), repeats, calls)
+        t_api = median_seconds(lambda: s.forces(x, v), repeats, calls)
         fn, params = s.force_kernel
-        t_kernel = median_time(lambda: fn(params, x[0], x[1], v[0], v[1]), repeats, calls)
+        t_kernel = median_seconds(lambda: fn(params, x[0], x[1], v[0], v[1]), repeats, calls)
         np.testing.assert_allclose(scipy_force(b, n, n, x, v), s.forces(x, v), rtol=1e-8)
-        t_scipy = median_time(lambda: scipy_force(b, n, n, x, v), 3, 5 if args.quick else 20)
-        t_batch = median_time(lambda: s.forces(X, V), 3, 1)
+        t_scipy = median_seconds(lambda: scipy_force(b, n, n, x, v), 3, 5 if args.quick else 20)
+        t_batch = median_seconds(lambda: s.forces(X, V), 3, 1)
         Xp, Vq = X[: 240 if args.quick else 960], V[:80]
-        t_prod = median_time(lambda: s.forces_product(Xp, Vq), 3, 1)
+        t_prod = median_seconds(lambda: s.forces_product(Xp, Vq), 3, 1)
         print(f"{n}x{n:<5} {t_api * 1e6:12.1f} {t_kernel * 1e6:10.1f} {t_scipy * 1e6:17.0f} "
               f"{t_scipy / t_api:7.0f} {n_pairs / t_batch:14.0f} {Xp.shape[0] * Vq.shape[0] / t_prod:17.0f}")
         table.append([f"{n}x{n}", f"{t_api * 1e6:.1f} us", f"{t_kernel * 1e6:.1f} us", f"{t_scipy * 1e3:.1f} ms",

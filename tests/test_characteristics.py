@@ -368,3 +368,17 @@ def test_coarse_grid_coefficients_converge_to_the_fine_grid():
     err = study.coefficient_errors(kc, "g120")
     worst = {m: e.rel_err.max() for m, e in err.groupby("model")}
     assert worst["g30"] > 0.05 and worst["g60"] < worst["g30"] / 2, worst
+
+
+def test_grooved_forces_product_is_the_force_of_every_pair():
+    """The grooved solver has no shared factorisation: its product of states is its forces pair by pair."""
+    b = paper_bearing()
+    s = GroovedReynoldsSolver(b, 24, 13, "gumbel", groove_angle=1.0)
+    c = b.clearance
+    X = np.array([[0.2 * c, -0.4 * c], [-0.5 * c, 0.1 * c]])
+    V = np.array([[0.0, 0.0], [0.01, -0.02], [-0.03, 0.005]])
+    P = s.forces_product(X, V)
+    assert P.shape == (2, 3, 2)
+    for i in range(2):
+        for j in range(3):
+            np.testing.assert_array_equal(P[i, j], s.forces(X[i], V[j]))

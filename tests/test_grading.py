@@ -259,7 +259,8 @@ def test_parallel_jobs_wanting_one_grading_make_it_once(tmp_path):
     import sys
 
     code = ("import json, sys; sys.path.insert(0, %r)\n"
-            "from fluidfilm import paper_bearing, grading\n"
+            "from fluidfilm import paper_bearing\n"
+            "from fluidfilm.studies import grading_study as grading\n"
             "from fluidfilm.data import DatasetSpec\n"
             "import test_grading as t\n"
             "p, m, reused = grading.cached_dataset(paper_bearing(), t.REFERENCE, DatasetSpec.from_cfg(t._tiny_cfg()), %r,"

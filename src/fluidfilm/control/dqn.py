@@ -1,7 +1,7 @@
 """Train the DQN sleeve controller with stable-baselines3.
 
 The library records the episode returns; logging them to MLflow is the workflow's business
-(``fluidfilm.workflow.tracking.sb3_learning_curves`` passed as ``callback``).
+(``fluidfilm.workflow.tracking.learning_curve_hooks`` passed as ``on_episode``/``on_rollout``).
 """
 from __future__ import annotations
 
@@ -9,8 +9,15 @@ from collections.abc import Mapping
 from pathlib import Path
 
 
-def episode_returns_callback():
-    """A stable-baselines3 callback that keeps the episode returns (from the Monitor wrapper) in ``.returns``."""
+def episode_returns_callback(on_episode=None, on_rollout=None):
+    """A stable-baselines3 callback that keeps the episode returns (from the Monitor wrapper) in ``.returns``.
+
+    ``on_episode(timestep, ret)`` is called with each finished episode's return and ``on_rollout(scalars,
+    timestep)`` with SB3's training scalars (a dict of floats, names with ``/`` replaced by ``_``) after each
+    rollout: the workflow's MLflow curves (``fluidfilm.workflow.tracking.learning_curve_hooks``) plug in there,
+    so this module imports no tracking code.
+    """
+    import numpy as np
     from stable_baselines3.common.callbacks import BaseCallback
 
     class EpisodeReturns(BaseCallback):
@@ -23,16 +30,26 @@ def episode_returns_callback():
                 ep = info.get("episode")
                 if ep is not None:
                     self.returns.append((self.num_timesteps, float(ep["r"])))
+                    if on_episode is not None:
+                        on_episode(self.num_timesteps, float(ep["r"]))
             return True
+
+        def _on_rollout_end(self) -> None:
+            if on_rollout is None:
+                return
+            vals = {k.replace("/", "_"): float(v) for k, v in self.model.logger.name_to_value.items()
+                    if isinstance(v, (int, float, np.floating))}
+            if vals:
+                on_rollout(vals, self.num_timesteps)
 
     return EpisodeReturns()
 
 
-def train_dqn(env, cfg: Mapping, seed: int = 0, progress: bool = False, callback=None):
+def train_dqn(env, cfg: Mapping, seed: int = 0, progress: bool = False, on_episode=None, on_rollout=None):
     """A DQN agent (stable-baselines3, MLP Q-network) trained on ``env`` for ``cfg['total_timesteps']``.
 
-    ``callback``: a stable-baselines3 callback with a ``.returns`` list (default: one that only records
-    the returns). Returns (agent, episode returns [(timestep, return)]).
+    ``on_episode``, ``on_rollout``: hooks called with each episode's return and SB3's training scalars
+    (``episode_returns_callback``). Returns (agent, episode returns [(timestep, return)]).
     """
     from stable_baselines3 import DQN
     from stable_baselines3.common.monitor import Monitor
@@ -45,7 +62,7 @@ def train_dqn(env, cfg: Mapping, seed: int = 0, progress: bool = False, callback
         raise ValueError(f"total_timesteps must be >= 1, got {total}")
     agent = DQN("MlpPolicy", Monitor(env), seed=seed, verbose=0, device="cpu",
                 policy_kwargs={"net_arch": list(cfg.get("net_arch", [64, 64]))}, **kwargs)
-    cb = episode_returns_callback() if callback is None else callback
+    cb = episode_returns_callback(on_episode, on_rollout)
     agent.learn(total_timesteps=total, callback=cb, progress_bar=progress)
     return agent, cb.returns
 

@@ -261,9 +261,10 @@ def dataset_bearing(meta: dict) -> JournalBearing | ConicalBearing:
 
 
 def relative_force_errors(predicted: np.ndarray, truth: np.ndarray, floor_N: float) -> np.ndarray:
-    """|F_model - F| / max(|F|, floor) per state: the held-out measure of the whole workspace (the floor keeps
-    states with almost no film force from dominating)."""
-    return np.hypot(*(predicted - truth).T) / np.maximum(np.hypot(*truth.T), floor_N)
+    """|F_model - F| / max(|F|, floor) per state, forces (..., 2) -> (...): the held-out measure of the whole
+    workspace (the floor keeps states with almost no film force from dominating)."""
+    d = predicted - truth
+    return np.hypot(d[..., 0], d[..., 1]) / np.maximum(np.hypot(truth[..., 0], truth[..., 1]), floor_N)
 
 
 def training_domain(meta: dict) -> list[list[float]]:

@@ -25,11 +25,10 @@ import numpy as np
 from numba import njit
 
 from fluidfilm.core.bearing import JournalBearing
-from fluidfilm.core.force_model import ReferenceModel
 from fluidfilm.core.states import as_state_pairs
 from fluidfilm.reynolds import kernels
 from fluidfilm.reynolds.params import FilmParams
-from fluidfilm.reynolds.solver import CAVITATION_MODELS, ReynoldsSolver
+from fluidfilm.reynolds.solver import CAVITATION_MODELS, ReynoldsSolver, _GridSolver
 
 _CAV = {"none": kernels.CAV_NONE, "gumbel": kernels.CAV_GUMBEL, "swift-stieber": kernels.CAV_SWIFT_STIEBER}
 
@@ -57,68 +56,6 @@ def from_groove_frame(cos_g, sin_g, b1, b2):
 
 
 @njit(cache=True)
-def sor_grooved(params, x1, x2, v1, v2, p, fixed, cavitation, omega_sor, tol, max_iter):
-    """(Projected) SOR of the discrete Reynolds equation with the node columns ``fixed`` (grooves) held.
-
-    Position and velocity are in the groove frame.  ``p``: full field with the
-    boundary rows and the groove column set, and a starting guess elsewhere;
-    updated in place.  Swift-Stieber projects onto p >= 0 (Cryer's PSOR);
-    the other models solve the linear system (Gumbel clips afterwards).
-    Returns the sweep count or -1 if ``max_iter`` sweeps did not reach ``tol``.
-    """
-    n = params.n_theta
-    sin_n = params.sin_node
-    cos_n = params.cos_node
-    inv_c = params.inv_c
-    inv_dth2 = params.inv_dtheta2
-    inv_dth = params.inv_dtheta
-    inv_dz2 = params.inv_dzeta2
-    k_omega = params.k_omega
-    k_v = params.k_v
-    nz = p.shape[1]
-    h = np.empty(n)
-    h3 = np.empty(n)
-    h3f = np.empty(n)
-    hf = np.empty(n)
-    kernels.film_thickness(params, x1 * inv_c, x2 * inv_c, h, h3, h3f, hf)
-    aw = np.empty(n)
-    ae = np.empty(n)
-    an = np.empty(n)
-    inv_ap = np.empty(n)
-    rhs = np.empty(n)
-    for i in range(n):
-        im = i - 1 if i > 0 else n - 1
-        aw[i] = h3f[im] * inv_dth2
-        ae[i] = h3f[i] * inv_dth2
-        an[i] = h3[i] * inv_dz2
-        inv_ap[i] = 1.0 / (aw[i] + ae[i] + 2.0 * an[i])
-        rhs[i] = k_omega * (hf[i] - hf[im]) * inv_dth + k_v * (-v1 * sin_n[i] - v2 * cos_n[i])
-    project = cavitation == kernels.CAV_SWIFT_STIEBER
-    for it in range(max_iter):
-        dmax = 0.0
-        pmax = 0.0
-        for i in range(n):
-            if fixed[i]:
-                continue
-            im = i - 1 if i > 0 else n - 1
-            ip = i + 1 if i < n - 1 else 0
-            for j in range(1, nz - 1):
-                gs = (ae[i] * p[ip, j] + aw[i] * p[im, j] + an[i] * (p[i, j + 1] + p[i, j - 1]) - rhs[i]) * inv_ap[i]
-                new = p[i, j] + omega_sor * (gs - p[i, j])
-                if project and new < 0.0:
-                    new = 0.0
-                d = abs(new - p[i, j])
-                if d > dmax:
-                    dmax = d
-                if abs(new) > pmax:
-                    pmax = abs(new)
-                p[i, j] = new
-        if dmax <= tol * pmax or pmax == 0.0:
-            return it + 1
-    return -1
-
-
-@njit(cache=True)
 def grooved_field(gparams, x1, x2, v1, v2, p):
     """Pressure field in the groove frame (boundaries, groove and cavitation applied); returns sweeps or -1."""
     params = gparams.film
@@ -141,7 +78,10 @@ def grooved_field(gparams, x1, x2, v1, v2, p):
         if fixed[i]:
             for j in range(nz):
                 p[i, j] = p_s
-    it = sor_grooved(params, y1, y2, w1, w2, p, fixed, cav, params.sor_omega, params.sor_tol, params.sor_max_iter)
+    # Swift-Stieber projects onto p >= 0 (Cryer's PSOR); the other models solve the linear system
+    # (Gumbel clips afterwards)
+    it = kernels.sor_sweeps(params, y1, y2, w1, w2, p, fixed, cav == kernels.CAV_SWIFT_STIEBER, params.sor_omega,
+                            params.sor_tol, params.sor_max_iter)
     if cav == kernels.CAV_GUMBEL:
         for i in range(n):
             for j in range(nz):
@@ -164,7 +104,7 @@ def grooved_force(gparams, x1, x2, v1, v2):
     return from_groove_frame(gparams.cos_groove, gparams.sin_groove, g1, g2)
 
 
-class GroovedReynoldsSolver(ReferenceModel):
+class GroovedReynoldsSolver(_GridSolver):
     """Finite-length Reynolds solver with an axial feed groove at ``groove_angle`` [rad] held at the supply pressure.
 
     >>> s = GroovedReynoldsSolver(bearing, 90, 61, cavitation="swift-stieber", groove_angle=math.pi)
@@ -209,31 +149,11 @@ class GroovedReynoldsSolver(ReferenceModel):
         self.gparams = GroovedParams(self._base.params, math.cos(g), math.sin(g), _CAV[cavitation], fixed)
         self._c = bearing.clearance
         self._bearing = bearing
+        self.mesh = self._base.mesh
 
-    @property
-    def bearing(self) -> JournalBearing:
-        return self._base.bearing
-
-    @property
-    def mesh(self):
-        return self._base.mesh
-
-    @property
-    def n_theta(self) -> int:
-        return self._base.n_theta
-
-    @property
-    def n_z(self) -> int:
-        return self._base.n_z
-
-    @property
-    def theta(self) -> np.ndarray:
-        """Node angles in the groove frame (0 at the groove)."""
-        return self._base.theta
-
-    @property
-    def z(self) -> np.ndarray:
-        return self._base.z
+    # --- read-only description (bearing, n_theta, n_z, theta, z: _GridSolver, on the groove-free solver's mesh) ---
+    def _separable(self) -> bool:
+        return False  # the groove couples the axial modes: no factorisation shared between velocities
 
     @property
     def force_kernel(self):

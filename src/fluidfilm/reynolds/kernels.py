@@ -29,6 +29,8 @@ it with a sparse direct solve), not an approximation of it.
 
 Kernels:
 
+- ``film_coefficients``      the film H and the theta-difference coefficients
+                             of one position (both solvers assemble from them)
 - ``position_modes``         per position: the periodic tridiagonal systems of
                              all axial modes solved together (vectorised over
                              modes), scaled so that p_hat = Q0 + V1*Qs + V2*Qc
@@ -42,6 +44,8 @@ Kernels:
 - ``forces_product``         every velocity at every position, one
                              factorisation per position, parallel over positions
 - ``pressure_field``         the full (n_theta, n_z) field of one state
+- ``sor_sweeps``             (projected) SOR of the discrete equation with
+                             chosen node columns held (the grooved bearing's too)
 - ``psor_swift_stieber``     Swift-Stieber (Reynolds) cavitation as a linear
                              complementarity problem solved by projected SOR
 - ``film_force_ss``          force with Swift-Stieber cavitation
@@ -98,11 +102,34 @@ def film_thickness(params, e1, e2, h_node, h3_node, h3_face, h_face):
         h3_face[i] = hf * hf * hf
 
 
+
+@njit(cache=True, inline="always")
+def film_coefficients(params, e1, e2):
+    """(H^3 at the nodes, H at the faces, west, east): the film (``film_thickness``) and the coefficients
+    H^3_{i-1/2} / dtheta^2, H^3_{i+1/2} / dtheta^2 of p_{i-1}, p_{i+1} in the conservative theta-difference
+    of node i, periodic.  Inlined: the callers compile it under their own fastmath settings, as when they
+    were written apart (``film_thickness`` stays a call, its arithmetic strict)."""
+    n = params.n_theta
+    inv_dth2 = params.inv_dtheta2
+    h = np.empty(n)
+    h3 = np.empty(n)
+    h3f = np.empty(n)
+    hf = np.empty(n)
+    film_thickness(params, e1, e2, h, h3, h3f, hf)
+    west = np.empty(n)
+    east = np.empty(n)
+    for i in range(n):
+        im = i - 1 if i > 0 else n - 1
+        west[i] = h3f[im] * inv_dth2
+        east[i] = h3f[i] * inv_dth2
+    return h3, hf, west, east
+
+
 @njit(cache=True, fastmath=_FAST)
-def position_modes(params, e1, e2, q0, qs, qc):
+def position_modes(params, e1, e2):
     """Solve every used axial mode at one position, all modes at once.
 
-    Fills ``q0, qs, qc`` (n_theta, n_modes) so that the sine coefficients of
+    Returns ``q0, qs, qc`` (n_theta, n_modes) so that the sine coefficients of
     the pressure at velocity (V1, V2) are ``q0 + V1*qs + V2*qc`` (q0 holds the
     Couette and supply-pressure parts).
 
@@ -115,7 +142,6 @@ def position_modes(params, e1, e2, q0, qs, qc):
     n = params.n_theta
     sin_n = params.sin_node
     cos_n = params.cos_node
-    inv_dth2 = params.inv_dtheta2
     inv_dth = params.inv_dtheta
     lam = params.lam  # lambda_k / dzeta^2, negative
     sig = params.sig  # transform of the z-constant right-hand side
@@ -125,19 +151,13 @@ def position_modes(params, e1, e2, q0, qs, qc):
     supply_term = params.supply_term  # -p_supply / dzeta^2
     nk = lam.shape[0]
     with_supply = supply_term != 0.0
-    h = np.empty(n)
-    h3 = np.empty(n)
-    h3f = np.empty(n)
-    hf = np.empty(n)
-    film_thickness(params, e1, e2, h, h3, h3f, hf)
-    lo = np.empty(n)
-    up = np.empty(n)
+    q0 = np.empty((n, nk))
+    qs = np.empty((n, nk))
+    qc = np.empty((n, nk))
+    h3, hf, lo, up = film_coefficients(params, e1, e2)
     r_w = np.empty(n)
     for i in range(n):
-        im = i - 1 if i > 0 else n - 1
-        lo[i] = h3f[im] * inv_dth2
-        up[i] = h3f[i] * inv_dth2
-        r_w[i] = (hf[i] - hf[im]) * inv_dth
+        r_w[i] = (hf[i] - hf[i - 1 if i > 0 else n - 1]) * inv_dth
     alpha = up[n - 1]  # coefficient of x[0] in the last row
     beta = lo[0]  # coefficient of x[n-1] in the first row
     cp = np.empty((n, nk))
@@ -207,6 +227,7 @@ def position_modes(params, e1, e2, q0, qs, qc):
             q0[i, k] = a
             qs[i, k] = sig[k] * k_v * (qs[i, k] - fs[k] * z)
             qc[i, k] = sig[k] * k_v * (qc[i, k] - fc[k] * z)
+    return q0, qs, qc
 
 
 @njit(cache=True, fastmath=_FAST)
@@ -253,22 +274,21 @@ def film_force(params, x1, x2, v1, v2):
     kernel that ``fluidfilm.rotor`` integrates; a surrogate provides a kernel
     of the same signature.
     """
-    n = params.n_theta
-    inv_c = params.inv_c
-    nk = params.lam.shape[0]
-    q0 = np.empty((n, nk))
-    qs = np.empty((n, nk))
-    qc = np.empty((n, nk))
-    phat = np.empty(nk)
-    position_modes(params, x1 * inv_c, x2 * inv_c, q0, qs, qc)
+    q0, qs, qc = position_modes(params, x1 * params.inv_c, x2 * params.inv_c)
+    phat = np.empty(q0.shape[1])
     return integrate_modes(params, q0, qs, qc, v1, v2, params.cavitation, phat)
 
 
 @njit(cache=True, parallel=True)
 def forces_batch(params, x, v, out):
-    """Forces for N (position, velocity) pairs, parallel over pairs."""
+    """Forces for N (position, velocity) pairs, parallel over pairs, by the kernel of ``params.cavitation``
+    (``film_force_ss`` for Swift-Stieber, else ``film_force``)."""
+    ss = params.cavitation == CAV_SWIFT_STIEBER
     for p in prange(x.shape[0]):
-        f1, f2 = film_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        if ss:
+            f1, f2 = film_force_ss(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        else:
+            f1, f2 = film_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
         out[p, 0] = f1
         out[p, 1] = f2
 
@@ -280,16 +300,10 @@ def forces_product(params, x, v, out):
     One factorisation per position (the pressure is linear in the velocity
     before cavitation), parallel over positions.
     """
-    n = params.n_theta
-    inv_c = params.inv_c
-    nk = params.lam.shape[0]
     cav = params.cavitation
     for p in prange(x.shape[0]):
-        q0 = np.empty((n, nk))
-        qs = np.empty((n, nk))
-        qc = np.empty((n, nk))
-        phat = np.empty(nk)
-        position_modes(params, x[p, 0] * inv_c, x[p, 1] * inv_c, q0, qs, qc)
+        q0, qs, qc = position_modes(params, x[p, 0] * params.inv_c, x[p, 1] * params.inv_c)
+        phat = np.empty(q0.shape[1])
         for q in range(v.shape[0]):
             f1, f2 = integrate_modes(params, q0, qs, qc, v[q, 0], v[q, 1], cav, phat)
             out[p, q, 0] = f1
@@ -300,12 +314,8 @@ def forces_product(params, x, v, out):
 def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
     """Pressure before cavitation on the whole (n_theta, n_z) grid, boundaries included."""
     n = params.n_theta
-    inv_c = params.inv_c
     nk = params.lam.shape[0]
-    q0 = np.empty((n, nk))
-    qs = np.empty((n, nk))
-    qc = np.empty((n, nk))
-    position_modes(params, x1 * inv_c, x2 * inv_c, q0, qs, qc)
+    q0, qs, qc = position_modes(params, x1 * params.inv_c, x2 * params.inv_c)
     nz = out.shape[1]
     for i in range(n):
         out[i, 0] = p_supply
@@ -317,6 +327,58 @@ def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
             out[i, j] = acc
 
 
+@njit(cache=True, inline="always")
+def sor_sweeps(params, x1, x2, v1, v2, p, fixed, project, omega_sor, tol, max_iter):
+    """(Projected) SOR of the discrete Reynolds equation, the node columns ``fixed`` held.
+
+    The one SOR of the library: ``psor_swift_stieber`` (no column held,
+    projected) and the grooved bearing (``feed``: the groove columns held,
+    projected for Swift-Stieber only) run it.  ``p``: the full
+    (n_theta, n_z) field with the boundary rows (and held columns) set and a
+    starting guess elsewhere; updated in place.  ``project``: keep p >= 0
+    (Cryer's PSOR), else solve the linear system.  Returns the number of
+    sweeps, or -1 if ``max_iter`` sweeps did not reach ``tol`` (max change
+    relative to the largest |p|).  Inlined into its callers, so each compiles
+    the sweep with its own constants, as when they were written apart.
+    """
+    n, nz = params.n_theta, p.shape[1]
+    sin_n, cos_n, inv_c = params.sin_node, params.cos_node, params.inv_c
+    inv_dth, inv_dz2, k_omega, k_v = params.inv_dtheta, params.inv_dzeta2, params.k_omega, params.k_v
+    h3, hf, aw, ae = film_coefficients(params, x1 * inv_c, x2 * inv_c)
+    an = np.empty(n)
+    inv_ap = np.empty(n)
+    rhs = np.empty(n)
+    for i in range(n):
+        im = i - 1 if i > 0 else n - 1
+        an[i] = h3[i] * inv_dz2
+        inv_ap[i] = 1.0 / (aw[i] + ae[i] + 2.0 * an[i])
+        rhs[i] = k_omega * (hf[i] - hf[im]) * inv_dth + k_v * (-v1 * sin_n[i] - v2 * cos_n[i])
+    for it in range(max_iter):
+        dmax = 0.0
+        pmax = 0.0
+        for i in range(n):
+            if fixed[i]:
+                continue
+            im = i - 1 if i > 0 else n - 1
+            ip = i + 1 if i < n - 1 else 0
+            for j in range(1, nz - 1):
+                gs = (ae[i] * p[ip, j] + aw[i] * p[im, j] + an[i] * (p[i, j + 1] + p[i, j - 1]) - rhs[i]) * inv_ap[i]
+                new = p[i, j] + omega_sor * (gs - p[i, j])
+                if project and new < 0.0:
+                    new = 0.0
+                d = abs(new - p[i, j])
+                if d > dmax:
+                    dmax = d
+                # the size of new: |new| in the linear system; projected, new >= 0 (that sweep compiles without abs)
+                a = new if project else abs(new)
+                if a > pmax:
+                    pmax = a
+                p[i, j] = new
+        if dmax <= tol * pmax or pmax == 0.0:
+            return it + 1
+    return -1
+
+
 @njit(cache=True)
 def psor_swift_stieber(params, x1, x2, v1, v2, p, omega_sor, tol, max_iter):
     """Swift-Stieber (Reynolds) cavitation as a linear complementarity problem.
@@ -325,59 +387,14 @@ def psor_swift_stieber(params, x1, x2, v1, v2, p, omega_sor, tol, max_iter):
     negative-definite operator), the solution satisfies p >= 0, G(p) <= 0
     where p = 0 and G(p) = 0 where p > 0: in the grid limit the film-rupture
     conditions p = 0 and dp/dn = 0 at the cavitation boundary.
-    Projected SOR (Cryer 1971) from the initial field in ``p`` (the Gumbel
-    field is a good start).  ``p`` is the full (n_theta, n_z) array with the
-    boundary rows set; updated in place.  Returns the number of sweeps, or
-    -1 if ``max_iter`` sweeps did not reach ``tol`` (max change relative to
-    the largest pressure).
+    Projected SOR (Cryer 1971, ``sor_sweeps``) from the initial field in ``p``
+    (the Gumbel field is a good start).  ``p`` is the full (n_theta, n_z)
+    array with the boundary rows set; updated in place.  Returns the number
+    of sweeps, or -1 if ``max_iter`` sweeps did not reach ``tol`` (max change
+    relative to the largest pressure).
     """
-    n = params.n_theta
-    sin_n = params.sin_node
-    cos_n = params.cos_node
-    inv_c = params.inv_c
-    inv_dth2 = params.inv_dtheta2
-    inv_dth = params.inv_dtheta
-    inv_dz2 = params.inv_dzeta2
-    k_omega = params.k_omega
-    k_v = params.k_v
-    nz = p.shape[1]
-    h = np.empty(n)
-    h3 = np.empty(n)
-    h3f = np.empty(n)
-    hf = np.empty(n)
-    film_thickness(params, x1 * inv_c, x2 * inv_c, h, h3, h3f, hf)
-    aw = np.empty(n)
-    ae = np.empty(n)
-    an = np.empty(n)
-    inv_ap = np.empty(n)
-    rhs = np.empty(n)
-    for i in range(n):
-        im = i - 1 if i > 0 else n - 1
-        aw[i] = h3f[im] * inv_dth2
-        ae[i] = h3f[i] * inv_dth2
-        an[i] = h3[i] * inv_dz2
-        inv_ap[i] = 1.0 / (aw[i] + ae[i] + 2.0 * an[i])
-        rhs[i] = k_omega * (hf[i] - hf[im]) * inv_dth + k_v * (-v1 * sin_n[i] - v2 * cos_n[i])
-    for it in range(max_iter):
-        dmax = 0.0
-        pmax = 0.0
-        for i in range(n):
-            im = i - 1 if i > 0 else n - 1
-            ip = i + 1 if i < n - 1 else 0
-            for j in range(1, nz - 1):
-                gs = (ae[i] * p[ip, j] + aw[i] * p[im, j] + an[i] * (p[i, j + 1] + p[i, j - 1]) - rhs[i]) * inv_ap[i]
-                new = p[i, j] + omega_sor * (gs - p[i, j])
-                if new < 0.0:
-                    new = 0.0
-                d = abs(new - p[i, j])
-                if d > dmax:
-                    dmax = d
-                if new > pmax:
-                    pmax = new
-                p[i, j] = new
-        if dmax <= tol * pmax or pmax == 0.0:
-            return it + 1
-    return -1
+    no_column_held = np.zeros(params.n_theta, dtype=np.bool_)
+    return sor_sweeps(params, x1, x2, v1, v2, p, no_column_held, True, omega_sor, tol, max_iter)
 
 
 @njit(cache=True)
@@ -414,15 +431,6 @@ def film_force_ss(params, x1, x2, v1, v2):
     if it < 0:
         raise RuntimeError("projected SOR (Swift-Stieber cavitation) did not converge; raise sor_max_iter")
     return integrate_field(params, p)
-
-
-@njit(cache=True, parallel=True)
-def forces_batch_ss(params, x, v, out):
-    """``forces_batch`` with Swift-Stieber cavitation."""
-    for p in prange(x.shape[0]):
-        f1, f2 = film_force_ss(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
-        out[p, 0] = f1
-        out[p, 1] = f2
 
 
 @njit(cache=True)

@@ -205,9 +205,7 @@ class ReynoldsSolver(_GridSolver):
             raise ValueError(f"sor_tol must be positive, got {sor_tol!r}")
         self.params = build_params(bearing, self.mesh, cavitation, sor_omega, sor_tol, sor_max_iter)
         self._c = bearing.clearance
-        ss = cavitation == "swift-stieber"
-        self._kernel = kernels.film_force_ss if ss else kernels.film_force
-        self._batch = kernels.forces_batch_ss if ss else kernels.forces_batch
+        self._kernel = kernels.film_force_ss if cavitation == "swift-stieber" else kernels.film_force
 
     # --- read-only description (bearing, n_theta, n_z, theta, z: _GridSolver) ---
     @property
@@ -236,7 +234,7 @@ class ReynoldsSolver(_GridSolver):
         x, v, shape = as_state_pairs(X, V, self._c)
         out = np.empty_like(x)
         if x.shape[0]:
-            self._batch(self.params, x, v, out)
+            kernels.forces_batch(self.params, x, v, out)
         return out.reshape(shape + (2,))
 
     def _separable(self) -> bool:

@@ -36,8 +36,8 @@ import numpy as np
 from numba import njit
 
 from fluidfilm.core.force_model import BatchSettable, ForceModel
-from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, OK, Trajectory, _acceleration, _uncached, check_run_args,
-                                       run_loop)
+from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, OK, Trajectory, _rk4_step, _rk4_step_uncached, _uncached,
+                                       check_run_args, run_loop)
 from fluidfilm.rotor.model import Rotor
 
 
@@ -80,7 +80,6 @@ def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_step
                eps_substep, max_substeps, out_x, out_v, n_rec, status, t_stop, n_evals):
     """Lockstep RK4 of N trajectories; each one's arithmetic is ``integrate._rk4_run``'s."""
     n_traj = x0.shape[0]
-    ref = 1.0 - eps_substep * eps_substep
     n_set = settings.shape[1]
     state = np.empty((n_traj, 4))
     for p in range(n_traj):
@@ -102,48 +101,11 @@ def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_step
                 setting[j] = settings[p, j]
             cp = (consts[p, 0], consts[p, 1], consts[p, 2], consts[p, 3], consts[p, 4], consts[p, 5],
                   consts[p, 6], consts[p, 7], consts[p, 8])
-            c2 = consts[p, 6]
-            stop2 = eps_stop * eps_stop * c2
             x1, x2, v1, v2 = state[p, 0], state[p, 1], state[p, 2], state[p, 3]
-            t = t_stop[p]
-            e2 = (x1 * x1 + x2 * x2) / c2
-            k = 1
-            if e2 > eps_substep * eps_substep:
-                k = int(math.ceil((ref / (1.0 - e2)) ** 1.5))
-                if k > max_substeps:
-                    k = max_substeps
-            h = dt / k
-            st = 0
-            for sub in range(k):
-                a1, a2, ok1 = _acceleration(kernel, params, x1, x2, v1, v2, t, cp)
-                b1, b2, ok2 = _acceleration(kernel, params, x1 + 0.5 * h * v1, x2 + 0.5 * h * v2,
-                                            v1 + 0.5 * h * a1, v2 + 0.5 * h * a2, t + 0.5 * h, cp)
-                kx1 = v1 + 0.5 * h * a1
-                kx2 = v2 + 0.5 * h * a2
-                c1, c2_, ok3 = _acceleration(kernel, params, x1 + 0.5 * h * kx1, x2 + 0.5 * h * kx2,
-                                             v1 + 0.5 * h * b1, v2 + 0.5 * h * b2, t + 0.5 * h, cp)
-                lx1 = v1 + 0.5 * h * b1
-                lx2 = v2 + 0.5 * h * b2
-                d1, d2, ok4 = _acceleration(kernel, params, x1 + h * lx1, x2 + h * lx2,
-                                            v1 + h * c1, v2 + h * c2_, t + h, cp)
-                mx1 = v1 + h * c1
-                mx2 = v2 + h * c2_
-                n_evals[p] += 4
-                if not (ok1 and ok2 and ok3 and ok4):
-                    st = 2
-                    break
-                nx1 = x1 + h / 6.0 * (v1 + 2.0 * kx1 + 2.0 * lx1 + mx1)
-                nx2 = x2 + h / 6.0 * (v2 + 2.0 * kx2 + 2.0 * lx2 + mx2)
-                nv1 = v1 + h / 6.0 * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
-                nv2 = v2 + h / 6.0 * (a2 + 2.0 * b2 + 2.0 * c2_ + d2)
-                if not (math.isfinite(nx1) and math.isfinite(nx2) and math.isfinite(nv1) and math.isfinite(nv2)):
-                    st = 3
-                    break
-                x1, x2, v1, v2 = nx1, nx2, nv1, nv2
-                t = t0 + (step + (sub + 1.0) / k) * dt
-                if x1 * x1 + x2 * x2 >= stop2:
-                    st = 1
-                    break
+            # no retry of a step whose stage left the clearance (simulate's retry=True): it ends the trajectory
+            x1, x2, v1, v2, t, n, st = _rk4_step(kernel, params, cp, x1, x2, v1, v2, t_stop[p], t0, step, dt,
+                                                 eps_substep, max_substeps, eps_stop * eps_stop * consts[p, 6], False)
+            n_evals[p] += n
             state[p, 0], state[p, 1], state[p, 2], state[p, 3] = x1, x2, v1, v2
             t_stop[p] = t  # the trajectory's current time (its stopping time once it stops)
             if st != 0:
@@ -157,7 +119,7 @@ def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_step
 
 
 # kernels the on-disk cache cannot take (a user's model, an ensemble's members): an uncached twin
-_rk4_batch_uncached = _uncached(_rk4_batch, _acceleration=_uncached(_acceleration))
+_rk4_batch_uncached = _uncached(_rk4_batch, _rk4_step=_rk4_step_uncached)
 
 
 def _rows(value, n: int, what: str) -> np.ndarray:

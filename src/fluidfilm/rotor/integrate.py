@@ -149,76 +149,86 @@ def _record(out_t, out_x, out_v, n, t, x1, x2, v1, v2):
     return n + 1
 
 
+@njit(cache=True, inline="always")
+def _rk4_step(kernel, params, consts, x1, x2, v1, v2, t, t0, step, dt, eps_substep, max_substeps, stop2, retry):
+    """Step ``step`` of RK4 from the state (x1, x2, v1, v2) at time t (= t0 + step dt), in substeps.
+
+    The one RK4 step of ``simulate`` and ``simulate_batch``. Returns (x1, x2, v1, v2, t, n_evals, status):
+    the state after the step, or the last valid state where it stopped (status ``CONTACT``,
+    ``CONTACT_STAGE``, ``NONFINITE``). ``retry``: a stage outside the clearance says the step is too long,
+    not that the journal touched: the step is redone with twice the substeps (up to ``max_substeps``)
+    before contact is reported. Inlined, so each loop compiles it as if written in place.
+    """
+    c2 = consts[6]
+    e2 = (x1 * x1 + x2 * x2) / c2
+    k = 1
+    if e2 > eps_substep * eps_substep:
+        k = int(math.ceil(((1.0 - eps_substep * eps_substep) / (1.0 - e2)) ** 1.5))
+        if k > max_substeps:
+            k = max_substeps
+    sx1, sx2, sv1, sv2, st = x1, x2, v1, v2, t
+    n_evals = 0
+    while True:
+        x1, x2, v1, v2, t = sx1, sx2, sv1, sv2, st
+        h = dt / k
+        status = OK
+        for sub in range(k):
+            a1, a2, ok1 = _acceleration(kernel, params, x1, x2, v1, v2, t, consts)
+            b1, b2, ok2 = _acceleration(kernel, params, x1 + 0.5 * h * v1, x2 + 0.5 * h * v2,
+                                        v1 + 0.5 * h * a1, v2 + 0.5 * h * a2, t + 0.5 * h, consts)
+            kx1 = v1 + 0.5 * h * a1
+            kx2 = v2 + 0.5 * h * a2
+            c1, c2_, ok3 = _acceleration(kernel, params, x1 + 0.5 * h * kx1, x2 + 0.5 * h * kx2,
+                                         v1 + 0.5 * h * b1, v2 + 0.5 * h * b2, t + 0.5 * h, consts)
+            lx1 = v1 + 0.5 * h * b1
+            lx2 = v2 + 0.5 * h * b2
+            d1, d2, ok4 = _acceleration(kernel, params, x1 + h * lx1, x2 + h * lx2,
+                                        v1 + h * c1, v2 + h * c2_, t + h, consts)
+            mx1 = v1 + h * c1
+            mx2 = v2 + h * c2_
+            n_evals += 4
+            if not (ok1 and ok2 and ok3 and ok4):
+                status = CONTACT_STAGE
+                break
+            nx1 = x1 + h / 6.0 * (v1 + 2.0 * kx1 + 2.0 * lx1 + mx1)
+            nx2 = x2 + h / 6.0 * (v2 + 2.0 * kx2 + 2.0 * lx2 + mx2)
+            nv1 = v1 + h / 6.0 * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
+            nv2 = v2 + h / 6.0 * (a2 + 2.0 * b2 + 2.0 * c2_ + d2)
+            if not (math.isfinite(nx1) and math.isfinite(nx2) and math.isfinite(nv1) and math.isfinite(nv2)):
+                status = NONFINITE
+                break
+            x1, x2, v1, v2 = nx1, nx2, nv1, nv2
+            t = t0 + (step + (sub + 1.0) / k) * dt
+            # contact is checked after every substep, independent of how often the output is recorded
+            if x1 * x1 + x2 * x2 >= stop2:
+                status = CONTACT
+                break
+        if not (retry and status == CONTACT_STAGE and k < max_substeps):
+            break
+        k = min(2 * k, max_substeps)
+    return x1, x2, v1, v2, t, n_evals, status
+
+
 @njit(cache=True)
 def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop, eps_substep,
              max_substeps, out_t, out_x, out_v):
     """Integrate; returns (n_recorded, status, t_stop, n_force_evals)."""
-    c2 = consts[6]
-    stop2 = eps_stop * eps_stop * c2
-    ref = 1.0 - eps_substep * eps_substep
+    stop2 = eps_stop * eps_stop * consts[6]
     x1, x2 = x0[0], x0[1]
     v1, v2 = v0[0], v0[1]
     t = t0
     n_evals = 0
     n_rec = _record(out_t, out_x, out_v, 0, t, x1, x2, v1, v2)
-    status = 0
+    status = OK
     for step in range(n_steps):
-        e2 = (x1 * x1 + x2 * x2) / c2
-        k = 1
-        if e2 > eps_substep * eps_substep:
-            k = int(math.ceil((ref / (1.0 - e2)) ** 1.5))
-            if k > max_substeps:
-                k = max_substeps
-        sx1, sx2, sv1, sv2 = x1, x2, v1, v2
-        while True:
-            # a stage outside the clearance says the step is too long, not that the journal touched:
-            # the step is redone with twice the substeps (up to max_substeps) before contact is reported
-            x1, x2, v1, v2 = sx1, sx2, sv1, sv2
-            t = t0 + step * dt
-            h = dt / k
-            stage_out = False
-            for sub in range(k):
-                a1, a2, ok1 = _acceleration(kernel, params, x1, x2, v1, v2, t, consts)
-                b1, b2, ok2 = _acceleration(kernel, params, x1 + 0.5 * h * v1, x2 + 0.5 * h * v2,
-                                            v1 + 0.5 * h * a1, v2 + 0.5 * h * a2, t + 0.5 * h, consts)
-                kx1 = v1 + 0.5 * h * a1
-                kx2 = v2 + 0.5 * h * a2
-                c1, c2_, ok3 = _acceleration(kernel, params, x1 + 0.5 * h * kx1, x2 + 0.5 * h * kx2,
-                                             v1 + 0.5 * h * b1, v2 + 0.5 * h * b2, t + 0.5 * h, consts)
-                lx1 = v1 + 0.5 * h * b1
-                lx2 = v2 + 0.5 * h * b2
-                d1, d2, ok4 = _acceleration(kernel, params, x1 + h * lx1, x2 + h * lx2,
-                                            v1 + h * c1, v2 + h * c2_, t + h, consts)
-                mx1 = v1 + h * c1
-                mx2 = v2 + h * c2_
-                n_evals += 4
-                if not (ok1 and ok2 and ok3 and ok4):
-                    stage_out = True
-                    break
-                nx1 = x1 + h / 6.0 * (v1 + 2.0 * kx1 + 2.0 * lx1 + mx1)
-                nx2 = x2 + h / 6.0 * (v2 + 2.0 * kx2 + 2.0 * lx2 + mx2)
-                nv1 = v1 + h / 6.0 * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
-                nv2 = v2 + h / 6.0 * (a2 + 2.0 * b2 + 2.0 * c2_ + d2)
-                if not (math.isfinite(nx1) and math.isfinite(nx2) and math.isfinite(nv1) and math.isfinite(nv2)):
-                    status = 3
-                    break
-                x1, x2, v1, v2 = nx1, nx2, nv1, nv2
-                t = t0 + (step + (sub + 1.0) / k) * dt
-                # contact is checked after every substep, independent of how often the output is recorded
-                if x1 * x1 + x2 * x2 >= stop2:
-                    status = 1
-                    break
-            if stage_out and status == 0 and k < max_substeps:
-                k = min(2 * k, max_substeps)
-                continue
-            if stage_out:
-                status = 2
-            break
-        if status != 0:
+        x1, x2, v1, v2, t, n, status = _rk4_step(kernel, params, consts, x1, x2, v1, v2, t0 + step * dt, t0, step,
+                                                 dt, eps_substep, max_substeps, stop2, True)
+        n_evals += n
+        if status != OK:
             break
         if (step + 1) % record_every == 0:
             n_rec = _record(out_t, out_x, out_v, n_rec, t, x1, x2, v1, v2)
-    if status != 0:
+    if status != OK:
         # last valid state, so the trajectory ends where it stopped
         n_rec = _record(out_t, out_x, out_v, n_rec, t, x1, x2, v1, v2)
     return n_rec, status, t, n_evals
@@ -228,13 +238,17 @@ def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_
 # numba's on-disk cache of ``_rk4_run`` records the argument types, and a kernel or parameter type
 # defined in a module that a later process cannot import would make that cache unreadable.
 def _uncached(dispatcher, **replace):
-    """A non-caching copy of a compiled function, its global names in ``replace`` swapped."""
+    """A non-caching copy of a compiled function (its other options kept), its global names in ``replace`` swapped."""
     fn = dispatcher.py_func
     glb = dict(fn.__globals__, **replace)
-    return njit(types.FunctionType(fn.__code__, glb, fn.__name__, fn.__defaults__, fn.__closure__))
+    options = {k: v for k, v in dispatcher.targetoptions.items() if k != "nopython"}  # njit sets it itself
+    return njit(**options)(types.FunctionType(fn.__code__, glb, fn.__name__, fn.__defaults__,
+                                                                fn.__closure__))
 
 
-_rk4_run_uncached = _uncached(_rk4_run, _acceleration=_uncached(_acceleration))
+# the step inlined into a loop takes the globals of its own module: its twin calls the uncached acceleration
+_rk4_step_uncached = _uncached(_rk4_step, _acceleration=_uncached(_acceleration))
+_rk4_run_uncached = _uncached(_rk4_run, _rk4_step=_rk4_step_uncached)
 
 
 def _holds_functions(params) -> bool:

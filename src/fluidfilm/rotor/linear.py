@@ -5,14 +5,13 @@ used to check the integrator against analytic responses.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from fluidfilm.core.bearing import JournalBearing
-from fluidfilm.core.force_model import WHOLE_FILM, ValidityDomain
+from fluidfilm.core.force_model import ReferenceModel
 
 
 class LinearParams(NamedTuple):
@@ -27,11 +26,11 @@ def linear_force(params, x1, x2, v1, v2):
     return -k * x1 - c * v1, -k * x2 - c * v2
 
 
-@dataclass(frozen=True)
-class LinearBearing:
+class LinearBearing(ReferenceModel):
     """An isotropic spring-damper force model, F = -K X - C V [N]: not a film, an exact check.
 
-    It has the force-model interface (``forces``, ``force_kernel``, ``bearing``, ...), so the
+    It has the force-model interface (``forces``, ``force_kernel``, ``bearing``, ...): a physics-based
+    model in the protocol's sense (``ReferenceModel``: valid everywhere, nothing counted), so the
     integrator runs it as any film model; its responses are known in closed form.
 
     Parameters
@@ -51,33 +50,19 @@ class LinearBearing:
     [-10.0, -10.0]
     """
 
-    bearing: JournalBearing
-    stiffness: float
-    damping: float
-
     name = "linear"
+
+    def __init__(self, bearing: JournalBearing, stiffness: float, damping: float):
+        self._bearing = bearing
+        self.stiffness = stiffness
+        self.damping = damping
+
+    def __repr__(self) -> str:
+        return f"LinearBearing(bearing={self._bearing!r}, stiffness={self.stiffness!r}, damping={self.damping!r})"
 
     @property
     def force_kernel(self):
         return linear_force, LinearParams(float(self.stiffness), float(self.damping))
-
-    @property
-    def clearance(self) -> float:
-        return float(self.bearing.clearance)
-
-    @property
-    def validity(self) -> ValidityDomain:
-        return WHOLE_FILM
-
-    def reset_domain_counter(self) -> None:
-        """Nothing to count: a linear law holds everywhere."""
-
-    def domain_report(self) -> str | None:
-        return None
-
-    @property
-    def n_outside_domain(self) -> int:
-        return 0
 
     def forces(self, X, V) -> np.ndarray:
         """-K X - C V [N] for positions X [m] and velocities V [m/s], (..., 2) each."""

@@ -38,7 +38,7 @@ def run(cfg) -> tracking.Logged:
         env.step(env.initial_action)  # compile and settle outside the timing
         t0 = time.perf_counter()
         # nothing logged while timed (the run opened by the wrapper gets the speeds at the end)
-        train_dqn(env, dqn, seed=cfg.controller.seed, callback=tracking.sb3_learning_curves(log=False))
+        train_dqn(env, dqn, seed=cfg.controller.seed)  # timed: nothing logged during it
         wall = time.perf_counter() - t0
         per_step = wall / dqn["total_timesteps"]
         out[name] = {"wall_s": wall, "s_per_env_step": per_step,

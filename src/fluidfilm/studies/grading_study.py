@@ -92,9 +92,10 @@ def _plain(node) -> dict:
 def source_digest() -> str:
     """SHA-256 (16 hex) of the source that computes and writes a dataset's forces: the bearing, the states,
     the force-model protocol, the Reynolds solver package and the dataset generator, layout and schema."""
-    root = Path(__file__).resolve().parent
-    files = [root / "bearing.py", root / "states.py", root / "models.py", root / "data" / "generate.py",
-             root / "data" / "spec.py", root / "data" / "schema.py", *sorted((root / "reynolds").rglob("*.py"))]
+    root = Path(__file__).resolve().parents[1]  # the package: this module lives in studies/
+    files = [root / "core" / "bearing.py", root / "core" / "states.py", root / "core" / "force_model.py",
+             root / "data" / "generate.py", root / "data" / "spec.py", root / "data" / "schema.py",
+             *sorted((root / "reynolds").rglob("*.py"))]
     h = hashlib.sha256()
     for f in files:
         h.update(f.relative_to(root).as_posix().encode())

@@ -25,7 +25,7 @@ def run(cfg) -> tracking.Logged:
     t0 = time.perf_counter()
     # the learning curve (episode returns, SB3's losses) goes to the run the entry wrapper opened
     agent, returns = train_dqn(env, c["controller"]["dqn"], seed=cfg.controller.seed,
-                               callback=tracking.sb3_learning_curves())
+                               **tracking.learning_curve_hooks())
     wall = time.perf_counter() - t0
     save_agent(agent, cfg.agent_path)
     n = c["controller"]["dqn"]["total_timesteps"]

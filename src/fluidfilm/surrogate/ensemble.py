@@ -235,13 +235,13 @@ def flag_calibration(model: EnsembleForceModel, X: ArrayLike, V: ArrayLike, F: A
     """
     from scipy.stats import spearmanr
 
+    from fluidfilm.data.schema import relative_force_errors  # pandas and pyarrow: imported when asked for
+
     F = np.asarray(F, dtype=float)
     mean, s = model.spread(X, V)
     if F.shape != mean.shape:
         raise ValueError(f"F must have the shape of the states' forces {mean.shape}, got {F.shape}")
-    scale = np.maximum(np.hypot(F[..., 0], F[..., 1]), model.floor_N)
-    d = mean - F
-    err = np.hypot(d[..., 0], d[..., 1]) / scale
+    err = relative_force_errors(mean, F, model.floor_N)
     flag = model._flag(mean, s)
     wrong = err > model.rel_tol
 

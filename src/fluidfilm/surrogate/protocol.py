@@ -362,9 +362,9 @@ def _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, na
     return model, report
 
 
-def _model_rel_rmse(sub: pd.DataFrame, idx: np.ndarray, model: SurrogateForceModel) -> float | None:
-    if len(idx) == 0:
-        return None
+def _predicted_and_true(sub: pd.DataFrame, idx: np.ndarray | slice, model) -> tuple[np.ndarray, np.ndarray]:
+    """(model forces, dataset forces) at the rows ``idx`` of ``sub``, the model's outside-the-domain warnings
+    silenced."""
     X = sub[["X1", "X2"]].to_numpy()[idx]
     V = sub[["V1", "V2"]].to_numpy()[idx]
     F = sub[OUTPUTS].to_numpy()[idx]
@@ -373,20 +373,20 @@ def _model_rel_rmse(sub: pd.DataFrame, idx: np.ndarray, model: SurrogateForceMod
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         P = model.forces(X, V)
+    return P, F
+
+
+def _model_rel_rmse(sub: pd.DataFrame, idx: np.ndarray, model: SurrogateForceModel) -> float | None:
+    if len(idx) == 0:
+        return None
+    P, F = _predicted_and_true(sub, idx, model)
     return math.sqrt(float(((P - F) ** 2).sum()) / max(float((F ** 2).sum()), 1e-300))
 
 
 def band_sq_errors(sub: pd.DataFrame, idx: np.ndarray, model: SurrogateForceModel, boundaries) -> list[float]:
     """sum |F_pred - F|^2 [N^2] of a model over the rows ``idx`` in each eccentricity region."""
     eps = sub["eps"].to_numpy()[idx]
-    X = sub[["X1", "X2"]].to_numpy()[idx]
-    V = sub[["V1", "V2"]].to_numpy()[idx]
-    F = sub[OUTPUTS].to_numpy()[idx]
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        P = model.forces(X, V)
+    P, F = _predicted_and_true(sub, idx, model)
     sq = ((P - F) ** 2).sum(axis=1)
     return [float(sq[(eps >= lo) & (eps < hi)].sum()) for lo, hi in regions(boundaries)]
 
@@ -411,14 +411,7 @@ def time_to_accuracy(split_report: dict, targets_sq_N2: list[float]) -> float | 
 def band_test_errors(model, testset: pd.DataFrame, bands=((0.0, 0.5), (0.5, 0.7), (0.7, 1.0)),
                      floor_N: float = 0.1) -> dict:
     """Median and 99th percentile of |F_model - F| / max(|F|, floor) per eccentricity band and below 0.7."""
-    import warnings
-
-    X = testset[["X1", "X2"]].to_numpy()
-    V = testset[["V1", "V2"]].to_numpy()
-    F = testset[OUTPUTS].to_numpy()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        P = model.forces(X, V)
+    P, F = _predicted_and_true(testset, slice(None), model)
     rel = relative_force_errors(P, F, floor_N)
     eps = testset["eps"].to_numpy()
     out = {}

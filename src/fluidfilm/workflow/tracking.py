@@ -339,36 +339,18 @@ def child_logger_factory(parent, tracking: Mapping, name: str):
     return logger_for
 
 
-def sb3_learning_curves(log: bool = True):
-    """A stable-baselines3 callback: episode returns (from the Monitor wrapper, kept in ``.returns``)
-    and SB3's training scalars, logged to the active MLflow run (``log=False``: returns kept, nothing
-    logged, e.g. where the training's wall time is what is measured)."""
-    import numpy as np
-    from stable_baselines3.common.callbacks import BaseCallback
+def learning_curve_hooks() -> dict:
+    """``on_episode``/``on_rollout`` hooks for ``control.dqn.train_dqn``: each episode's return and SB3's
+    training scalars logged to the active MLflow run (nothing when none is active)."""
 
-    class MlflowCurves(BaseCallback):
-        def __init__(self):
-            super().__init__()
-            self.returns: list[tuple[int, float]] = []
+    def on_episode(timestep: int, ret: float) -> None:
+        log_metric("episode_return", ret, step=timestep)
 
-        def _on_step(self) -> bool:
-            for info in self.locals.get("infos", []):
-                ep = info.get("episode")
-                if ep is not None:
-                    self.returns.append((self.num_timesteps, float(ep["r"])))
-                    if log:
-                        log_metric("episode_return", float(ep["r"]), step=self.num_timesteps)
-            return True
+    def on_rollout(scalars: dict, timestep: int) -> None:
+        if _active() is not None:
+            log_metrics(scalars, step=timestep)
 
-        def _on_rollout_end(self) -> None:
-            if not log or _active() is None:
-                return
-            vals = {k.replace("/", "_"): float(v) for k, v in self.model.logger.name_to_value.items()
-                    if isinstance(v, (int, float, np.floating))}
-            if vals:
-                log_metrics(vals, step=self.num_timesteps)
-
-    return MlflowCurves()
+    return {"on_episode": on_episode, "on_rollout": on_rollout}
 
 
 class MlflowSweepCallback:
