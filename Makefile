@@ -13,6 +13,8 @@
 #                                  ?viewStateShareKey=summary: one row per model (accuracy, training time,
 #                                  speed-up); MLflow's home page is its GenAI overview
 #   make lint / test-slow / bench
+#   make time-tests                make setup + make test in a fresh clone of HEAD from a plain shell, timed:
+#                                  reports/test_timing.json (the README's commands table)
 #   make ross-peer                 ROSS (external peer, its own .venv-ross) vs ours: benchmarks/bench_ross_peer.py
 #   make train-time-ci             the training-time study at 3x the pipeline's subsample (12,000 per
 #                                  seed) until its 95 % interval is +-10 points (hours here:
@@ -65,6 +67,11 @@ bench: setup
 	$(PY) benchmarks/bench_rotor.py
 	$(PY) benchmarks/bench_conical.py
 	$(PY) benchmarks/bench_training_step.py
+
+.PHONY: time-tests
+time-tests: setup
+	$(PY) benchmarks/time_fresh_clone.py
+	$(PY) -m fluidfilm.reporting.readme
 
 mlflow: setup
 	$(PY) -m fluidfilm.workflow.pipeline serve --port $(MLFLOW_PORT)

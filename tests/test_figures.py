@@ -137,6 +137,22 @@ def test_grading_study_log_axes_do_not_overprint():
     plt.close(fig)
 
 
+def test_ablation_on_one_dataset_gets_one_row_per_job_and_no_label_overprints():
+    """Every ablation job has the same dataset size: on a size axis their labels would stack on one point."""
+    jobs = [f"scaling={s},split={p}" for s in ("physics_whirl", "standard", "physics_polar") for p in ("none", "five_blend")]
+    n = len(jobs)
+    table = pd.DataFrame({"job": jobs, "n_samples": [690625] * n, "generation_s": [11.0] * n,
+                          "held_out_rel_err_median": np.linspace(0.01, 5, n), "held_out_rel_err_p99": np.linspace(1, 150, n),
+                          "orbit_states_rel_err_median": np.linspace(0.01, 20, n),
+                          "orbit_states_rel_err_p99": np.linspace(0.04, 180, n), "n_satisfactory": [7, 7, 0, 0, 0, 0]})
+    fig = plots.plot_grading_study(table, "ablation")
+    (ax,) = fig.axes
+    assert [t.get_text() for t in ax.get_yticklabels()] == [f"{j} ({k}/7)" for j, k in zip(jobs, table.n_satisfactory)]
+    _assert_no_overlap(ax.yaxis)
+    _assert_no_overlap(ax.xaxis)
+    plt.close(fig)
+
+
 def _pipeline_figures() -> set[str]:
     """Every PNG the pipeline writes (dvc.yaml: the stages' outs and the plots list), as a path under reports/."""
     spec = yaml.safe_load((ROOT / "dvc.yaml").read_text())

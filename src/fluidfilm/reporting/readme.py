@@ -82,13 +82,14 @@ def _minutes(seconds: float) -> str:
 
 def render_commands(reports: Path) -> str:
     """The README's commands and how long each takes: the pipeline from ``reproduce_timing.json`` (written by
-    ``make reproduce``), the install and the test suite from ``test_timing.json`` (a fresh clone's run)."""
+    ``make reproduce``), the install and the test suite from ``test_timing.json`` (``make time-tests``: a fresh
+    clone's run)."""
     full = _load(reports, "reproduce_timing.json").get("full")
     if not full:
         raise FileNotFoundError("reports/reproduce_timing.json has no full-profile run yet")
     t = _load(reports, "test_timing.json")
     rows = [["`make setup`", "creates `.venv`, installs torch (CPU) and the project; the two below run it first",
-             f"{t['setup_s_min'] / 60:.1f}-{t['setup_s_max'] / 60:.0f} min"],
+             _minutes(t["setup_s"])],
             ["`make reproduce`", "the whole pipeline (`dvc repro`): datasets, models, studies, figures, report",
              _minutes(full["stages_total_s"])],
             ["`make test`", f"the default suite ({t['tests']:,} tests, {t['skipped']} skipped), among them the pipeline "
@@ -308,6 +309,37 @@ def render_characteristics(reports: Path) -> str:
                          f"{_num(100 * r['direct'], '.2f', ' %')} / {_num(100 * r['cross'], '.2f', ' %')}" if r else "-"])
         lines.append(_table(["eps", "best: direct", "best: cross", f"{coarse} grid: direct / cross"], rows))
     return "\n".join(lines)
+
+
+def _stage_outputs(root: Path) -> dict[str, tuple[str, bool]]:
+    """{output path under reports/: (stage, committed to git)} from dvc.yaml (``cache: false`` outputs, and
+    the files under such a folder, are committed; the others come with `make reproduce` or `dvc pull`)."""
+    import yaml
+
+    out: dict[str, tuple[str, bool]] = {}
+    for name, stage in yaml.safe_load((root / "dvc.yaml").read_text())["stages"].items():
+        for entry in stage.get("do", stage).get("outs", []):
+            path, opts = (entry, {}) if isinstance(entry, str) else next(iter(entry.items()))
+            if path.startswith("reports/"):
+                out[path[len("reports/"):]] = (name, opts.get("cache", True) is False)
+    return out
+
+
+def render_figures(reports: Path) -> str:
+    """Every figure the pipeline draws, with its caption (``studies.figure_style.CAPTIONS``): the image where
+    it is committed, otherwise its path and the stage that draws it."""
+    from fluidfilm.studies.figure_style import CAPTIONS
+
+    outs = _stage_outputs(reports.parent)
+    parts = []
+    for path, caption in CAPTIONS.items():
+        stage, committed = next(((st, c) for out, (st, c) in outs.items()
+                                 if path == out or path.startswith(out.rstrip("/") + "/")), ("?", False))
+        if committed:
+            parts.append(f"![{path}](../reports/{path})\n\n*{caption}* (stage `{stage}`)")
+        else:
+            parts.append(f"`reports/{path}` (stage `{stage}`; made by `make reproduce`, not committed): *{caption}*")
+    return "\n\n".join(parts)
 
 
 def render_ensemble(reports: Path) -> str:
@@ -548,6 +580,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "error_map": render_error_map,
     "surrogate_goals": render_surrogate_goals,
     "control": render_control,
+    "figures": render_figures,
 }
 
 

@@ -376,11 +376,15 @@ def plot_grading_study(table: pd.DataFrame, title: str):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5.0), sharey=True)
     series = (("held_out_rel_err_median", "held-out random states, median", "o"),
               ("held_out_rel_err_p99", "held-out random states, 99th percentile", "s"),
               ("orbit_states_rel_err_median", "states along the reference orbits, median", "^"),
               ("orbit_states_rel_err_p99", "states along the reference orbits, 99th percentile", "D"))
+    if table["n_samples"].nunique() == 1:
+        # one dataset for every job (the ablation): a size axis would stack every label on one point, so
+        # one row per job, the errors along x
+        return _plot_jobs_by_row(plt, table, series, title)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5.0), sharey=True)
     for ax, xkey, xlabel in ((axes[0], "n_samples", "dataset size [samples]"),
                              (axes[1], "generation_s", "dataset generation time [s] (reference model, 2 cores)")):
         for key, label, marker in series:
@@ -400,6 +404,32 @@ def plot_grading_study(table: pd.DataFrame, title: str):
     axes[0].legend(fontsize=7)
     fig.suptitle(f"{title}: labels are the jobs' swept values (grading.* shortened), (n/7) the Fig. 4 cases "
                  "within 2 % of c", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def _plot_jobs_by_row(plt, table: pd.DataFrame, series, title: str):
+    """The grading/ablation figure when every job has the same dataset: one row per job (its swept values and
+    the Fig. 4 cases it passes), each error series a marker along a log x axis."""
+    rows = table.reset_index(drop=True)
+    labels = []
+    for _, r in rows.iterrows():
+        cases = f" ({int(r['n_satisfactory'])}/7)" if "n_satisfactory" in r and not pd.isna(r["n_satisfactory"]) else ""
+        labels.append(str(r["job"]).replace("grading.", "") + cases)
+    fig, ax = plt.subplots(figsize=(9, 1.2 + 0.38 * len(rows)))
+    y = np.arange(len(rows))
+    for key, label, marker in series:
+        ax.scatter(100 * rows[key], y, marker=marker, label=label)
+    ax.set_yticks(y, labels, fontsize=7)
+    ax.invert_yaxis()
+    ax.set_xscale("log")
+    readable_log_ticks(ax, "x")
+    ax.set_xlabel("relative force error [%]")
+    ax.grid(True, which="both", axis="x", alpha=0.3)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.6 / (1.2 + 0.38 * len(rows)) - 0.1), ncol=2)
+    n = int(rows["n_samples"].iloc[0])
+    ax.set_title(f"{title}: every job on one dataset ({n:,} samples)\nrows: the swept values (grading.* "
+                 "shortened), (n/7) the Fig. 4 cases within 2 % of c", fontsize=9)
     fig.tight_layout()
     return fig
 
