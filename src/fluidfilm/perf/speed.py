@@ -93,7 +93,7 @@ def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
     return median_seconds(lambda: _kernel_loop(kernel, params, x, v), repeats, warmup=False) / len(x)
 
 
-def best_shaped_surrogate(bearing, seed: int = 0):
+def best_shaped_surrogate(bearing, seed: int = 0, restoring: bool = True):
     """An untrained surrogate with the best model's shapes (conf/experiment/best.yaml): five eccentricity
     regions (boundaries 0.3, 0.5, 0.7, 0.85) blended over 0.04, the whirl frame, physics scaling
     ((1 - eps^2)^1.5), 3 -> 64 -> 2 tanh networks with random weights.  What the speed of the best model
@@ -105,6 +105,10 @@ def best_shaped_surrogate(bearing, seed: int = 0):
         The bearing (no supply pressure: the whirl frame needs the film's homogeneity).
     seed : int, default 0
         Seed of the random weights and scalings.
+    restoring : bool, default True
+        Make the force mostly a restoring one along the line of centres (output centre (-20, 0), the
+        output layer's weights scaled by 0.01), so that an orbit stays inside the clearance (trajectory
+        timings); False: output layers of full-size random weights (tests of the arithmetic).
 
     Returns
     -------
@@ -122,10 +126,11 @@ def best_shaped_surrogate(bearing, seed: int = 0):
     rng = np.random.default_rng(seed)
     nets, scalings = [], []
     for _ in range(5):
+        gain = 0.01 if restoring else 1.0
         nets.append([(rng.normal(0, 1 / np.sqrt(3), (64, 3)), rng.normal(0, 0.1, 64)),
-                     (rng.normal(0, 1 / 8, (2, 64)), rng.normal(0, 0.1, 2))])
+                     (gain * rng.normal(0, 1 / 8, (2, 64)), gain * rng.normal(0, 0.1, 2))])
+        out_mean = np.array([-20.0, 0.0]) if restoring else rng.normal(0, 1, 2)
         scalings.append(Scaling("physics", bearing.clearance, bearing.omega, bearing.force_scale, 1.5,
-                                rng.normal(0, 0.1, 3), 1 + rng.random(3), rng.normal(0, 1, 2), 1 + rng.random(2),
-                                "whirl"))
+                                rng.normal(0, 0.1, 3), 1 + rng.random(3), out_mean, 1 + rng.random(2), "whirl"))
     return SurrogateForceModel(bearing, nets, scalings, "tanh", boundaries=(0.3, 0.5, 0.7, 0.85), blend_width=0.04,
                                domain=[[0.0, 0.95, 0.2]], eps_max=0.95, name="best-shaped (random weights)")

@@ -547,7 +547,7 @@ def forces_batch(bp, x, v, out):
     blend = bp.blend_width
     dom = bp.domain
     n_dom = dom.shape[0]
-    f32 = bp.weights.dtype == np.float32
+    f32 = bp.weights.itemsize == 4
     # 1. route: region(s) and weight(s) of every state, the domain count
     ra = np.empty(n, dtype=np.int64)
     rb = np.empty(n, dtype=np.int64)
