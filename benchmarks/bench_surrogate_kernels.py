@@ -80,7 +80,7 @@ def main() -> None:
     header = ["N", "reference (graded)", "generic", "fast", "batch f64", "batch f32",
               "ref/fast", "ref/batch f64", "ref/batch f32"]
     rows = []
-    print(("{:>7}" + "{:>20}" + "{:>10}" * 7).format(*header))
+    print(("{:>7}" + "{:>20}" + "{:>10}" * 4 + "{:>15}" * 3).format(*header))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         for n in SIZES:
@@ -102,7 +102,7 @@ def main() -> None:
                    f"{ns['batch32']:.0f}", f"{ns['reference'] / ns['fast']:.1f}x",
                    f"{ns['reference'] / ns['batch64']:.1f}x", f"{ns['reference'] / ns['batch32']:.1f}x"]
             rows.append(row)
-            print(("{:>7}" + "{:>20}" + "{:>10}" * 7).format(*row))
+            print(("{:>7}" + "{:>20}" + "{:>10}" * 4 + "{:>15}" * 3).format(*row))
         # one trajectory, the same integrator and start for both models; the time per force evaluation inside
         # it (a random-weight surrogate's orbit is not the reference's and may stop early)
         rotor = Rotor(mass=2.5, imbalance=5e-4 * 2.5)
