@@ -12,6 +12,7 @@ from fluidfilm import Rotor, load_surrogate, paper_bearing, simulate
 from fluidfilm.surrogate import Scaling, SurrogateForceModel
 from fluidfilm.surrogate.fit import fit_surrogate, regions, held_out_errors
 from fluidfilm.surrogate.inference import surrogate_force
+from fluidfilm.surrogate.kernels import compiled_kernel, shape_key
 
 C = 120e-6
 TINY = dict(width=32, depth=2, activation="tanh", lr=1e-2, optimizer="adam", scheduler="cosine")
@@ -122,7 +123,9 @@ def test_surrogate_runs_in_the_compiled_integrator(trained):
     model, _ = trained
     traj = simulate(model, Rotor(mass=2.5, imbalance=1e-4), t_end=0.05, record_every=10)
     assert traj.ok and np.isfinite(traj.x).all()
-    assert surrogate_force is model.force_kernel[0]
+    # the integrator runs the kernel compiled for the model's shape, not the generic one
+    assert model.force_kernel[0] is compiled_kernel(shape_key(model))
+    assert model.force_kernel[0] is not surrogate_force
 
 
 def test_training_resumes_from_its_checkpoint(quick_data, tmp_path):

@@ -10,7 +10,7 @@ from numba import njit
 
 from fluidfilm.perf.benchmarking import median_seconds
 
-__all__ = ["sample_states", "time_per_force_eval"]
+__all__ = ["sample_states", "time_per_force_eval", "best_shaped_surrogate"]
 
 
 @njit  # not cached: numba's on-disk cache cannot always pickle a specialisation on a function argument
@@ -91,3 +91,46 @@ def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
     kernel, params = model.force_kernel
     _kernel_loop(kernel, params, x[:2], v[:2])  # compile
     return median_seconds(lambda: _kernel_loop(kernel, params, x, v), repeats, warmup=False) / len(x)
+
+
+def best_shaped_surrogate(bearing, seed: int = 0, restoring: bool = True):
+    """An untrained surrogate with the best model's shapes (conf/experiment/best.yaml): five eccentricity
+    regions (boundaries 0.3, 0.5, 0.7, 0.85) blended over 0.04, the whirl frame, physics scaling
+    ((1 - eps^2)^1.5), 3 -> 64 -> 2 tanh networks with random weights.  What the speed of the best model
+    depends on, where no trained one is at hand (its cost does not depend on the weights' values).
+
+    Parameters
+    ----------
+    bearing : JournalBearing
+        The bearing (no supply pressure: the whirl frame needs the film's homogeneity).
+    seed : int, default 0
+        Seed of the random weights and scalings.
+    restoring : bool, default True
+        Make the force mostly a restoring one along the line of centres (output centre (-20, 0), the
+        output layer's weights scaled by 0.01), so that an orbit stays inside the clearance (trajectory
+        timings); False: output layers of full-size random weights (tests of the arithmetic).
+
+    Returns
+    -------
+    SurrogateForceModel
+
+    Examples
+    --------
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.perf.speed import best_shaped_surrogate
+    >>> best_shaped_surrogate(paper_bearing())
+    SurrogateForceModel('best-shaped (random weights)', 5 network(s), boundaries=[0.3, 0.5, 0.7, 0.85], 1930 parameters)
+    """
+    from fluidfilm.surrogate import Scaling, SurrogateForceModel
+
+    rng = np.random.default_rng(seed)
+    nets, scalings = [], []
+    for _ in range(5):
+        gain = 0.01 if restoring else 1.0
+        nets.append([(rng.normal(0, 1 / np.sqrt(3), (64, 3)), rng.normal(0, 0.1, 64)),
+                     (gain * rng.normal(0, 1 / 8, (2, 64)), gain * rng.normal(0, 0.1, 2))])
+        out_mean = np.array([-20.0, 0.0]) if restoring else rng.normal(0, 1, 2)
+        scalings.append(Scaling("physics", bearing.clearance, bearing.omega, bearing.force_scale, 1.5,
+                                rng.normal(0, 0.1, 3), 1 + rng.random(3), out_mean, 1 + rng.random(2), "whirl"))
+    return SurrogateForceModel(bearing, nets, scalings, "tanh", boundaries=(0.3, 0.5, 0.7, 0.85), blend_width=0.04,
+                               domain=[[0.0, 0.95, 0.2]], eps_max=0.95, name="best-shaped (random weights)")

@@ -38,6 +38,7 @@ from fluidfilm import io
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict
 from fluidfilm.core.force_model import ValidityDomain
 from fluidfilm.core.states import as_state_pairs
+from fluidfilm.surrogate.kernels import COUNTER, SETTING, fast_force_kernel, pack, shape_key
 from fluidfilm.surrogate.scaling import Scaling, check_whirl_use, network_inputs
 from fluidfilm.surrogate.transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
                          standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb, whirl_direction_nb)
@@ -80,7 +81,7 @@ class SurrogateParams(NamedTuple):
     blend_width: float        # smoothstep blend across each boundary (0: hard switch)
     domain: np.ndarray        # (S, 3) [eps_low, eps_high, v_max] of the training data
     eps_max: float            # largest eccentricity ratio of the training data
-    counter: np.ndarray       # (1,) int64: evaluations outside the domain (mutable)
+    counter: np.ndarray       # (1,) float64: evaluations outside the domain (mutable; a view of the fast kernel's vector)
     setting: np.ndarray       # (2,) [1/c^2 of the current clearance, sleeve] (mutable)
     max_width: int            # widest layer
     scratch: np.ndarray       # (3, max_width) work rows: two layer buffers and the inputs
@@ -392,10 +393,6 @@ class SurrogateForceModel:
             all_layers = [layer for pair in networks for n in pair for layer in n]
         max_width = max(W.shape[0] for W, _ in all_layers)
         self._n_parameters = int(sum(W.size + b.size for W, b in all_layers))
-        self._counter = np.zeros(1, dtype=np.int64)
-        # the current setting, read by the kernel: 1/c^2 (eccentricity for routing and domain) and the
-        # sleeve displacement; mutable, so a controller moves the sleeve without rebuilding anything
-        self._setting = np.array([1.0 / bearing.clearance**2, 0.0])
         # the clearance itself, not 1/sqrt(1/c^2): rounding there let eps = 1 pass the domain check as 0.9999...
         self._clearance = float(bearing.clearance)
         self._n_extra = len(scalings[0].extras)
@@ -407,6 +404,14 @@ class SurrogateForceModel:
             check_whirl_use(sc.frame, structure, bearing)
         if self._n_extra and not isinstance(bearing, ConicalBearing):
             raise ValueError(f"extra inputs {scalings[0].extras} need an active (conical) bearing")
+        # the current setting, read by the kernel: 1/c^2 (eccentricity for routing and domain) and the
+        # sleeve displacement; mutable, so a controller moves the sleeve without rebuilding anything.  It and
+        # the domain counter are views of the fast kernel's parameter vector (surrogate.kernels.pack; the
+        # kernel compiles on first use of force_kernel), so both kernels read and count in one place
+        self._fast_key = shape_key(self)
+        self._fast_weights = pack(self, self._fast_key)
+        self._setting = self._fast_weights[SETTING:SETTING + 2]
+        self._counter = self._fast_weights[COUNTER:COUNTER + 1]  # float64: exact to 2^53 evaluations
         # one flat weight array for all regions: each region's table offsets shifted to its block
         offsets = np.cumsum([0] + [w.size for w, _ in packed])
         tables = [t.copy() for _, t in packed]
@@ -434,7 +439,9 @@ class SurrogateForceModel:
 
     @property
     def force_kernel(self):
-        return surrogate_force, self.params
+        """The compiled one-state kernel of this model's shape (``surrogate.kernels.fast_force_kernel``),
+        equal to the generic ``surrogate_force`` on ``self.params`` to round-off; compiled on first use."""
+        return fast_force_kernel(self)
 
     @property
     def validity(self) -> ValidityDomain:

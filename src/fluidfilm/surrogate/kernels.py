@@ -1,0 +1,689 @@
+"""The surrogates' fast force kernels: one compiled function per model shape, and a batched kernel.
+
+``inference.surrogate_force`` is the generic kernel: it reads its layer
+table, region count and scaling codes at run time, standardises the inputs,
+evaluates ``tanh`` through one scalar ``exp`` per unit (which never
+vectorises here: numba has no SVML on this machine) and checks every
+division for zero (numba's default ``error_model="python"``).  This module
+holds what the integrator runs instead:
+
+- ``fast_force_kernel(model)`` -> ``(fn, params)`` with the generic
+  kernel's signature ``fn(params, x1, x2, v1, v2) -> (F1, F2)``.  ``fn`` is
+  compiled from source generated for the model's *shape* (regions, frames,
+  scaling kinds, layer widths, activation, blending, domain rows): widths
+  and offsets are literal constants, the regions' bodies are written out
+  one by one, ``error_model="numpy"``.  The weights sit in one flat array
+  of ``params`` with the input standardisation folded into the first
+  layer and the output un-standardisation into the last, so every model of
+  one shape (an ensemble's members) shares one compiled function.  ``tanh``
+  is ``tanh64``: a [7/6] Pade approximant at x/8 doubled three times, pure
+  arithmetic (it vectorises over a layer) and within 1e-15 relative of
+  ``math.tanh`` (tests/test_surrogate_kernels.py states and checks the
+  bound), so the fast kernel equals the generic one to round-off.
+- ``forces_batch(bparams, x, v, out)``: many states at once: each state
+  routed to its region (a state in a blend zone to both neighbours),
+  each region's network run on tiles of states as dense products with the
+  states along the vector lanes, then blended and turned back into the
+  (X1, X2) frame.  float64 by default; ``batch_params(model, "float32")``
+  runs the network arithmetic in float32 with Eigen's rational ``tanh32``
+  (within 4e-7 relative of ``math.tanh``), forces within 1e-5 relative of
+  float64 (tested).
+
+The training-domain counter keeps its meaning: every evaluation outside the
+domain adds one to the model's counter, exactly as the generic kernel
+counts (the count is a few scalar compares per call, written without
+early exits; the per-unit loops that vectorise are not touched by it).  It
+stays inside the kernel because every caller (``simulate``,
+``simulate_batch``, the ensemble's members) reports that count.
+
+The generated functions live in no importable module, so numba cannot
+cache them on disk: the integrator runs them through its uncached loops
+(``rotor.integrate._library_types`` is False for them).  Compiling the best
+model's shape (five regions, 3-64-2) took 1.5-1.9 s on the 2-core project
+machine under load (``compile_seconds`` records it per shape), and the
+integrator's uncached loop about 1 s more on the first ``simulate`` of a
+process; a model of a shape already compiled in the process costs neither.
+"""
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, NamedTuple
+
+import numpy as np
+from numba import njit, types
+
+__all__ = ["tanh64", "tanh32", "fast_force_kernel", "shape_key", "pack", "kernel_source", "compiled_kernel",
+           "compile_seconds", "BatchParams", "batch_params", "forces_batch", "TILE"]
+
+# ---------------------------------------------------------------------------------------------- tanh
+
+# tanh(u) ~ u P(u^2) / Q(u^2), the [7/6] Pade approximant (a convergent of Lambert's continued
+# fraction), normalised to Q(0) = 1; used at u = x/8, then tanh(2u) = 2 t / (1 + t^2) three times on
+# the pair (p, q) (p' = 2 p q, q' = p^2 + q^2: no division until the end, and the map contracts a
+# relative error in p or q by (1 - t^2)/(1 + t^2)).  Clamped at |x| = 19.5, where tanh rounds to 1.
+_P1, _P3, _P5, _P7 = 1.0, 17325.0 / 135135.0, 378.0 / 135135.0, 1.0 / 135135.0
+_Q0, _Q2, _Q4, _Q6 = 1.0, 62370.0 / 135135.0, 3150.0 / 135135.0, 28.0 / 135135.0
+TANH64_CLAMP = 19.5
+
+
+@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def tanh64(x):
+    """tanh in float64 from arithmetic only (vectorises); within 1e-15 relative of ``math.tanh``."""
+    x = min(max(x, -TANH64_CLAMP), TANH64_CLAMP)
+    u = 0.125 * x
+    u2 = u * u
+    p = u * (_P1 + u2 * (_P3 + u2 * (_P5 + u2 * _P7)))
+    q = _Q0 + u2 * (_Q2 + u2 * (_Q4 + u2 * _Q6))
+    p, q = 2.0 * p * q, p * p + q * q
+    p, q = 2.0 * p * q, p * p + q * q
+    p, q = 2.0 * p * q, p * p + q * q
+    return p / q
+
+
+# Eigen's float32 tanh (TensorFlow/Eigen ``generic_fast_tanh_float``): a 13/6 rational function on
+# |x| <= 7.9053, the value +-1 beyond (tanh rounds to 1 in float32 there)
+_EA = np.array([4.89352455891786e-03, 6.37261928875436e-04, 1.48572235717979e-05, 5.12229709037114e-08,
+                -8.60467152213735e-11, 2.00018790482477e-13, -2.76076847742355e-16], dtype=np.float32)
+_EB = np.array([4.89352518554385e-03, 2.26843463243900e-03, 1.18534705686654e-04, 1.19825839466702e-06],
+               dtype=np.float32)
+_A1, _A3, _A5, _A7, _A9, _A11, _A13 = (np.float32(a) for a in _EA)
+_B0, _B2, _B4, _B6 = (np.float32(b) for b in _EB)
+_CLAMP32 = np.float32(7.90531110763549805)
+_TINY32 = np.float32(0.0004)
+
+
+@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def tanh32(x):
+    """Eigen's rational tanh in float32 (vectorises); within 4e-7 relative of ``math.tanh``."""
+    x = min(max(x, -_CLAMP32), _CLAMP32)
+    x2 = x * x
+    p = x2 * _A13 + _A11
+    p = x2 * p + _A9
+    p = x2 * p + _A7
+    p = x2 * p + _A5
+    p = x2 * p + _A3
+    p = x2 * p + _A1
+    p = x * p
+    q = x2 * _B6 + _B4
+    q = x2 * q + _B2
+    q = x2 * q + _B0
+    # tanh x = x to float32 precision below 4e-4 (Eigen's cut; the rational form underflows for tiny x)
+    return x if abs(x) < _TINY32 else p / q
+
+
+# ---------------------------------------------------------------------------------------------- folding
+
+_ACT = {"tanh": 0, "relu": 1, "silu": 2, "sigmoid": 3}
+
+
+def _fold_network(layers, in_mean, in_std, out_mean=None, out_std=None, out_rows=None):
+    """Layers [(W (out, in), b)] with z = (raw - in_mean)/in_std folded into the first layer and, when
+    given, y = out_std[row] * y + out_mean[row] into the last (``out_rows``: which output scale each row
+    takes; ``out_mean`` None: the rows are only scaled)."""
+    folded = [(np.array(W, dtype=np.float64), np.array(b, dtype=np.float64)) for W, b in layers]
+    W, b = folded[0]
+    mean = np.asarray(in_mean, dtype=np.float64)[:W.shape[1]]
+    std = np.asarray(in_std, dtype=np.float64)[:W.shape[1]]
+    folded[0] = (W / std[None, :], b - (W / std[None, :]) @ mean)
+    if out_std is not None:
+        W, b = folded[-1]
+        s = np.asarray(out_std, dtype=np.float64)[out_rows]
+        m = np.zeros_like(s) if out_mean is None else np.asarray(out_mean, dtype=np.float64)[out_rows]
+        folded[-1] = (W * s[:, None], b * s + m)
+    return folded
+
+
+def _folded_networks(model):
+    """Per region: (static layers, damping layers or []) with the scalings folded in (module doc)."""
+    out = []
+    for net, sc in zip(model.networks, model.scalings):
+        row = sc.kernel_row()
+        n_in = len(sc.in_mean)
+        mean, std = row[5:5 + n_in], row[10:10 + n_in]
+        om, os_ = row[15:17], row[17:19]
+        if model.structure == "plain":
+            out.append((_fold_network(net, mean, std, om, os_, [0, 1]), []))
+        else:
+            # y = out_std (S + C w) + out_mean: the mean goes with S, the scale with both (C's rows 0, 1
+            # make y1 and rows 2, 3 make y2)
+            static, damping = net
+            out.append((_fold_network(static, mean, std, om, os_, [0, 1]),
+                        _fold_network(damping, mean, std, None, os_, [0, 0, 1, 1])))
+    return out
+
+
+def shape_key(model) -> tuple:
+    """What the compiled one-state kernel depends on (everything else is in its parameter vector)."""
+    regions = []
+    for net, sc in zip(model.networks, model.scalings):
+        static, damping = (net, []) if model.structure == "plain" else net
+        row = sc.kernel_row()
+        regions.append((int(row[0]), int(row[19]), int(row[20]), bool(row[21] == 1.0), bool(row[4] == 1.5),
+                        tuple(np.shape(W) for W, _ in static), tuple(np.shape(W) for W, _ in damping)))
+    return (model.structure, model.activation, tuple(regions), len(model.boundaries), model.blend_width > 0.0,
+            int(np.shape(model.domain)[0]))
+
+
+# ---------------------------------------------------------------------------------------------- one state
+
+#: the parameter vector's head: [1/c^2, sleeve] (the model's setting), the domain counter, eps_max, blend
+SETTING, COUNTER, EPS_MAX, BLEND, HEAD = 0, 2, 3, 4, 5
+
+
+class Layout:
+    """Where each part sits in the one-state kernel's parameter vector (the same for every model of a shape).
+
+    One float64 vector holds everything the kernel reads, the model's mutable setting and domain counter
+    included (the model's ``setting_array`` and counter are views of it): numba passes an array argument
+    without reference counting, while each array taken out of a tuple costs an atomic increment and
+    decrement per call (measured: 16 of them, ~60 ns of a ~220 ns force).
+    """
+
+    def __init__(self, key):
+        structure, act, regions, nb, blending, n_dom = key
+        self.bounds = HEAD
+        self.domain = self.bounds + nb
+        self.regions = self.domain + 3 * n_dom  # per region [c, omega, F_scale, power]
+        widths = [shape[0] for r in regions for chain in r[5:] for shape in chain]
+        self.maxw = max(widths + [1])
+        self.scratch = self.regions + 4 * len(regions)  # two rows of maxw hidden activations
+        off = self.scratch + 2 * self.maxw
+        self.layers = []  # per region, per chain (static, damping): [(W offset, b offset)]
+        for r in regions:
+            region = []
+            for chain in r[5:]:
+                offs = []
+                for n_out, n_in in chain:
+                    offs.append((off, off + n_out * n_in))
+                    off += n_out * n_in + n_out
+                region.append(offs)
+            self.layers.append(region)
+        self.size = off
+
+
+def pack(model, key=None) -> np.ndarray:
+    """The one-state kernel's parameter vector of ``model`` (``Layout``), scalings folded into the weights.
+
+    The setting (1/c^2 of the nominal clearance, sleeve 0) and the counter (0) start fresh; the model makes
+    its setting and counter views of this vector.
+    """
+    key = shape_key(model) if key is None else key
+    lay = Layout(key)
+    w = np.zeros(lay.size)
+    w[SETTING] = 1.0 / model.bearing.clearance ** 2
+    w[EPS_MAX] = model.eps_max
+    w[BLEND] = model.blend_width
+    nb = len(model.boundaries)
+    w[lay.bounds:lay.bounds + nb] = model.boundaries
+    w[lay.domain:lay.regions] = np.asarray(model.domain, dtype=np.float64).ravel()
+    for r, ((static, damping), sc) in enumerate(zip(_folded_networks(model), model.scalings)):
+        w[lay.regions + 4 * r:lay.regions + 4 * r + 4] = [sc.clearance, sc.omega, sc.force_scale, sc.power]
+        for layers, offs in zip((static, damping), lay.layers[r]):
+            for k, ((W, b), (wo, bo)) in enumerate(zip(layers, offs)):
+                # the last layer is a few dot products over the hidden units (its rows contiguous); the
+                # others are axpy updates vectorised over their outputs (columns contiguous)
+                stored = W if k == len(layers) - 1 else W.T
+                w[wo:bo] = np.ascontiguousarray(stored).ravel()
+                w[bo:bo + b.size] = b
+    return w
+
+
+def _act_expr(act: str, x: str) -> str:
+    if act == "tanh":
+        return f"tanh64({x})"
+    if act == "relu":
+        return f"max({x}, 0.0)"
+    if act == "silu":
+        return f"{x} / (1.0 + math.exp(-{x}))"
+    return f"1.0 / (1.0 + math.exp(-{x}))"
+
+
+def _net_source(chain, offs, inputs, act, lay, ind, out_names):
+    """Source lines evaluating one folded network (layer shapes ``chain``) on the named scalar inputs
+    (as many leading ones as its first layer takes: the generic kernel's rule) into ``out_names``."""
+    lines = []
+    src = None  # offset of the previous layer's activations in the scratch rows
+    h = lay.scratch
+    for k, ((n_out, n_in), (wo, bo)) in enumerate(zip(chain, offs)):
+        if k == len(chain) - 1:
+            for j, name in enumerate(out_names):
+                if src is None:
+                    terms = " + ".join(f"w[{wo + j * n_in + i}] * {inputs[i]}" for i in range(n_in))
+                    lines.append(f"{ind}{name} = w[{bo + j}] + {terms}")
+                else:
+                    lines.append(f"{ind}{name} = w[{bo + j}]")
+            if src is not None:
+                lines.append(f"{ind}for i in range({n_in}):")
+                lines.append(f"{ind}    hi = w[{src} + i]")
+                for j, name in enumerate(out_names):
+                    lines.append(f"{ind}    {name} += w[{wo + j * n_in} + i] * hi")
+            break
+        dst = h if src != h else h + lay.maxw
+        lines.append(f"{ind}for o in range({n_out}):")
+        if src is None:
+            terms = " + ".join(f"w[{wo + i * n_out} + o] * {inputs[i]}" for i in range(n_in))
+            lines.append(f"{ind}    a = w[{bo} + o] + {terms}")
+        else:
+            lines.append(f"{ind}    w[{dst} + o] = w[{bo} + o]")
+            lines.append(f"{ind}for i in range({n_in}):")
+            lines.append(f"{ind}    hi = w[{src} + i]")
+            lines.append(f"{ind}    for o in range({n_out}):")
+            lines.append(f"{ind}        w[{dst} + o] += w[{wo} + i * {n_out} + o] * hi")
+            lines.append(f"{ind}for o in range({n_out}):")
+            lines.append(f"{ind}    a = w[{dst} + o]")
+        lines.append(f"{ind}    w[{dst} + o] = {_act_expr(act, 'a')}")
+        src = dst
+    return lines
+
+
+def _region_source(r, region_key, act, lay, ind):
+    """The body of region r: inputs from the state, the network(s), the gain and the frame back.
+    Mirrors ``inference._region_force`` step by step (the generic kernel is the specification)."""
+    kind, frame, n_extra, sleeve, power15, static, damping = region_key
+    physics = kind >= 1
+    polar = frame >= 1
+    rc = lay.regions + 4 * r
+    L = [f"{ind}c = w[{rc}]", f"{ind}omega = w[{rc + 1}]", f"{ind}fscale = w[{rc + 2}]"]
+    if sleeve:
+        # sleeve-aware: normalise by the current clearance c_r; forces scale as (c/c_r)^2
+        L += [f"{ind}fscale = fscale * c * c * inv_c2", f"{ind}c = 1.0 / math.sqrt(inv_c2)"]
+    if polar:
+        L += [f"{ind}rr = math.sqrt(x1 * x1 + x2 * x2)", f"{ind}at0 = 1.0 if rr == 0.0 else 0.0",
+              f"{ind}safe = rr + at0", f"{ind}er1 = x1 / safe", f"{ind}er2 = x2 / safe + at0",
+              f"{ind}cw = c * omega", f"{ind}z0 = rr / c",
+              f"{ind}z1 = (v1 * er1 + v2 * er2) / cw", f"{ind}z2 = (v1 * er2 - v2 * er1) / cw"]
+        if frame == 2:
+            L += [f"{ind}ua = z0 - 2.0 * z2", f"{ind}ub = 2.0 * z1", f"{ind}drive = math.sqrt(ua * ua + ub * ub)",
+                  f"{ind}zero = 1.0 if drive == 0.0 else 0.0", f"{ind}safe = drive + zero",
+                  f"{ind}z1 = ua / safe + zero", f"{ind}z2 = ub / safe"]
+        inputs = ["z0", "z1", "z2"]
+    elif physics:
+        L += [f"{ind}z0 = x1 / c", f"{ind}z1 = x2 / c", f"{ind}z2 = v1 / (c * omega)", f"{ind}z3 = v2 / (c * omega)"]
+        inputs = ["z0", "z1", "z2", "z3"]
+    else:
+        inputs = ["x1", "x2", "v1", "v2"]
+    for k in range(n_extra):
+        L.append(f"{ind}e{k} = w[{SETTING + 1 + k}]")  # extra inputs (the sleeve) come from the setting
+        inputs.append(f"e{k}")
+    L += _net_source(static, lay.layers[r][0], inputs, act, lay, ind, ["y1", "y2"])
+    if damping:
+        # y = S(position inputs) + C(all inputs) w, w the raw velocity inputs (units of c omega)
+        L += _net_source(damping, lay.layers[r][1], inputs, act, lay, ind, ["d0", "d1", "d2", "d3"])
+        w1, w2 = inputs[len(inputs) - 2], inputs[len(inputs) - 1]
+        L += [f"{ind}y1 += d0 * {w1} + d1 * {w2}", f"{ind}y2 += d2 * {w1} + d3 * {w2}"]
+    if physics:
+        L.append(f"{ind}d = 1.0 - e2")
+        L.append(f"{ind}g = fscale / (d * math.sqrt(d))" if power15 else f"{ind}g = fscale / d ** w[{rc + 3}]")
+        if kind == 2:
+            L.append(f"{ind}g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)")
+        if frame == 2:
+            L.append(f"{ind}g *= drive")
+        L += [f"{ind}y1 *= g", f"{ind}y2 *= g"]
+    if polar:
+        L += [f"{ind}g1 = y1 * er1 + y2 * er2", f"{ind}g2 = y1 * er2 - y2 * er1"]
+    else:
+        L += [f"{ind}g1 = y1", f"{ind}g2 = y2"]
+    return L
+
+
+def kernel_source(key) -> str:
+    """Python source of the one-state kernel of a model shape (``shape_key``), compiled by ``fast_force_kernel``."""
+    structure, act, regions, nb, blending, n_dom = key
+    lay = Layout(key)
+    L = ["def surrogate_kernel(w, x1, x2, v1, v2):",
+         f"    inv_c2 = w[{SETTING}]",
+         "    e2 = (x1 * x1 + x2 * x2) * inv_c2",
+         "    eps = math.sqrt(e2)",
+         # training domain: the first row holding eps (the last one also beyond its top) bounds the velocities
+         "    vout = False"]
+    for s in reversed(range(n_dom)):
+        d = lay.domain + 3 * s
+        hit = f"w[{d}] <= eps < w[{d + 1}]" + (f" or eps >= w[{d + 1}]" if s == n_dom - 1 else "")
+        L.append(f"    vout = (abs(v1) > w[{d + 2}] or abs(v2) > w[{d + 2}]) if ({hit}) else vout")
+    L += [f"    w[{COUNTER}] += 1.0 if (eps > w[{EPS_MAX}] or vout) else 0.0",
+          "    r = 0"]
+    for b in range(nb):
+        L.append(f"    r += 1 if eps >= w[{lay.bounds + b}] else 0")
+    L += ["    ra = r", "    rb = r", "    wb = 0.0", "    n_eval = 1"]
+    if blending:
+        L.append(f"    half = 0.5 * w[{BLEND}]")
+        for b in reversed(range(nb)):  # the first boundary in order wins, as in the generic kernel
+            L += [f"    lo = w[{lay.bounds + b}] - half",
+                  f"    if lo <= eps < w[{lay.bounds + b}] + half:",
+                  f"        t = (eps - lo) / w[{BLEND}]",
+                  f"        ra = {b}", f"        rb = {b + 1}", "        wb = t * t * (3.0 - 2.0 * t)",
+                  "        n_eval = 2"]
+    L += ["    fa1 = 0.0", "    fa2 = 0.0", "    fb1 = 0.0", "    fb2 = 0.0",
+          "    for j in range(n_eval):",
+          "        k = ra if j == 0 else rb",
+          "        g1 = 0.0", "        g2 = 0.0"]
+    for r in range(len(regions)):
+        L.append(f"        {'if' if r == 0 else 'elif'} k == {r}:")
+        L += _region_source(r, regions[r], act, lay, " " * 12)
+    L += ["        if j == 0:", "            fa1 = g1", "            fa2 = g2",
+          "        else:", "            fb1 = g1", "            fb2 = g2",
+          "    if n_eval == 2:",
+          "        return (1.0 - wb) * fa1 + wb * fb1, (1.0 - wb) * fa2 + wb * fb2",
+          "    return fa1, fa2"]
+    return "\n".join(L) + "\n"
+
+
+_COMPILED: dict[tuple, Any] = {}
+#: shape key -> seconds its one-state kernel took to compile, in this process
+compile_seconds: dict[tuple, float] = {}
+
+
+def compiled_kernel(key):
+    """The one-state kernel of a model shape, compiled once per process (``kernel_source``)."""
+    fn = _COMPILED.get(key)
+    if fn is None:
+        source = kernel_source(key)
+        # a module name outside the package: the integrator takes its uncached loops for this kernel
+        # (numba cannot cache a function generated at run time; see rotor.integrate._library_types)
+        namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "tanh64": tanh64}
+        exec(compile(source, f"<surrogate kernel {len(_COMPILED)}>", "exec"), namespace)
+        fn = njit(error_model="numpy", fastmath={"contract", "reassoc"})(namespace["surrogate_kernel"])
+        t0 = time.perf_counter()
+        fn.compile((types.float64[::1], types.float64, types.float64, types.float64, types.float64))
+        compile_seconds[key] = time.perf_counter() - t0
+        _COMPILED[key] = fn
+    return fn
+
+
+def fast_force_kernel(model):
+    """``(fn, params)``: the one-state kernel of ``model``'s shape and the model's parameter vector.
+
+    Parameters
+    ----------
+    model : SurrogateForceModel
+        Its ``_fast_weights`` (``pack``) is the parameter vector; the model's domain counter and setting
+        (sleeve) are views of it, so counting and moving the sleeve work as with the generic kernel.
+
+    Returns
+    -------
+    fn : numba dispatcher
+        ``fn(params, x1, x2, v1, v2) -> (F1, F2)`` [N], compiled for the model's shape (``shape_key``).
+    params : ndarray
+        The parameter vector (``Layout``).
+    """
+    return compiled_kernel(model._fast_key), model._fast_weights
+
+
+# ---------------------------------------------------------------------------------------------- batched
+
+#: states per tile of a region's network evaluation (the hidden activations of a tile, 64 x TILE
+#: float64, stay within the second-level cache)
+TILE = 128
+
+
+class BatchParams(NamedTuple):
+    """Parameters of ``forces_batch`` (made by ``batch_params``)."""
+
+    weights: np.ndarray      # flat folded weights, float64 or float32 (the network arithmetic's type)
+    tables: np.ndarray       # (R, L, 4) int64 per region and layer [W offset, b offset, n_in, n_out], W (out, in)
+    n_layers: np.ndarray     # (R,) int64
+    damping_tables: np.ndarray  # (R, L, 4) the damping-matrix networks' layers (damping structure)
+    damping_n_layers: np.ndarray  # (R,) int64 (0: plain structure)
+    regions: np.ndarray      # (R, 8) float64 [kind, frame, n_extra, sleeve-aware, c, omega, F_scale, power]
+    boundaries: np.ndarray   # (R-1,) eccentricity ratios between the regions
+    blend_width: float
+    domain: np.ndarray       # (S, 3) [eps_low, eps_high, v_max]
+    eps_max: float
+    counter: np.ndarray      # the model's domain counter (float64 view, mutable)
+    setting: np.ndarray      # the model's setting [1/c^2, sleeve] (view, mutable)
+    activation: int          # 0 tanh, 1 relu, 2 silu, 3 sigmoid
+    width: int               # widest layer
+
+
+def _flat_tables(chains, dtype):
+    """[region][layers (W (out, in), b)] -> flat weights of ``dtype`` and an (R, L, 4) table."""
+    flat, tabs, off = [], [], 0
+    for layers in chains:
+        t = []
+        for W, b in layers:
+            t.append([off, off + W.size, W.shape[1], W.shape[0]])
+            flat += [np.ascontiguousarray(W).ravel(), b]
+            off += W.size + b.size
+        tabs.append(t)
+    table = np.zeros((len(chains), max([len(t) for t in tabs] + [1]), 4), dtype=np.int64)
+    for r, t in enumerate(tabs):
+        if t:
+            table[r, :len(t)] = t
+    weights = np.concatenate(flat) if flat else np.zeros(1)
+    return weights.astype(dtype), table
+
+
+def batch_params(model, dtype: str = "float64") -> BatchParams:
+    """``forces_batch``'s parameters of ``model``, its network arithmetic in ``dtype``.
+
+    Parameters
+    ----------
+    model : SurrogateForceModel
+    dtype : {"float64", "float32"}, default "float64"
+        float32 runs the networks (inputs, weights, activations) in single precision with ``tanh32``; the
+        routing, the scalings and the blend stay float64.  Forces within 1e-5 relative of float64 (tested).
+
+    Returns
+    -------
+    BatchParams
+    """
+    if dtype not in ("float64", "float32"):
+        raise ValueError(f"dtype must be 'float64' or 'float32', got {dtype!r}")
+    folded = _folded_networks(model)
+    static = [s for s, _ in folded]
+    damping = [d for _, d in folded]
+    # the damping chains follow the static ones in one flat array
+    w_s, t_s = _flat_tables(static, dtype)
+    w_d, t_d = _flat_tables(damping, dtype)
+    t_d = t_d.copy()
+    t_d[:, :, :2] += w_s.size
+    rows = []
+    for sc in model.scalings:
+        row = sc.kernel_row()
+        rows.append([row[0], row[19], row[20], row[21], sc.clearance, sc.omega, sc.force_scale, sc.power])
+    width = max([W.shape[0] for s, d in folded for W, _ in s + d] + [4])
+    return BatchParams(np.concatenate([w_s, w_d]), t_s, np.array([len(s) for s in static], dtype=np.int64),
+                       t_d, np.array([len(d) for d in damping], dtype=np.int64), np.array(rows, dtype=np.float64),
+                       np.ascontiguousarray(model.boundaries if len(model.boundaries) else np.zeros(0),
+                                            dtype=np.float64),
+                       float(model.blend_width), np.ascontiguousarray(model.domain, dtype=np.float64),
+                       float(model.eps_max), model._counter, model._setting, _ACT[model.activation], int(width))
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract", "reassoc"})
+def _activate_tile(dst, n_out, n, act, f32):
+    for o in range(n_out):
+        if act == 0:
+            if f32:
+                for p in range(n):
+                    dst[o, p] = tanh32(dst[o, p])
+            else:
+                for p in range(n):
+                    dst[o, p] = tanh64(dst[o, p])
+        elif act == 1:
+            for p in range(n):
+                dst[o, p] = max(dst[o, p], 0.0)
+        elif act == 2:
+            for p in range(n):
+                dst[o, p] = dst[o, p] / (1.0 + math.exp(-dst[o, p]))
+        else:
+            for p in range(n):
+                dst[o, p] = 1.0 / (1.0 + math.exp(-dst[o, p]))
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract", "reassoc"})
+def _mlp_tile(w, table, n_layers, act, f32, z, buf_a, buf_b, n):
+    """One network on the n states of a tile, states along the rows' vector lanes: z (n_in, n) ->
+    the buffer holding (n_out, n).  Dense products written as axpy updates over the tile."""
+    src = z
+    for layer in range(n_layers):
+        w_off, b_off, n_in, n_out = table[layer, 0], table[layer, 1], table[layer, 2], table[layer, 3]
+        dst = buf_a if layer % 2 == 0 else buf_b
+        for o in range(n_out):
+            bo = w[b_off + o]
+            for p in range(n):
+                dst[o, p] = bo
+            for i in range(n_in):
+                c = w[w_off + o * n_in + i]
+                for p in range(n):
+                    dst[o, p] += c * src[i, p]
+        if layer < n_layers - 1:
+            _activate_tile(dst, n_out, n, act, f32)
+        src = dst
+    return src
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract", "reassoc"})
+def forces_batch(bp, x, v, out):
+    """Film forces [N] of the states (x (N, 2) [m], v (N, 2) [m/s]) into ``out`` (N, 2), counting the states
+    outside the training domain in the model's counter as the one-state kernels do.
+
+    Each state goes to its region (a state within a blend zone to both neighbours, with the smoothstep
+    weights); each region's network runs on tiles of its states as dense products; the forces are blended
+    and turned back into the (X1, X2) frame.
+    """
+    n = x.shape[0]
+    nr = bp.regions.shape[0]
+    nb = bp.boundaries.shape[0]
+    inv_c2 = bp.setting[0]
+    blend = bp.blend_width
+    dom = bp.domain
+    n_dom = dom.shape[0]
+    f32 = bp.weights.itemsize == 4
+    # 1. route: region(s) and weight(s) of every state, the domain count
+    ra = np.empty(n, dtype=np.int64)
+    rb = np.empty(n, dtype=np.int64)
+    wb = np.empty(n)
+    count = np.zeros(nr, dtype=np.int64)
+    outside = 0
+    for p in range(n):
+        x1, x2, v1, v2 = x[p, 0], x[p, 1], v[p, 0], v[p, 1]
+        eps = math.sqrt((x1 * x1 + x2 * x2) * inv_c2)
+        vout = False
+        for s in range(n_dom):
+            if dom[s, 0] <= eps < dom[s, 1] or (s == n_dom - 1 and eps >= dom[s, 1]):
+                vout = abs(v1) > dom[s, 2] or abs(v2) > dom[s, 2]
+                break
+        if eps > bp.eps_max or vout:
+            outside += 1
+        r = 0
+        while r < nb and eps >= bp.boundaries[r]:
+            r += 1
+        ra[p] = r
+        rb[p] = -1
+        wb[p] = 0.0
+        if blend > 0.0:
+            for b in range(nb):
+                lo = bp.boundaries[b] - 0.5 * blend
+                if lo <= eps < bp.boundaries[b] + 0.5 * blend:
+                    t = (eps - lo) / blend
+                    ra[p] = b
+                    rb[p] = b + 1
+                    wb[p] = t * t * (3.0 - 2.0 * t)
+                    break
+        count[ra[p]] += 1
+        if rb[p] >= 0:
+            count[rb[p]] += 1
+        out[p, 0] = 0.0
+        out[p, 1] = 0.0
+    bp.counter[0] += outside
+    # 2. each region's entries (state, weight), in state order
+    start = np.zeros(nr + 1, dtype=np.int64)
+    for r in range(nr):
+        start[r + 1] = start[r] + count[r]
+    fill = start[:nr].copy()
+    ent = np.empty(start[nr], dtype=np.int64)
+    ent_w = np.empty(start[nr])
+    for p in range(n):
+        k = fill[ra[p]]
+        ent[k] = p
+        ent_w[k] = 1.0 - wb[p] if rb[p] >= 0 else 1.0
+        fill[ra[p]] = k + 1
+        if rb[p] >= 0:
+            k = fill[rb[p]]
+            ent[k] = p
+            ent_w[k] = wb[p]
+            fill[rb[p]] = k + 1
+    # 3. each region's network on tiles
+    wdt = bp.weights
+    z = np.empty((8, TILE), dtype=wdt.dtype)
+    buf_a = np.empty((bp.width, TILE), dtype=wdt.dtype)
+    buf_b = np.empty((bp.width, TILE), dtype=wdt.dtype)
+    post = np.empty((5, TILE))  # gain, e_r (2), raw velocity inputs (2, damping structure)
+    for r in range(nr):
+        kind, frame, n_extra = bp.regions[r, 0], bp.regions[r, 1], int(bp.regions[r, 2])
+        physics = kind >= 1.0
+        polar = frame >= 1.0
+        for t0 in range(start[r], start[r + 1], TILE):
+            m = min(TILE, start[r + 1] - t0)
+            for j in range(m):
+                p = ent[t0 + j]
+                x1, x2, v1, v2 = x[p, 0], x[p, 1], v[p, 0], v[p, 1]
+                c, omega, fscale = bp.regions[r, 4], bp.regions[r, 5], bp.regions[r, 6]
+                if bp.regions[r, 3] == 1.0:
+                    fscale = fscale * c * c * inv_c2
+                    c = 1.0 / math.sqrt(inv_c2)
+                e2 = (x1 * x1 + x2 * x2) * inv_c2
+                drive = 1.0
+                er1, er2 = 0.0, 1.0
+                if polar:
+                    rr = math.sqrt(x1 * x1 + x2 * x2)
+                    at0 = 1.0 if rr == 0.0 else 0.0
+                    safe = rr + at0
+                    er1 = x1 / safe
+                    er2 = x2 / safe + at0
+                    cw = c * omega
+                    z0 = rr / c
+                    z1 = (v1 * er1 + v2 * er2) / cw
+                    z2 = (v1 * er2 - v2 * er1) / cw
+                    if frame == 2.0:
+                        ua = z0 - 2.0 * z2
+                        ub = 2.0 * z1
+                        drive = math.sqrt(ua * ua + ub * ub)
+                        zero = 1.0 if drive == 0.0 else 0.0
+                        z1 = ua / (drive + zero) + zero
+                        z2 = ub / (drive + zero)
+                    z[0, j], z[1, j], z[2, j] = z0, z1, z2
+                    n_in = 3
+                    post[3, j], post[4, j] = z1, z2
+                else:
+                    if physics:
+                        z0, z1, z2, z3 = x1 / c, x2 / c, v1 / (c * omega), v2 / (c * omega)
+                    else:
+                        z0, z1, z2, z3 = x1, x2, v1, v2
+                    z[0, j], z[1, j], z[2, j], z[3, j] = z0, z1, z2, z3
+                    n_in = 4
+                    post[3, j], post[4, j] = z2, z3
+                for k in range(n_extra):
+                    z[n_in + k, j] = bp.setting[1 + k]
+                g = 1.0
+                if physics:
+                    d = 1.0 - e2
+                    g = fscale / (d * math.sqrt(d)) if bp.regions[r, 7] == 1.5 else fscale / d ** bp.regions[r, 7]
+                    if kind == 2.0:
+                        g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)
+                    g *= drive
+                post[0, j], post[1, j], post[2, j] = g, er1, er2
+            y = _mlp_tile(wdt, bp.tables[r], bp.n_layers[r], bp.activation, f32, z, buf_a, buf_b, m)
+            y1 = np.empty(m)
+            y2 = np.empty(m)
+            for j in range(m):
+                y1[j] = y[0, j]
+                y2[j] = y[1, j]
+            if bp.damping_n_layers[r] > 0:
+                dm = _mlp_tile(wdt, bp.damping_tables[r], bp.damping_n_layers[r], bp.activation, f32, z, buf_a,
+                               buf_b, m)
+                for j in range(m):
+                    w1, w2 = post[3, j], post[4, j]
+                    y1[j] += dm[0, j] * w1 + dm[1, j] * w2
+                    y2[j] += dm[2, j] * w1 + dm[3, j] * w2
+            for j in range(m):
+                p = ent[t0 + j]
+                g, er1, er2 = post[0, j], post[1, j], post[2, j]
+                f1 = y1[j] * g
+                f2 = y2[j] * g
+                if polar:
+                    f1, f2 = f1 * er1 + f2 * er2, f1 * er2 - f2 * er1
+                out[p, 0] += ent_w[t0 + j] * f1
+                out[p, 1] += ent_w[t0 + j] * f2

@@ -1,0 +1,219 @@
+"""The surrogates' fast kernels (``fluidfilm.surrogate.kernels``) against the generic kernel and libm.
+
+The generic kernel ``inference.surrogate_force`` is the specification (it is itself checked against the
+pre-refactor values in tests/test_force_model.py and against the Lightning module in test_surrogate.py);
+the kernels generated per model shape must give its forces to round-off, count the same states outside
+the training domain, and drive ``simulate`` along the same orbit.
+"""
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import pytest
+from numba import njit
+
+import golden_models as gm
+from fluidfilm import Rotor, paper_bearing, simulate
+from fluidfilm.perf.speed import best_shaped_surrogate, sample_states
+from fluidfilm.surrogate import SurrogateForceModel
+from fluidfilm.surrogate.inference import surrogate_force
+from fluidfilm.surrogate.kernels import compile_seconds, compiled_kernel, shape_key, tanh32, tanh64
+
+#: bounds stated in the module doc: tanh64 against math.tanh (relative, float64), tanh32 (relative, its
+#: float32 arithmetic against math.tanh of the same float32 input)
+TANH64_REL = 1.5e-15
+TANH32_REL = 4e-7
+#: the fast kernel against the generic one: |F_fast - F_generic| / |F_generic| per state (measured: 3e-14
+#: at most; the folded scalings and summation order differ only by rounding)
+KERNEL_REL = 1e-12
+
+
+@njit
+def _tanh64_all(x, out):
+    for i in range(x.size):
+        out[i] = tanh64(x[i])
+
+
+@njit
+def _tanh32_all(x, out):
+    for i in range(x.size):
+        out[i] = tanh32(x[i])
+
+
+def _dense_grid():
+    x = np.linspace(-30.0, 30.0, 3_000_001)
+    return np.concatenate([x, np.geomspace(1e-300, 1e-3, 2001), -np.geomspace(1e-300, 1e-3, 2001)])
+
+
+def test_tanh64_is_within_its_bound_of_libm():
+    x = _dense_grid()
+    y = np.empty_like(x)
+    _tanh64_all(x, y)
+    ref = np.array([math.tanh(t) for t in x[::50]] + [math.tanh(t) for t in x[-4002:]])
+    got = np.concatenate([y[::50], y[-4002:]])
+    rel = np.abs(got - ref) / np.abs(ref)
+    assert rel.max() < TANH64_REL, rel.max()
+    # the whole grid against numpy's tanh (libm as well), and the exact points
+    np.testing.assert_allclose(y, np.tanh(x), rtol=TANH64_REL, atol=0.0)
+    assert tanh64(0.0) == 0.0 and tanh64(40.0) == 1.0 and tanh64(-1e300) == -1.0
+    y_neg = np.empty_like(x)
+    _tanh64_all(-x, y_neg)
+    assert np.array_equal(y_neg, -y)  # odd
+
+
+def test_tanh32_is_within_its_bound_of_libm():
+    x = _dense_grid().astype(np.float32)
+    x = x[np.isfinite(x) & (x != 0)]
+    y = np.empty_like(x)
+    _tanh32_all(x, y)
+    assert y.dtype == np.float32
+    ref = np.tanh(x.astype(np.float64))
+    rel = np.abs(y.astype(np.float64) - ref) / np.abs(ref)
+    assert rel.max() < TANH32_REL, rel.max()
+
+
+def _surrogates():
+    out = {name: (m, s) for name, (m, s) in gm.models().items() if isinstance(m, SurrogateForceModel)}
+    out["best_shaped"] = (best_shaped_surrogate(paper_bearing(), restoring=False), None)
+    return out
+
+
+def _generic(model, X, V):
+    return np.array([surrogate_force(model.params, *x, *v) for x, v in zip(X, V)])
+
+
+@pytest.mark.parametrize("name", sorted(_surrogates()))
+def test_the_fast_kernel_equals_the_generic_one(name):
+    model, sleeve = _surrogates()[name]
+    if sleeve is not None:
+        model.set_sleeve(sleeve)
+    X, V = gm.states(model, n=3000, seed=11)
+    if name == "best_shaped":  # the blend zones of its five regions covered densely
+        X, V = sample_states(model.clearance, n=3000, eps_max=0.93, v_max=0.1, seed=4)
+    fn, params = model.force_kernel
+    fast = np.array([fn(params, *x, *v) for x, v in zip(X, V)])
+    model.reset_domain_counter()
+    generic = _generic(model, X, V)
+    n_generic = model.n_outside_domain
+    model.reset_domain_counter()
+    fast_again = np.array([fn(params, *x, *v) for x, v in zip(X, V)])
+    assert model.n_outside_domain == n_generic  # counted alike
+    assert np.array_equal(fast, fast_again)
+    rel = np.linalg.norm(fast - generic, axis=1) / np.linalg.norm(generic, axis=1)
+    assert rel.max() < KERNEL_REL, (name, rel.max())
+    assert fn is compiled_kernel(shape_key(model)) and shape_key(model) in compile_seconds
+
+
+def test_the_sleeve_moves_the_fast_kernel_too():
+    model, _ = gm.models()["surrogate_sleeve"]
+    X, V = gm.states(model, n=50, seed=2)
+    fn, params = model.force_kernel
+    forces = []
+    for sleeve in (-0.6e-3, 0.0, 0.5e-3):
+        model.set_sleeve(sleeve)
+        forces.append(np.array([fn(params, *x, *v) for x, v in zip(X, V)]))
+        np.testing.assert_allclose(forces[-1], _generic(model, X, V), rtol=KERNEL_REL, atol=0.0)
+    assert not np.allclose(forces[0], forces[2], rtol=1e-3)  # the sleeve reached the kernel
+
+
+def test_the_fast_kernel_counts_each_state_outside_the_domain_as_the_generic_one():
+    model, _ = gm.models()["surrogate_split"]  # two velocity bounds and an eps_max below 1
+    X, V = gm.states(model, n=400, seed=3)
+    inside = model.validity.contains(X, V, model.clearance)
+    assert 0 < inside.sum() < len(inside)
+    fn, params = model.force_kernel
+    for x, v, ok in zip(X, V, inside):
+        model.reset_domain_counter()
+        fn(params, *x, *v)
+        assert model.n_outside_domain == (0 if ok else 1)
+
+
+def test_models_of_one_shape_share_one_compiled_kernel():
+    a, b = best_shaped_surrogate(paper_bearing(), seed=1), best_shaped_surrogate(paper_bearing(), seed=2)
+    assert shape_key(a) == shape_key(b) and a.force_kernel[0] is b.force_kernel[0]
+    assert not np.array_equal(a.force_kernel[1], b.force_kernel[1])
+    assert compile_seconds[shape_key(a)] < 30.0  # recorded (about a second on the project machine)
+
+
+class _GenericKernelModel(SurrogateForceModel):
+    """The same model driven through the generic kernel (the pre-fast-kernel integrator input)."""
+
+    @property
+    def force_kernel(self):
+        return surrogate_force, self.params
+
+
+def test_simulate_follows_the_same_orbit_and_counts_the_same_with_the_fast_kernel():
+    model = best_shaped_surrogate(paper_bearing(), seed=3)  # restoring: the orbit stays inside the clearance
+    # a tight velocity bound: part of the orbit lies outside the domain
+    model = SurrogateForceModel(model.bearing, model.networks, model.scalings, "tanh", model.boundaries,
+                                model.blend_width, [[0.0, 0.95, 0.02]], 0.95)
+    generic = copy.copy(model)
+    generic.__class__ = _GenericKernelModel
+    rotor = Rotor(mass=2.5, imbalance=2e-4 * 2.5)
+    x0 = [0.0, 0.5 * model.clearance]
+    with pytest.warns(RuntimeWarning):
+        fast = simulate(model, rotor, t_end=0.01, x0=x0)
+    with pytest.warns(RuntimeWarning):
+        slow = simulate(generic, rotor, t_end=0.01, x0=x0)
+    assert fast.n_force_evals == slow.n_force_evals > 0
+    assert 0 < fast.n_outside_domain == slow.n_outside_domain < fast.n_force_evals
+    scale = np.abs(slow.x).max()
+    np.testing.assert_allclose(fast.x, slow.x, rtol=0.0, atol=1e-10 * scale)
+    assert fast.status == slow.status
+
+
+# ---------------------------------------------------------------------------------------------- batched
+
+#: float32 network arithmetic against float64: |F32 - F64| / |F64| per state
+FLOAT32_REL = 1e-5
+
+
+def _batch(model, X, V, dtype="float64"):
+    from fluidfilm.surrogate.kernels import batch_params, forces_batch
+
+    out = np.empty_like(X)
+    forces_batch(batch_params(model, dtype), np.ascontiguousarray(X), np.ascontiguousarray(V), out)
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(_surrogates()))
+def test_the_batched_kernel_equals_the_generic_one_and_counts_alike(name):
+    model, sleeve = _surrogates()[name]
+    if sleeve is not None:
+        model.set_sleeve(sleeve)
+    # more states than a tile, so every region runs several tiles and a partial one
+    X, V = sample_states(model.clearance, n=2500, eps_max=0.93, v_max=0.1, seed=5)
+    model.reset_domain_counter()
+    generic = _generic(model, X, V)
+    n_generic = model.n_outside_domain
+    model.reset_domain_counter()
+    batched = _batch(model, X, V)
+    assert model.n_outside_domain == n_generic
+    rel = np.linalg.norm(batched - generic, axis=1) / np.linalg.norm(generic, axis=1)
+    assert rel.max() < KERNEL_REL, (name, rel.max())
+
+
+@pytest.mark.parametrize("name", ["best_shaped", "surrogate_std", "surrogate_split"])
+def test_the_float32_network_keeps_the_forces_within_1e_5_of_float64(name):
+    """Relative to max(|F|, the sample's RMS force): near a zero of the force (a random network's output
+    cancelling) float32 rounding of the hidden units is a larger share of a vanishing force (measured: 4e-5
+    of |F| at a state where |F| is 0.7 % of the RMS force, 3.4e-6 of the RMS force there)."""
+    model, _ = _surrogates()[name]
+    X, V = sample_states(model.clearance, n=20000, eps_max=0.93, v_max=0.1, seed=6)
+    f64 = _batch(model, X, V)
+    f32 = _batch(model, X, V, "float32")
+    size = np.linalg.norm(f64, axis=1)
+    err = np.linalg.norm(f32 - f64, axis=1)
+    rel = err / np.maximum(size, np.sqrt(np.mean(size**2)))
+    assert 0.0 < rel.max() < FLOAT32_REL, rel.max()  # float32 indeed (not equal), and within the bound
+    assert np.quantile(err / size, 0.999) < FLOAT32_REL  # and plainly relative but for a few states
+
+
+def test_batch_params_refuses_an_unknown_dtype():
+    from fluidfilm.surrogate.kernels import batch_params
+
+    with pytest.raises(ValueError, match="dtype must be 'float64' or 'float32', got 'float16'"):
+        batch_params(best_shaped_surrogate(paper_bearing()), "float16")
