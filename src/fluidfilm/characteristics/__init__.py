@@ -27,34 +27,9 @@ from fluidfilm.characteristics.static import (equilibrium, film_solver, load_alo
 from fluidfilm.characteristics.stability import lund, operating_point, threshold_speed
 
 
-def bearing_characteristics(model, load, h_rel: float = 1e-4) -> dict:
-    """Equilibrium under the load vector ``load`` = (W1, W2) [N], the eight coefficients (dimensional K, C
-    and dimensionless Kxx..Cyy, x = X1, y = X2) and Lund's stability numbers there (``operating_point``).
-
-    Parameters
-    ----------
-    model : force model
-        Anything with ``.forces(X, V)`` and ``.bearing``.
-    load : array_like, shape (2,)
-        The load vector (W1, W2) [N]; ``load_along_gravity(W)`` for a magnitude along +X2.
-    h_rel : float
-        Relative finite-difference step where the model has no exact derivatives.
-
-    Returns
-    -------
-    dict
-        ``operating_point``'s: the equilibrium's keys, ``K`` [N/m] and ``C`` [N s/m] with
-        K[i, j] = -dF_i/dX_j, the dimensionless ``Kxx``..``Cyy`` and Lund's ``K0``, ``whirl_ratio``,
-        ``critical_mass_bar``.
-
-    Examples
-    --------
-    >>> from fluidfilm import ReynoldsSolver, paper_bearing
-    >>> out = bearing_characteristics(ReynoldsSolver(paper_bearing(), 30, 30), load_along_gravity(24.5))
-    >>> round(out["eps"], 2), round(out["attitude_deg"])
-    (0.59, 61)
-    """
-    return operating_point(model, load, h_rel)
+#: the engineer's name for it: equilibrium under a load vector, the eight coefficients and Lund's stability
+#: numbers there (one function, ``stability.operating_point``)
+bearing_characteristics = operating_point
 
 
 __all__ = ["bearing_characteristics", "equilibrium", "load_along_gravity", "film_solver", "sommerfeld_sweep", "static_point", "lund",
