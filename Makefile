@@ -67,6 +67,7 @@ bench: setup
 	$(PY) benchmarks/bench_rotor.py
 	$(PY) benchmarks/bench_conical.py
 	$(PY) benchmarks/bench_training_step.py
+	$(PY) benchmarks/bench_surrogate_kernels.py
 
 .PHONY: time-tests
 time-tests: setup
