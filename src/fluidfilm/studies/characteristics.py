@@ -22,6 +22,7 @@ from fluidfilm.characteristics import stability as stab
 from fluidfilm.characteristics import static
 from fluidfilm.characteristics import published as pub
 from fluidfilm.characteristics.published import RAIMONDI_BOYD, short_bearing_kc
+from fluidfilm.characteristics.static import load_along_gravity
 
 DIRECT = ("Kxx", "Kyy", "Cxx", "Cyy")
 CROSS = ("Kxy", "Kyx", "Cxy", "Cyx")
@@ -503,7 +504,7 @@ def run(cfg):
         out[key] = {}
         for name in names:
             out[key][name] = coefficient_error_summary(err[(err.against == against) & (err.model == name)])
-    x0 = stab.operating_point(ref, static.load_along_gravity(loads_for_eccentricities(ref, [ch.step_study_eps])[0]))["X"]
+    x0 = stab.operating_point(ref, load_along_gravity(loads_for_eccentricities(ref, [ch.step_study_eps])[0]))["X"]
     steps = step_table(ref, x0, ch.step_study_steps)
     steps_sur = {n: step_table(m, x0, ch.step_study_steps) for n, m in surrogates.items()}
     io.write_csv(tables / "step_csv", pd.concat([steps.assign(model="reference")] +
@@ -517,7 +518,7 @@ def run(cfg):
     thr = {}
     for name, m in models.items():
         try:
-            thr[name] = stab.threshold_speed(m, mass, static.load_along_gravity(load), tuple(ch.threshold.speed_bracket),
+            thr[name] = stab.threshold_speed(m, mass, load_along_gravity(load), tuple(ch.threshold.speed_bracket),
                                              h.get(name, h["default"]))
         except ValueError as err:  # e.g. a poor surrogate unstable over the whole bracket: recorded, not fatal
             thr[name] = {"speed_rad_s": float("nan"), "speed_rpm": float("nan"), "note": str(err)}
