@@ -41,6 +41,8 @@ Kernels:
                              (F1, F2); the compiled force kernel the rotor
                              integrator calls
 - ``forces_batch``           many (X, V) pairs, parallel over pairs
+- ``forces_serial``          the same in one thread (a rotor batch's stage kernel,
+                             whose threads run over chunks of trajectories)
 - ``forces_product``         every velocity at every position, one
                              factorisation per position, parallel over positions
 - ``pressure_field``         the full (n_theta, n_z) field of one state
@@ -285,6 +287,20 @@ def forces_batch(params, x, v, out):
     (``film_force_ss`` for Swift-Stieber, else ``film_force``)."""
     ss = params.cavitation == CAV_SWIFT_STIEBER
     for p in prange(x.shape[0]):
+        if ss:
+            f1, f2 = film_force_ss(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        else:
+            f1, f2 = film_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        out[p, 0] = f1
+        out[p, 1] = f2
+
+
+@njit(cache=True)
+def forces_serial(params, x, v, out):
+    """``forces_batch`` in the calling thread: each row exactly the one-state kernel's force (``simulate_batch``
+    calls it per RK4 stage; its own threads run over chunks of trajectories, numba's pool is not nested)."""
+    ss = params.cavitation == CAV_SWIFT_STIEBER
+    for p in range(x.shape[0]):
         if ss:
             f1, f2 = film_force_ss(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
         else:

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing
-from fluidfilm.core.force_model import ReferenceModel
+from fluidfilm.core.force_model import ReferenceModel, check_precision
 from fluidfilm.core.states import as_state_pairs
 from fluidfilm.reynolds import kernels
 from fluidfilm.reynolds.conical import ConicalReynoldsSolver
@@ -76,6 +76,25 @@ def graded_force_ss(params, x1, x2, v1, v2):
     return kernels.film_force_ss(params.dense, x1, x2, v1, v2)
 
 
+@njit(cache=True)
+def graded_forces(params, x, v, out):
+    """``graded_force`` of every row of x, v (m, 2) into out (m, 2), in the calling thread (``simulate_batch``'s
+    stage kernel; it runs its own threads over chunks of trajectories)."""
+    for p in range(x.shape[0]):
+        f1, f2 = graded_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        out[p, 0] = f1
+        out[p, 1] = f2
+
+
+@njit(cache=True)
+def graded_forces_ss(params, x, v, out):
+    """``graded_forces`` with Swift-Stieber cavitation."""
+    for p in range(x.shape[0]):
+        f1, f2 = graded_force_ss(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        out[p, 0] = f1
+        out[p, 1] = f2
+
+
 class GradedReynoldsModel(ReferenceModel):
     """Reference force model with the paper's grid policy (same interface as ``ReynoldsSolver``).
 
@@ -126,6 +145,7 @@ class GradedReynoldsModel(ReferenceModel):
         self._rebuild()
         ss = cavitation == "swift-stieber"
         self._kernel = graded_force_ss if ss else graded_force
+        self._batch_kernel = graded_forces_ss if ss else graded_forces
 
     def _rebuild(self) -> None:
         self.params = GradedParams(self.coarse.params, self.dense.params, self.eps_threshold * self.clearance)
@@ -159,6 +179,12 @@ class GradedReynoldsModel(ReferenceModel):
     @property
     def force_kernel(self):
         return self._kernel, self.params
+
+    def batch_force_kernel(self, precision: str = "float64", counter=None):
+        """``(graded_forces, params)`` (``core.force_model.BatchForceModel``): each row exactly ``force_kernel``'s
+        force, in float64 whatever ``precision``; nothing to count (``counter`` unused)."""
+        check_precision(precision)
+        return self._batch_kernel, self.params
 
     def grid_for(self, eps) -> tuple[np.ndarray, np.ndarray]:
         """(n_theta, n_z) the policy uses at eccentricity ratio(s) ``eps``."""

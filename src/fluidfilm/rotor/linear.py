@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit
 
 from fluidfilm.core.bearing import JournalBearing
-from fluidfilm.core.force_model import ReferenceModel
+from fluidfilm.core.force_model import ReferenceModel, check_precision
 
 
 class LinearParams(NamedTuple):
@@ -24,6 +24,15 @@ def linear_force(params, x1, x2, v1, v2):
     """Force kernel (``LinearParams``)."""
     k, c = params.stiffness, params.damping
     return -k * x1 - c * v1, -k * x2 - c * v2
+
+
+@njit(cache=True)
+def linear_forces(params, x, v, out):
+    """``linear_force`` of every row of x, v (m, 2) into out (m, 2) (the batched kernel)."""
+    for p in range(x.shape[0]):
+        f1, f2 = linear_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+        out[p, 0] = f1
+        out[p, 1] = f2
 
 
 class LinearBearing(ReferenceModel):
@@ -63,6 +72,11 @@ class LinearBearing(ReferenceModel):
     @property
     def force_kernel(self):
         return linear_force, LinearParams(float(self.stiffness), float(self.damping))
+
+    def batch_force_kernel(self, precision: str = "float64", counter=None):
+        """``(linear_forces, params)`` (``core.force_model.BatchForceModel``), float64 whatever ``precision``."""
+        check_precision(precision)
+        return linear_forces, self.force_kernel[1]
 
     def forces(self, X, V) -> np.ndarray:
         """-K X - C V [N] for positions X [m] and velocities V [m/s], (..., 2) each."""
