@@ -190,14 +190,15 @@ class BatchForceModel(Protocol):
     """A force model with a compiled kernel of many states at once (``simulate_batch`` calls it once per
     RK4 stage for all running trajectories).
 
-    ``batch_force_kernel(precision, counter)`` -> ``(fn, bparams)``: ``fn(bparams, x, v, out)`` writes the
+    ``batch_force_kernel(precision, private)`` -> ``(fn, bparams)``: ``fn(bparams, x, v, out)`` writes the
     forces [N] of the states x (m, 2) [m], v (m, 2) [m/s] (C-contiguous float64) into ``out`` (m, 2), each
     row what ``force_kernel`` gives for that state (to round-off; exactly, for the reference models).
     ``precision`` "float64" or "float32": the arithmetic of a surrogate's networks (a reference model
-    computes in float64 either way).  ``counter``: None, or a float64 array of one element that ``fn``
-    adds its evaluations outside ``validity`` to instead of the model's own counter, so that calls on
-    different such parameters may run in concurrent threads (``bparams`` holds no other mutable state);
-    ``count_outside(n)`` adds those counts back to the model's counter afterwards.
+    computes in float64 either way).  ``private=True``: parameters with their own counters (domain,
+    ensemble flags) and nothing else mutable shared, so that calls on different private parameters may
+    run in concurrent threads; ``merge_counts(bparams)`` adds a private set's counts to the model's own.
+    ``batch_force_kernel`` returns None where this instance has no batched kernel (an ensemble whose
+    members have none); ``simulate_batch`` then steps each trajectory with ``force_kernel``.
 
     Examples
     --------
@@ -209,9 +210,9 @@ class BatchForceModel(Protocol):
     """
 
     def batch_force_kernel(self, precision: str = "float64",
-                           counter: np.ndarray | None = None) -> tuple[BatchForceKernel, Any]: ...
+                           private: bool = False) -> tuple[BatchForceKernel, Any] | None: ...
 
-    def count_outside(self, n: int) -> None: ...
+    def merge_counts(self, bparams: Any) -> None: ...
 
 
 def check_precision(precision: str) -> str:
@@ -308,7 +309,7 @@ class ReferenceModel:
         """Evaluations outside the validity domain since the last reset: none for a physics-based model."""
         return 0
 
-    def count_outside(self, n: int) -> None:
+    def merge_counts(self, bparams: Any) -> None:
         """Nothing is counted (``BatchForceModel``)."""
 
 

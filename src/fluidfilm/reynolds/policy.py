@@ -180,9 +180,9 @@ class GradedReynoldsModel(ReferenceModel):
     def force_kernel(self):
         return self._kernel, self.params
 
-    def batch_force_kernel(self, precision: str = "float64", counter=None):
+    def batch_force_kernel(self, precision: str = "float64", private: bool = False):
         """``(graded_forces, params)`` (``core.force_model.BatchForceModel``): each row exactly ``force_kernel``'s
-        force, in float64 whatever ``precision``; nothing to count (``counter`` unused)."""
+        force, in float64 whatever ``precision``; nothing to count, nothing mutable (``private`` changes nothing)."""
         check_precision(precision)
         return self._batch_kernel, self.params
 

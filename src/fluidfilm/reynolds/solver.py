@@ -213,9 +213,9 @@ class ReynoldsSolver(_GridSolver):
         """(compiled function, params): ``fn(params, x1, x2, v1, v2) -> (F1, F2)`` for compiled callers."""
         return self._kernel, self.params
 
-    def batch_force_kernel(self, precision: str = "float64", counter=None):
+    def batch_force_kernel(self, precision: str = "float64", private: bool = False):
         """``(kernels.forces_serial, params)`` (``core.force_model.BatchForceModel``): each row exactly
-        ``force_kernel``'s force, in float64 whatever ``precision``; nothing to count (``counter`` unused)."""
+        ``force_kernel``'s force, in float64 whatever ``precision``; nothing to count, nothing mutable (``private`` changes nothing)."""
         check_precision(precision)
         return kernels.forces_serial, self.params
 

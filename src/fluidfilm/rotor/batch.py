@@ -340,17 +340,21 @@ def _thread_count(threads, n: int) -> int:
 
 def _run_stages(model, precision, n_threads, consts, x0, v0, *args) -> None:
     """``_rk4_stages`` over ``n_threads`` contiguous chunks of the batch, each chunk in its own thread with
-    its own batched-kernel parameters (their own domain counter: nothing mutable is shared), the counts
-    added to the model's counter afterwards."""
+    its own private batched-kernel parameters (their own counters: nothing mutable is shared), the counts
+    merged into the model's afterwards."""
     (t0, dt, n_steps, record_every, eps_stop, eps_substep, max_substeps, out_x, out_v, n_rec, status, t_stop,
      n_evals) = args
     n = x0.shape[0]
     edges = np.linspace(0, n, n_threads + 1).round().astype(int)
-    counters = [np.zeros(1) for _ in range(n_threads)]
+    kernels = []
+    for _ in range(n_threads):
+        kernel = model.batch_force_kernel(precision, private=True)
+        assert kernel is not None  # checked by the caller
+        kernels.append(kernel)
 
     def chunk(c: int) -> None:
         lo, hi = int(edges[c]), int(edges[c + 1])
-        fn, bp = model.batch_force_kernel(precision, counter=counters[c])
+        fn, bp = kernels[c]
         run_loop(_rk4_stages, _rk4_stages_uncached, fn, bp, consts[lo:hi], x0[lo:hi], v0[lo:hi], t0, dt, n_steps,
                  record_every, eps_stop, eps_substep, max_substeps, out_x[lo:hi], out_v[lo:hi], n_rec[lo:hi],
                  status[lo:hi], t_stop[lo:hi], n_evals[lo:hi])
@@ -361,7 +365,8 @@ def _run_stages(model, precision, n_threads, consts, x0, v0, *args) -> None:
         # the compiled loop releases the GIL (nogil): the chunks run in parallel
         with ThreadPoolExecutor(max_workers=n_threads) as pool:
             list(pool.map(chunk, range(n_threads)))
-    model.count_outside(int(sum(c[0] for c in counters)))
+    for _, bp in kernels:
+        model.merge_counts(bp)
 
 
 def _rows(value, n: int, what: str) -> np.ndarray:
@@ -465,7 +470,8 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     saved = setting.copy()
     t_start = time.perf_counter()
     try:
-        if stage_batched and settings is None and isinstance(model, BatchForceModel):
+        if stage_batched and settings is None and isinstance(model, BatchForceModel) and \
+                model.batch_force_kernel(precision) is not None:
             _run_stages(model, precision, n_threads, consts, x0, v0, float(t0), float(dt), n_steps, record_every,
                         float(eps_stop), float(eps_substep), int(max_substeps), out_x, out_v, n_rec, status, t_stop,
                         n_evals)

@@ -73,7 +73,7 @@ class LinearBearing(ReferenceModel):
     def force_kernel(self):
         return linear_force, LinearParams(float(self.stiffness), float(self.damping))
 
-    def batch_force_kernel(self, precision: str = "float64", counter=None):
+    def batch_force_kernel(self, precision: str = "float64", private: bool = False):
         """``(linear_forces, params)`` (``core.force_model.BatchForceModel``), float64 whatever ``precision``."""
         check_precision(precision)
         return linear_forces, self.force_kernel[1]

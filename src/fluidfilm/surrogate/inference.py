@@ -445,20 +445,21 @@ class SurrogateForceModel:
         equal to the generic ``surrogate_force`` on ``self.params`` to round-off; compiled on first use."""
         return fast_force_kernel(self)
 
-    def batch_force_kernel(self, precision: str = "float64", counter=None):
+    def batch_force_kernel(self, precision: str = "float64", private: bool = False):
         """``(surrogate.kernels.forces_batch, BatchParams)`` (``core.force_model.BatchForceModel``): many states
-        per call, the networks in ``precision``; it counts in ``counter`` (a float64 array of one element,
-        e.g. one per thread) where given, else in the model's counter.  The parameters read the model's
-        setting (sleeve) in place; they are built once per precision."""
+        per call, the networks in ``precision``; ``private``: the parameters count in their own domain
+        counter (``merge_counts`` adds it to the model's).  They read the model's setting (sleeve) in place
+        and are built once per precision."""
         check_precision(precision)
         bp = self._batch_params.get(precision)
         if bp is None:
             bp = self._batch_params[precision] = batch_params(self, precision)
-        return forces_batch, (bp if counter is None else bp._replace(counter=counter))
+        return forces_batch, (bp._replace(counter=np.zeros(1)) if private else bp)
 
-    def count_outside(self, n: int) -> None:
-        """Add n evaluations outside the training domain to the counter (``BatchForceModel``)."""
-        self._counter[0] += int(n)
+    def merge_counts(self, bparams: BatchParams) -> None:
+        """Add the domain count of private batch parameters to the model's (``BatchForceModel``)."""
+        if bparams.counter is not self._counter:
+            self._counter[0] += bparams.counter[0]
 
     @property
     def validity(self) -> ValidityDomain:
