@@ -75,8 +75,8 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
     cores (module doc); written unless ``quick``."""
     n = 64 if quick else N_TRAJECTORIES
     all_cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-    arms = [("reference (graded)", reference, {}), ("surrogate f64", model, {}),
-            ("surrogate f32", model, {"precision": "float32"}),
+    arms = [("reference (graded)", reference, {"stage_batched": True}), ("surrogate f64", model, {"stage_batched": True}),
+            ("surrogate f32", model, {"precision": "float32", "stage_batched": True}),
             ("surrogate lockstep (before)", model, {"stage_batched": False})]
     header = ["arm", "threads", "trajectories/s", "ns per force", "n_ok", "vs reference"]
     rows = []

@@ -5,7 +5,7 @@
 - trajectories that stop (contact) stop at the same time with the same state, the others go on;
 - the model's own control setting is restored after a batch; bad input raises a clear error;
 - the stage-batched loop (one batched-kernel call per RK4 stage; the default for models with a batched
-  kernel): to the last bit for the reference models and the linear bearing (their batched kernels give
+  kernel and batches of at least ``STAGE_BATCHED_MIN_N``): to the last bit for the reference models and the linear bearing (their batched kernels give
   the one-state kernel's forces exactly), whatever the threads and against the lockstep loop; for a
   surrogate (batched kernel equal to the one-state kernel to round-off) within 1e-9 c of ``simulate`` in
   float64 and 1e-4 c with float32 networks over case d of the paper, with equal counters; batches mixing a
@@ -40,7 +40,8 @@ def _assert_same(batch, p, single):
     np.testing.assert_allclose(tp.t, single.t, rtol=0, atol=1e-15)
 
 
-def test_batch_of_reference_trajectories_equals_simulate():
+@pytest.mark.parametrize("stage_batched", [False, True])
+def test_batch_of_reference_trajectories_equals_simulate(stage_batched):
     b = paper_bearing()
     solver = ReynoldsSolver(b, 30, 30)
     c = b.clearance
@@ -48,18 +49,20 @@ def test_batch_of_reference_trajectories_equals_simulate():
               [(0.0, (0.0, 0.0)), (5e-4, (0.0, 0.0)), (1e-3, (20.0, 0.0)), (2e-4, (-30.0, 10.0))]]
     x0 = np.array([[0.0, 0.0], [0.3 * c, 0.0], [0.0, 0.5 * c], [-0.2 * c, 0.6 * c]])
     v0 = np.array([[0.0, 0.0], [0.0, 0.01], [0.005, 0.0], [0.0, 0.0]])
-    batch = simulate_batch(solver, rotors, 0.005, 1e-5, x0, v0, record_every=7)
+    batch = simulate_batch(solver, rotors, 0.005, 1e-5, x0, v0, record_every=7, stage_batched=stage_batched)
     assert len(batch) == 4 and batch.ok.all()
     for p in range(4):
         _assert_same(batch, p, simulate(solver, rotors[p], 0.005, 1e-5, x0[p], v0[p], record_every=7))
 
 
-def test_batch_with_contact_stops_only_that_trajectory():
+@pytest.mark.parametrize("stage_batched", [False, True])
+def test_batch_with_contact_stops_only_that_trajectory(stage_batched):
     b = paper_bearing()
     lin = LinearBearing(b, stiffness=1e6, damping=50.0)
     # a soft spring and a heavy static load drive trajectory 1 into the sleeve; 0 stays inside
     rotors = [Rotor(mass=2.5), Rotor(mass=2.5, external_force=(0.0, 400.0))]
-    batch = simulate_batch(lin, rotors, 0.12, 1e-5, record_every=5, t0=0.1)  # t_end: the end time
+    batch = simulate_batch(lin, rotors, 0.12, 1e-5, record_every=5, t0=0.1,  # t_end: the end time
+                           stage_batched=stage_batched)
     assert batch.ok.tolist() == [True, False]
     for p in range(2):
         _assert_same(batch, p, simulate(lin, rotors[p], 0.12, 1e-5, record_every=5, t0=0.1))
@@ -92,6 +95,26 @@ def test_batch_with_per_trajectory_sleeve_equals_simulate_at_each_sleeve():
         _assert_same(batch, p, simulate(model, rotor, 0.004, 1e-5, x0))
 
 
+def test_the_default_loop_depends_on_the_batch_size():
+    """Below ``STAGE_BATCHED_MIN_N`` trajectories the lockstep loop, from it on the stage-batched one: seen in
+    the surrogate's float32 option, which only the stage-batched loop takes."""
+    from fluidfilm.rotor.batch import STAGE_BATCHED_MIN_N
+
+    b = paper_bearing()
+    model = best_shaped_surrogate(b)
+    n = STAGE_BATCHED_MIN_N
+    x0 = np.zeros((n, 2))
+    x0[:, 1] = np.linspace(0.0, 0.4, n) * b.clearance
+    rotor = Rotor(mass=2.5, imbalance=5e-4)
+
+    def run(m, **kw):
+        return simulate_batch(model, rotor, 5e-4, 1e-5, x0[:m], threads=1, **kw).x
+
+    np.testing.assert_array_equal(run(n - 1, precision="float32"), run(n - 1))  # lockstep: float64 kernel
+    assert not np.array_equal(run(n, precision="float32"), run(n))
+    np.testing.assert_array_equal(run(n), run(n, stage_batched=True))
+
+
 def _assert_batches_equal(a, b):
     for name in ("x", "v", "n_recorded", "t_stop", "n_force_evals"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
@@ -112,7 +135,7 @@ def _mixed_linear_batch():
 def test_stage_batched_mixed_batch_equals_simulate_and_the_lockstep_loop_to_the_last_bit():
     lin, rotors, x0 = _mixed_linear_batch()
     n_steps = 2000
-    runs = {threads: simulate_batch(lin, rotors, 0.02, 1e-5, x0, record_every=3, threads=threads)
+    runs = {threads: simulate_batch(lin, rotors, 0.02, 1e-5, x0, record_every=3, threads=threads, stage_batched=True)
             for threads in (1, 2, 3)}
     lockstep = simulate_batch(lin, rotors, 0.02, 1e-5, x0, record_every=3, stage_batched=False)
     batch = runs[1]
@@ -131,7 +154,7 @@ def test_stage_batched_graded_reference_equals_simulate_to_the_last_bit():
     c = b.clearance
     rotor = Rotor(mass=2.5, imbalance=5e-4)
     x0 = np.array([[0.0, 0.0], [0.3 * c, 0.2 * c], [0.0, 0.93 * c]])  # the last starts on the dense grid
-    batch = simulate_batch(model, rotor, 0.003, 1e-5, x0, threads=2)
+    batch = simulate_batch(model, rotor, 0.003, 1e-5, x0, threads=2, stage_batched=True)
     assert batch.n_force_evals[2] > 4 * 300  # substeps near the sleeve
     for p in range(3):
         _assert_same(batch, p, simulate(model, rotor, 0.003, 1e-5, x0[p]))
@@ -169,7 +192,8 @@ def test_stage_batched_surrogate_follows_simulate_over_case_d_in_float64_and_flo
     singles = [simulate(model, rotor, t_end, 1e-5, x0[p], record_every=10) for p in range(4)]
     n_outside = sum(s.n_outside_domain for s in singles)
     for precision, tol in (("float64", SURROGATE_F64_TOL), ("float32", SURROGATE_F32_TOL)):
-        batch = simulate_batch(model, rotor, t_end, 1e-5, x0, record_every=10, threads=1, precision=precision)
+        batch = simulate_batch(model, rotor, t_end, 1e-5, x0, record_every=10, threads=1, precision=precision,
+                               stage_batched=True)
         assert model.n_outside_domain == n_outside, precision
         worst = max(_max_dx(batch, p, singles[p], c) for p in range(4))
         assert worst < tol, (precision, worst)
@@ -177,7 +201,7 @@ def test_stage_batched_surrogate_follows_simulate_over_case_d_in_float64_and_flo
         assert np.hypot(*batch.x[0, :batch.n_recorded[0]].T).max() > 0.1 * c
         # threads split the batch into chunks; a trajectory does not depend on them
         _assert_batches_equal(batch, simulate_batch(model, rotor, t_end, 1e-5, x0, record_every=10, threads=3,
-                                                    precision=precision))
+                                                    precision=precision, stage_batched=True))
         assert model.n_outside_domain == n_outside, precision
 
 
@@ -192,7 +216,7 @@ def test_stage_batched_surrogate_mixed_batch_of_contact_substeps_and_a_normal_or
     rotors = [rotor, dataclasses.replace(rotor, external_force=(0.0, 30000.0)), rotor]
     x0 = np.array([[0.1 * c, 0.0], [0.0, 0.5 * c], [0.0, 0.88 * c]])
     n_steps = 200
-    batch = simulate_batch(model, rotors, 0.002, 1e-5, x0, threads=2)
+    batch = simulate_batch(model, rotors, 0.002, 1e-5, x0, threads=2, stage_batched=True)
     n_outside = model.n_outside_domain  # the whole batch's (simulate resets the counter)
     singles = [simulate(model, rotors[p], 0.002, 1e-5, x0[p]) for p in range(3)]
     assert batch.ok.tolist() == [True, False, True]

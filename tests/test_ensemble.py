@@ -249,7 +249,7 @@ def test_a_batch_of_hybrid_trajectories_equals_simulate_to_the_last_bit(batched_
     c = jb.clearance
     rotors = [Rotor(mass=0.5, imbalance=u) for u in (2e-6, 5e-6, 1e-5)]
     x0 = np.array([[1e-6, 0.0], [0.0, 0.2 * c], [0.3 * c, 0.0]])
-    batch = simulate_batch(hyb, rotors, 0.02, 1e-4, x0, threads=2)
+    batch = simulate_batch(hyb, rotors, 0.02, 1e-4, x0, threads=2, stage_batched=True)
     n_eval, n_fb = hyb.n_evaluations, hyb.n_fallbacks
     total = [0, 0]
     for p in range(3):
