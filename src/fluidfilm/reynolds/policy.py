@@ -78,21 +78,13 @@ def graded_force_ss(params, x1, x2, v1, v2):
 
 @njit(cache=True)
 def graded_forces(params, x, v, out):
-    """``graded_force`` of every row of x, v (m, 2) into out (m, 2), in the calling thread (``simulate_batch``'s
-    stage kernel; it runs its own threads over chunks of trajectories)."""
-    for p in range(x.shape[0]):
-        f1, f2 = graded_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
-        out[p, 0] = f1
-        out[p, 1] = f2
-
-
-@njit(cache=True)
-def graded_forces_ss(params, x, v, out):
-    """``graded_forces`` with Swift-Stieber cavitation."""
-    for p in range(x.shape[0]):
-        f1, f2 = graded_force_ss(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
-        out[p, 0] = f1
-        out[p, 1] = f2
+    """``graded_force`` (``graded_force_ss`` with Swift-Stieber cavitation) of every row of x, v (m, 2) into
+    out (m, 2), in the calling thread (``simulate_batch``'s stage kernel; it runs its own threads over chunks
+    of trajectories)."""
+    if params.coarse.cavitation == kernels.CAV_SWIFT_STIEBER:
+        kernels.kernel_rows(graded_force_ss, params, x, v, out)
+    else:
+        kernels.kernel_rows(graded_force, params, x, v, out)
 
 
 class GradedReynoldsModel(ReferenceModel):
@@ -145,7 +137,6 @@ class GradedReynoldsModel(ReferenceModel):
         self._rebuild()
         ss = cavitation == "swift-stieber"
         self._kernel = graded_force_ss if ss else graded_force
-        self._batch_kernel = graded_forces_ss if ss else graded_forces
 
     def _rebuild(self) -> None:
         self.params = GradedParams(self.coarse.params, self.dense.params, self.eps_threshold * self.clearance)
@@ -184,7 +175,7 @@ class GradedReynoldsModel(ReferenceModel):
         """``(graded_forces, params)`` (``core.force_model.BatchForceModel``): each row exactly ``force_kernel``'s
         force, in float64 whatever ``precision``; nothing to count, nothing mutable (``private`` changes nothing)."""
         check_precision(precision)
-        return self._batch_kernel, self.params
+        return graded_forces, self.params
 
     def grid_for(self, eps) -> tuple[np.ndarray, np.ndarray]:
         """(n_theta, n_z) the policy uses at eccentricity ratio(s) ``eps``."""

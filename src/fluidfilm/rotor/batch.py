@@ -95,6 +95,25 @@ class BatchTrajectory:
                           meta=dict(self.meta))
 
 
+@njit(cache=True, inline="always")
+def _start_row(p, x0, v0, t0, out_x, out_v, n_rec, status, t_stop, n_evals):
+    """Trajectory p's first recorded row and counters (both batch loops)."""
+    out_x[p, 0, 0], out_x[p, 0, 1] = x0[p, 0], x0[p, 1]
+    out_v[p, 0, 0], out_v[p, 0, 1] = v0[p, 0], v0[p, 1]
+    n_rec[p] = 1
+    status[p] = 0
+    t_stop[p] = t0
+    n_evals[p] = 0
+
+
+@njit(cache=True, inline="always")
+def _record_row(p, out_x, out_v, n_rec, x1, x2, v1, v2):
+    r = n_rec[p]
+    out_x[p, r, 0], out_x[p, r, 1] = x1, x2
+    out_v[p, r, 0], out_v[p, r, 1] = v1, v2
+    n_rec[p] = r + 1
+
+
 @njit(cache=True)
 def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
                eps_substep, max_substeps, out_x, out_v, n_rec, status, t_stop, n_evals):
@@ -104,12 +123,7 @@ def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_step
     state = np.empty((n_traj, 4))
     for p in range(n_traj):
         state[p, 0], state[p, 1], state[p, 2], state[p, 3] = x0[p, 0], x0[p, 1], v0[p, 0], v0[p, 1]
-        out_x[p, 0, 0], out_x[p, 0, 1] = x0[p, 0], x0[p, 1]
-        out_v[p, 0, 0], out_v[p, 0, 1] = v0[p, 0], v0[p, 1]
-        n_rec[p] = 1
-        status[p] = 0
-        t_stop[p] = t0
-        n_evals[p] = 0
+        _start_row(p, x0, v0, t0, out_x, out_v, n_rec, status, t_stop, n_evals)
     n_running = n_traj
     for step in range(n_steps):
         if n_running == 0:
@@ -132,10 +146,7 @@ def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_step
                 status[p] = st
                 n_running -= 1
             if st != 0 or (step + 1) % record_every == 0:
-                r = n_rec[p]
-                out_x[p, r, 0], out_x[p, r, 1] = x1, x2
-                out_v[p, r, 0], out_v[p, r, 1] = v1, v2
-                n_rec[p] = r + 1
+                _record_row(p, out_x, out_v, n_rec, x1, x2, v1, v2)
 
 
 # kernels the on-disk cache cannot take (a user's model, an ensemble's members): an uncached twin
@@ -186,6 +197,19 @@ def _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, ax, ay, 
         ay[i] = (f2 + sgn * unb * sph + g2) * inv_m
 
 
+@njit(cache=True, inline="always")
+def _late_stage(f, p1, p2, q1, q2, run, act, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq):
+    """Stage states 3 (f = 0.5: P = a, Q = b) and 4 (f = 1: P = b, Q = c) of RK4: position X + f h (V + h/2 P),
+    velocity V + f h Q, time T + f h; ``_rk4_step``'s expressions (f h = h exactly for f = 1)."""
+    for i in range(m):
+        p = run[act[i]]
+        h = dt / K[act[i]]
+        u1 = V1[p] + 0.5 * h * p1[i]
+        u2 = V2[p] + 0.5 * h * p2[i]
+        qx1[i], qx2[i] = X1[p] + f * h * u1, X2[p] + f * h * u2
+        qv1[i], qv2[i], tq[i] = V1[p] + f * h * q1[i], V2[p] + f * h * q2[i], T[p] + f * h
+
+
 @njit(cache=True, nogil=True)
 def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop, eps_substep, max_substeps,
                 out_x, out_v, n_rec, status, t_stop, n_evals):
@@ -206,12 +230,7 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
     run = np.empty(n, dtype=np.int64)
     for p in range(n):
         X1[p], X2[p], V1[p], V2[p], T[p] = x0[p, 0], x0[p, 1], v0[p, 0], v0[p, 1], t0
-        out_x[p, 0, 0], out_x[p, 0, 1] = x0[p, 0], x0[p, 1]
-        out_v[p, 0, 0], out_v[p, 0, 1] = v0[p, 0], v0[p, 1]
-        n_rec[p] = 1
-        status[p] = 0
-        t_stop[p] = t0
-        n_evals[p] = 0
+        _start_row(p, x0, v0, t0, out_x, out_v, n_rec, status, t_stop, n_evals)
         run[p] = p
     K = np.empty(n, dtype=np.int64)   # per entry of run: substeps of this step
     ST = np.empty(n, dtype=np.int64)  # per entry of run: status of this step
@@ -264,21 +283,9 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
                 qx1[i], qx2[i] = X1[p] + 0.5 * h * V1[p], X2[p] + 0.5 * h * V2[p]
                 qv1[i], qv2[i], tq[i] = V1[p] + 0.5 * h * a1[i], V2[p] + 0.5 * h * a2[i], T[p] + 0.5 * h
             _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, b1, b2, ok2, xs, vs, fs, rows)
-            for i in range(m):
-                p = run[act[i]]
-                h = dt / K[act[i]]
-                kx1 = V1[p] + 0.5 * h * a1[i]
-                kx2 = V2[p] + 0.5 * h * a2[i]
-                qx1[i], qx2[i] = X1[p] + 0.5 * h * kx1, X2[p] + 0.5 * h * kx2
-                qv1[i], qv2[i] = V1[p] + 0.5 * h * b1[i], V2[p] + 0.5 * h * b2[i]
+            _late_stage(0.5, a1, a2, b1, b2, run, act, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
             _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, c1, c2, ok3, xs, vs, fs, rows)
-            for i in range(m):
-                p = run[act[i]]
-                h = dt / K[act[i]]
-                lx1 = V1[p] + 0.5 * h * b1[i]
-                lx2 = V2[p] + 0.5 * h * b2[i]
-                qx1[i], qx2[i] = X1[p] + h * lx1, X2[p] + h * lx2
-                qv1[i], qv2[i], tq[i] = V1[p] + h * c1[i], V2[p] + h * c2[i], T[p] + h
+            _late_stage(1.0, b1, b2, c1, c2, run, act, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
             _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, d1, d2, ok4, xs, vs, fs, rows)
             for i in range(m):
                 j = act[i]
@@ -316,10 +323,7 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
             if st != 0:
                 status[p] = st
             if st != 0 or (step + 1) % record_every == 0:
-                r = n_rec[p]
-                out_x[p, r, 0], out_x[p, r, 1] = X1[p], X2[p]
-                out_v[p, r, 0], out_v[p, r, 1] = V1[p], V2[p]
-                n_rec[p] = r + 1
+                _record_row(p, out_x, out_v, n_rec, X1[p], X2[p], V1[p], V2[p])
             if st == 0:
                 run[keep] = p
                 keep += 1

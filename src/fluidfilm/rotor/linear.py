@@ -12,6 +12,7 @@ from numba import njit
 
 from fluidfilm.core.bearing import JournalBearing
 from fluidfilm.core.force_model import ReferenceModel, check_precision
+from fluidfilm.reynolds.kernels import kernel_rows
 
 
 class LinearParams(NamedTuple):
@@ -29,10 +30,7 @@ def linear_force(params, x1, x2, v1, v2):
 @njit(cache=True)
 def linear_forces(params, x, v, out):
     """``linear_force`` of every row of x, v (m, 2) into out (m, 2) (the batched kernel)."""
-    for p in range(x.shape[0]):
-        f1, f2 = linear_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
-        out[p, 0] = f1
-        out[p, 1] = f2
+    kernel_rows(linear_force, params, x, v, out)
 
 
 class LinearBearing(ReferenceModel):
