@@ -81,8 +81,9 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
     header = ["arm", "threads", "trajectories/s", "ns per force", "n_ok", "vs reference"]
     rows = []
     ref_rate = {}
+    load = os.getloadavg()
     print(f"batched trajectories: N = {n}, {T_END * 1e3:g} ms each at dt = 1e-5 s (simulate_batch)")
-    print(("{:>28}{:>9}{:>16}{:>14}{:>8}{:>14}").format(*header))
+    print(("{:>28}{:>9}{:>16}{:>14}{:>11}{:>14}").format(*header))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         for threads in sorted({1, all_cores}):
@@ -97,15 +98,16 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
                 row = [name, threads, f"{rate:.1f}", f"{1e9 * r['wall_s'] / r['n_force_evals']:.0f}",
                        f"{r['n_ok']}/{n}", f"{rate / ref_rate[threads]:.1f}x"]
                 rows.append(row)
-                print(("{:>28}{:>9}{:>16}{:>14}{:>8}{:>14}").format(*row))
+                print(("{:>28}{:>9}{:>16}{:>14}{:>11}{:>14}").format(*row))
     scaling = {name: float(rows[i + len(arms)][2]) / float(rows[i][2]) for i, (name, _, _) in enumerate(arms[:3])
                } if all_cores > 1 else {}
     note = ("Ratios at equal threads, both models through the same stage-batched simulate_batch "
             "(threads: contiguous chunks of the batch, one thread each). "
             + (f"Scaling {all_cores} threads / 1: " + ", ".join(f"{k} {v:.2f}x" for k, v in scaling.items()) + ". "
                if scaling else "")
-            + "The machine was shared with other work (a pipeline run on both cores) while measured: absolute "
-            "rates and above all the thread scaling are low bounds; the ratios are measured side by side.")
+            + f"Load average before / after: {load[0]:.2f} / {os.getloadavg()[0]:.2f} on {all_cores} cores; on a "
+            "shared machine absolute rates and above all the thread scaling are low bounds; the ratios at equal "
+            "threads are measured side by side.")
     print(note)
     if not quick:
         write_benchmark("batch_trajectories", f"trajectories per second, N = {n} batched trajectories of "
