@@ -1,6 +1,6 @@
 """ns per force of the surrogate's kernels and the reference, side by side, for N = 1, 64, 1024, 65536 states.
 
-    python benchmarks/bench_surrogate_kernels.py [--model models/best] [--quick]
+    python benchmarks/bench_surrogate_kernels.py [--model models/best] [--quick] [--trajectories-only]
 
 Arms (one run, one process, the same states for all):
 
@@ -16,10 +16,17 @@ Python's call overhead; the figure is the median over the samples (``median_seco
 (``simulate``, 20 ms of rotor time at dt = 1e-5 s) of the fast surrogate and of the reference.  The
 surrogate is ``--model`` where that folder holds a saved model, else one with the best model's shapes and
 random weights (``perf.speed.best_shaped_surrogate``: the cost does not depend on the weights' values).
+
+Last, batched trajectories (``perf.throughput.trajectories_per_second``, ``simulate_batch``): N = 1024 Monte
+Carlo trajectories of 5 ms each, the surrogate (float64 and float32 networks, and the per-trajectory lockstep
+loop it had before) and the graded reference run the same way (one batched-kernel call per RK4 stage), at one
+thread and at all cores; trajectories per second and the ratios (reports/benchmarks/batch_trajectories.json;
+``--trajectories-only`` runs just this part).
 """
 from __future__ import annotations
 
 import argparse
+import os
 import time
 import warnings
 from pathlib import Path
@@ -30,10 +37,13 @@ from numba import njit
 from fluidfilm import GradedReynoldsModel, Rotor, load_surrogate, paper_bearing, simulate
 from fluidfilm.perf.benchmarking import machine, median_seconds, write_benchmark
 from fluidfilm.perf.speed import best_shaped_surrogate, sample_states
+from fluidfilm.perf.throughput import trajectories_per_second
 from fluidfilm.surrogate.inference import surrogate_force
 from fluidfilm.surrogate.kernels import batch_params, compile_seconds, forces_batch
 
 SIZES = (1, 64, 1024, 65536)
+#: batched trajectories: how many, and the rotor time of each [s]
+N_TRAJECTORIES, T_END = 1024, 0.005
 
 
 @njit
@@ -60,10 +70,56 @@ def _ns_per_force(run, n, passes, repeats):
     return 1e9 * median_seconds(lambda: run(passes), repeats, warmup=False) / (n * passes)
 
 
+def batch_trajectories(model, reference, label: str, quick: bool) -> None:
+    """Trajectories per second of N = 1024 batched trajectories, surrogate vs reference, one thread and all
+    cores (module doc); written unless ``quick``."""
+    n = 64 if quick else N_TRAJECTORIES
+    all_cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    arms = [("reference (graded)", reference, {"stage_batched": True}), ("surrogate f64", model, {"stage_batched": True}),
+            ("surrogate f32", model, {"precision": "float32", "stage_batched": True}),
+            ("surrogate lockstep (before)", model, {"stage_batched": False})]
+    header = ["arm", "threads", "trajectories/s", "ns per force", "n_ok", "vs reference"]
+    rows = []
+    ref_rate = {}
+    load = os.getloadavg()
+    print(f"batched trajectories: N = {n}, {T_END * 1e3:g} ms each at dt = 1e-5 s (simulate_batch)")
+    print(("{:>28}{:>9}{:>16}{:>14}{:>11}{:>14}").format(*header))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        for threads in sorted({1, all_cores}):
+            for name, m, kw in arms:
+                if threads > 1 and kw.get("stage_batched") is False:
+                    continue  # the lockstep loop runs in one thread
+                repeats = 1 if m is reference else 3
+                r = trajectories_per_second(m, n, T_END, repeats=repeats, threads=threads, **kw)
+                rate = r["trajectories_per_s"]
+                if m is reference:
+                    ref_rate[threads] = rate
+                row = [name, threads, f"{rate:.1f}", f"{1e9 * r['wall_s'] / r['n_force_evals']:.0f}",
+                       f"{r['n_ok']}/{n}", f"{rate / ref_rate[threads]:.1f}x"]
+                rows.append(row)
+                print(("{:>28}{:>9}{:>16}{:>14}{:>11}{:>14}").format(*row))
+    scaling = {name: float(rows[i + len(arms)][2]) / float(rows[i][2]) for i, (name, _, _) in enumerate(arms[:3])
+               } if all_cores > 1 else {}
+    note = ("Ratios at equal threads, both models through the same stage-batched simulate_batch "
+            "(threads: contiguous chunks of the batch, one thread each). "
+            + (f"Scaling {all_cores} threads / 1: " + ", ".join(f"{k} {v:.2f}x" for k, v in scaling.items()) + ". "
+               if scaling else "")
+            + f"Load average before / after: {load[0]:.2f} / {os.getloadavg()[0]:.2f} on {all_cores} cores; on a "
+            "shared machine absolute rates and above all the thread scaling are low bounds; the ratios at equal "
+            "threads are measured side by side.")
+    print(note)
+    if not quick:
+        write_benchmark("batch_trajectories", f"trajectories per second, N = {n} batched trajectories of "
+                        f"{T_END * 1e3:g} ms, surrogate ({label}) vs the graded reference, medians", header, rows,
+                        notes=note)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--model", default="models/best")
     ap.add_argument("--quick", action="store_true", help="fewer forces per sample, no file written")
+    ap.add_argument("--trajectories-only", action="store_true", help="only the batched trajectories")
     args = ap.parse_args()
     bearing = paper_bearing()
     if (Path(args.model) / "model.json").exists():
@@ -71,6 +127,10 @@ def main() -> None:
     else:
         model, label = best_shaped_surrogate(bearing), "best-shaped, random weights (no trained model here)"
     reference = GradedReynoldsModel(bearing)
+    if args.trajectories_only:
+        print(f"machine: {machine()}; surrogate: {label}")
+        batch_trajectories(model, reference, label, args.quick)
+        return
     per_sample, repeats = (2e4, 3) if args.quick else (2e5, 7)
     t0 = time.perf_counter()
     fast_kernel, fast_params = model.force_kernel
@@ -127,6 +187,7 @@ def main() -> None:
                    f"compiled in {compile_fast:.2f} s. Every arm in a compiled loop; the machine was shared with "
                    "other work while measured, so absolute times vary from run to run; the ratios are measured "
                    "side by side."))
+    batch_trajectories(model, reference, label, args.quick)
 
 
 if __name__ == "__main__":

@@ -3,18 +3,28 @@
 - reference solver, linear bearing and a sleeve-input surrogate: every trajectory of a batch
   (different imbalance, load, initial state, sleeve) equals ``simulate``'s run of it alone;
 - trajectories that stop (contact) stop at the same time with the same state, the others go on;
-- the model's own control setting is restored after a batch; bad input raises a clear error.
+- the model's own control setting is restored after a batch; bad input raises a clear error;
+- the stage-batched loop (one batched-kernel call per RK4 stage; the default for models with a batched
+  kernel and batches of at least ``STAGE_BATCHED_MIN_N``): to the last bit for the reference models and the linear bearing (their batched kernels give
+  the one-state kernel's forces exactly), whatever the threads and against the lockstep loop; for a
+  surrogate (batched kernel equal to the one-state kernel to round-off) within 1e-9 c of ``simulate`` in
+  float64 and 1e-4 c with float32 networks over case d of the paper, with equal counters; batches mixing a
+  contact, a substepping and a normal trajectory.
 """
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pytest
 import yaml
 
-from fluidfilm import ReynoldsSolver, Rotor, paper_bearing, simulate
+from fluidfilm import GradedReynoldsModel, ReynoldsSolver, Rotor, paper_bearing, simulate
 from fluidfilm.core.bearing import bearing_from_dict
 from fluidfilm.rotor import LinearBearing
+from fluidfilm.perf.speed import best_shaped_surrogate
 from fluidfilm.rotor.batch import simulate_batch
+from fluidfilm.rotor.cases import rotor_for_case
 from fluidfilm.surrogate.inference import SurrogateForceModel
 from fluidfilm.surrogate.scaling import Scaling
 
@@ -30,7 +40,8 @@ def _assert_same(batch, p, single):
     np.testing.assert_allclose(tp.t, single.t, rtol=0, atol=1e-15)
 
 
-def test_batch_of_reference_trajectories_equals_simulate():
+@pytest.mark.parametrize("stage_batched", [False, True])
+def test_batch_of_reference_trajectories_equals_simulate(stage_batched):
     b = paper_bearing()
     solver = ReynoldsSolver(b, 30, 30)
     c = b.clearance
@@ -38,18 +49,20 @@ def test_batch_of_reference_trajectories_equals_simulate():
               [(0.0, (0.0, 0.0)), (5e-4, (0.0, 0.0)), (1e-3, (20.0, 0.0)), (2e-4, (-30.0, 10.0))]]
     x0 = np.array([[0.0, 0.0], [0.3 * c, 0.0], [0.0, 0.5 * c], [-0.2 * c, 0.6 * c]])
     v0 = np.array([[0.0, 0.0], [0.0, 0.01], [0.005, 0.0], [0.0, 0.0]])
-    batch = simulate_batch(solver, rotors, 0.005, 1e-5, x0, v0, record_every=7)
+    batch = simulate_batch(solver, rotors, 0.005, 1e-5, x0, v0, record_every=7, stage_batched=stage_batched)
     assert len(batch) == 4 and batch.ok.all()
     for p in range(4):
         _assert_same(batch, p, simulate(solver, rotors[p], 0.005, 1e-5, x0[p], v0[p], record_every=7))
 
 
-def test_batch_with_contact_stops_only_that_trajectory():
+@pytest.mark.parametrize("stage_batched", [False, True])
+def test_batch_with_contact_stops_only_that_trajectory(stage_batched):
     b = paper_bearing()
     lin = LinearBearing(b, stiffness=1e6, damping=50.0)
     # a soft spring and a heavy static load drive trajectory 1 into the sleeve; 0 stays inside
     rotors = [Rotor(mass=2.5), Rotor(mass=2.5, external_force=(0.0, 400.0))]
-    batch = simulate_batch(lin, rotors, 0.12, 1e-5, record_every=5, t0=0.1)  # t_end: the end time
+    batch = simulate_batch(lin, rotors, 0.12, 1e-5, record_every=5, t0=0.1,  # t_end: the end time
+                           stage_batched=stage_batched)
     assert batch.ok.tolist() == [True, False]
     for p in range(2):
         _assert_same(batch, p, simulate(lin, rotors[p], 0.12, 1e-5, record_every=5, t0=0.1))
@@ -82,11 +95,144 @@ def test_batch_with_per_trajectory_sleeve_equals_simulate_at_each_sleeve():
         _assert_same(batch, p, simulate(model, rotor, 0.004, 1e-5, x0))
 
 
+def test_the_default_loop_depends_on_the_batch_size():
+    """Below ``STAGE_BATCHED_MIN_N`` trajectories the lockstep loop, from it on the stage-batched one: seen in
+    the surrogate's float32 option, which only the stage-batched loop takes."""
+    from fluidfilm.rotor.batch import STAGE_BATCHED_MIN_N
+
+    b = paper_bearing()
+    model = best_shaped_surrogate(b)
+    n = STAGE_BATCHED_MIN_N
+    x0 = np.zeros((n, 2))
+    x0[:, 1] = np.linspace(0.0, 0.4, n) * b.clearance
+    rotor = Rotor(mass=2.5, imbalance=5e-4)
+
+    def run(m, **kw):
+        return simulate_batch(model, rotor, 5e-4, 1e-5, x0[:m], threads=1, **kw).x
+
+    np.testing.assert_array_equal(run(n - 1, precision="float32"), run(n - 1))  # lockstep: float64 kernel
+    assert not np.array_equal(run(n, precision="float32"), run(n))
+    np.testing.assert_array_equal(run(n), run(n, stage_batched=True))
+
+
+def _assert_batches_equal(a, b):
+    for name in ("x", "v", "n_recorded", "t_stop", "n_force_evals"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert a.status == b.status
+
+
+def _mixed_linear_batch():
+    """A normal, a contact (heavy static load) and a substepping trajectory (released at eps 0.92, it spends
+    its first steps above eps_substep = 0.8) of a linear bearing, 20 ms."""
+    b = paper_bearing()
+    lin = LinearBearing(b, stiffness=1e6, damping=1500.0)  # about half the critical damping: little overshoot
+    c = b.clearance
+    rotors = [Rotor(mass=2.5, imbalance=2e-4), Rotor(mass=2.5, external_force=(0.0, 400.0)), Rotor(mass=2.5)]
+    x0 = np.array([[0.1 * c, 0.0], [0.0, 0.0], [0.0, -0.92 * c]])
+    return lin, rotors, x0
+
+
+def test_stage_batched_mixed_batch_equals_simulate_and_the_lockstep_loop_to_the_last_bit():
+    lin, rotors, x0 = _mixed_linear_batch()
+    n_steps = 2000
+    runs = {threads: simulate_batch(lin, rotors, 0.02, 1e-5, x0, record_every=3, threads=threads, stage_batched=True)
+            for threads in (1, 2, 3)}
+    lockstep = simulate_batch(lin, rotors, 0.02, 1e-5, x0, record_every=3, stage_batched=False)
+    batch = runs[1]
+    assert batch.ok.tolist() == [True, False, True]
+    assert batch.n_force_evals[0] == 4 * n_steps and batch.n_force_evals[2] > 4 * n_steps  # 2 substepped
+    for p in range(3):
+        _assert_same(batch, p, simulate(lin, rotors[p], 0.02, 1e-5, x0[p], record_every=3))
+    for other in (runs[2], runs[3], lockstep):
+        _assert_batches_equal(batch, other)
+
+
+def test_stage_batched_graded_reference_equals_simulate_to_the_last_bit():
+    """The graded reference's batched kernel (each state on its grid, the dense one above eps 0.9)."""
+    b = paper_bearing()
+    model = GradedReynoldsModel(b, coarse=(16, 8), dense=(24, 12))
+    c = b.clearance
+    rotor = Rotor(mass=2.5, imbalance=5e-4)
+    x0 = np.array([[0.0, 0.0], [0.3 * c, 0.2 * c], [0.0, 0.93 * c]])  # the last starts on the dense grid
+    batch = simulate_batch(model, rotor, 0.003, 1e-5, x0, threads=2, stage_batched=True)
+    assert batch.n_force_evals[2] > 4 * 300  # substeps near the sleeve
+    for p in range(3):
+        _assert_same(batch, p, simulate(model, rotor, 0.003, 1e-5, x0[p]))
+
+
+def _case_d_rotor():
+    rotor_cfg = yaml.safe_load((ROOT / "conf" / "rotor" / "paper.yaml").read_text())
+    return rotor_for_case(rotor_cfg, yaml.safe_load((ROOT / "conf" / "case" / "d.yaml").read_text()))
+
+
+#: the stage-batched surrogate against ``simulate`` (its one-state kernel), max |dX| (and 0.1 ms times |dV|) over
+#: the run in units of c: float64 round-off, float32 networks.  The random-weight surrogate's case-d orbit is
+#: irregular (eps 0.004-0.5) and amplifies a difference about 2x every 5 ms (measured: 1e-12 c after 40 ms,
+#: 4e-9 c after 100 ms in float64), so the comparison runs 40 ms (two revolutions)
+SURROGATE_F64_TOL = 1e-9
+SURROGATE_F32_TOL = 1e-4
+
+
+def _max_dx(batch, p, single, c):
+    tp = batch.trajectory(p)
+    assert tp.status.split(";")[0] == single.status.split(";")[0]
+    assert tp.n_force_evals == single.n_force_evals and len(tp.x) == len(single.x)
+    np.testing.assert_allclose(tp.t, single.t, rtol=0, atol=1e-15)
+    return max(np.abs(tp.x - single.x).max(), np.abs(tp.v - single.v).max() * 1e-4) / c
+
+
+@pytest.mark.filterwarnings("ignore:.*outside the training domain:RuntimeWarning")
+def test_stage_batched_surrogate_follows_simulate_over_case_d_in_float64_and_float32():
+    b = paper_bearing()
+    model = best_shaped_surrogate(b)
+    c = b.clearance
+    rotor = _case_d_rotor()
+    x0 = np.array([[0.0, 0.0], [0.3 * c, 0.1 * c], [-0.2 * c, -0.4 * c], [0.0, 0.5 * c]])
+    t_end = 0.04
+    singles = [simulate(model, rotor, t_end, 1e-5, x0[p], record_every=10) for p in range(4)]
+    n_outside = sum(s.n_outside_domain for s in singles)
+    for precision, tol in (("float64", SURROGATE_F64_TOL), ("float32", SURROGATE_F32_TOL)):
+        batch = simulate_batch(model, rotor, t_end, 1e-5, x0, record_every=10, threads=1, precision=precision,
+                               stage_batched=True)
+        assert model.n_outside_domain == n_outside, precision
+        worst = max(_max_dx(batch, p, singles[p], c) for p in range(4))
+        assert worst < tol, (precision, worst)
+        # the orbits are not trivial: they span a good part of the clearance
+        assert np.hypot(*batch.x[0, :batch.n_recorded[0]].T).max() > 0.1 * c
+        # threads split the batch into chunks; a trajectory does not depend on them
+        _assert_batches_equal(batch, simulate_batch(model, rotor, t_end, 1e-5, x0, record_every=10, threads=3,
+                                                    precision=precision, stage_batched=True))
+        assert model.n_outside_domain == n_outside, precision
+
+
+@pytest.mark.filterwarnings("ignore:.*outside the training domain:RuntimeWarning")
+def test_stage_batched_surrogate_mixed_batch_of_contact_substeps_and_a_normal_orbit():
+    """2 ms: the random-weight surrogate's orbit released near the sleeve is chaotic (its round-off doubles
+    about every 40 steps), so the comparison with ``simulate`` is kept short."""
+    b = paper_bearing()
+    model = best_shaped_surrogate(b)
+    c = b.clearance
+    rotor = _case_d_rotor()
+    rotors = [rotor, dataclasses.replace(rotor, external_force=(0.0, 30000.0)), rotor]
+    x0 = np.array([[0.1 * c, 0.0], [0.0, 0.5 * c], [0.0, 0.88 * c]])
+    n_steps = 200
+    batch = simulate_batch(model, rotors, 0.002, 1e-5, x0, threads=2, stage_batched=True)
+    n_outside = model.n_outside_domain  # the whole batch's (simulate resets the counter)
+    singles = [simulate(model, rotors[p], 0.002, 1e-5, x0[p]) for p in range(3)]
+    assert batch.ok.tolist() == [True, False, True]
+    assert batch.n_force_evals[0] == 4 * n_steps and batch.n_force_evals[2] > 4 * n_steps
+    assert max(_max_dx(batch, p, singles[p], c) for p in range(3)) < SURROGATE_F64_TOL
+    assert n_outside == sum(s.n_outside_domain for s in singles) > 0
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"x0": np.zeros((3, 2))}, "3 rotors|rotors for a batch"),
     ({"x0": np.zeros((2, 3))}, "x0 must be"),
     ({"dt": -1.0}, "dt must be"),
     ({"settings": np.zeros((2, 2))}, "no per-trajectory settings"),
+    ({"threads": 0}, "threads must be a positive integer or None"),
+    ({"threads": 1.5}, "threads must be"),
+    ({"precision": "float16"}, "precision must be 'float64' or 'float32', got 'float16'"),
 ])
 def test_bad_batch_input_raises(kwargs, match):
     lin = LinearBearing(paper_bearing(), 1e7, 100.0)

@@ -178,3 +178,84 @@ def test_flag_calibration_counts_what_the_flag_catches():
     assert cal["wrong_share"] == 0.0 and cal["precision"] == 0.0
     with pytest.raises(ValueError, match="F must have the shape"):
         flag_calibration(EnsembleForceModel([a, b]), X, V, truth[:3])
+
+
+# --- through the batched kernels (simulate_batch's stage-batched loop) ------------------------------------
+def test_the_batched_ensemble_and_hybrid_kernels_equal_the_one_state_ones_and_count_alike():
+    members = _surrogates(3)
+    fallback = ReynoldsSolver(paper_bearing(), 16, 16)
+    X, V = _states(fallback.clearance, n=300)
+    mean, s = EnsembleForceModel(members).spread(X, V)
+    tol = float(np.median(s / np.maximum(np.hypot(mean[:, 0], mean[:, 1]), 0.5)))  # flags about half
+    for model in (EnsembleForceModel(members, rel_tol=tol, floor_N=0.5),
+                  HybridForceModel(members, fallback, rel_tol=tol, floor_N=0.5)):
+        model.reset_domain_counter()
+        expect = model.forces(X, V)
+        counts = (model.n_evaluations, model.n_flagged, model.n_outside_domain)
+        assert 0 < counts[1] < len(X)
+        model.reset_domain_counter()
+        fn, bp = model.batch_force_kernel()
+        got = np.empty_like(X)
+        fn(bp, np.ascontiguousarray(X), np.ascontiguousarray(V), got)
+        np.testing.assert_allclose(got, expect, rtol=1e-12, atol=1e-12)
+        assert (model.n_evaluations, model.n_flagged, model.n_outside_domain) == counts
+        # private parameters count apart until merged
+        model.reset_domain_counter()
+        fn, bp = model.batch_force_kernel(private=True)
+        fn(bp, np.ascontiguousarray(X), np.ascontiguousarray(V), got)
+        assert (model.n_evaluations, model.n_flagged) == (0, 0)
+        model.merge_counts(bp)
+        assert (model.n_evaluations, model.n_flagged, model.n_outside_domain) == counts
+
+
+def _linear_hybrid(fallback=None):
+    jb = paper_bearing()
+    a, b = LinearBearing(jb, 2.0e5, 300.0), LinearBearing(jb, 3.0e5, 500.0)
+    # the spread relative to the mean force is ~0.28 where the spring dominates, more where damping does
+    return HybridForceModel([a, b], fallback or LinearBearing(jb, 4.0e5, 250.0), rel_tol=0.3, floor_N=1e-3)
+
+
+class _NoBatchKernel:
+    """A force model without a batched kernel (a user's model): the linear bearing's one-state kernel only."""
+
+    def __init__(self, inner):
+        self._inner = inner
+        self.name, self.bearing, self.clearance = "user", inner.bearing, inner.clearance
+        self.force_kernel, self.validity = inner.force_kernel, inner.validity
+        self.n_outside_domain = 0
+
+    def forces(self, X, V):
+        return self._inner.forces(X, V)
+
+    def reset_domain_counter(self):
+        pass
+
+    def domain_report(self):
+        return None
+
+
+@pytest.mark.parametrize("batched_fallback", [True, False])
+def test_a_batch_of_hybrid_trajectories_equals_simulate_to_the_last_bit(batched_fallback):
+    """Linear members and fallback: every force of the stage-batched path is the one-state kernel's to the
+    last bit, so the batch must equal ``simulate`` run by run, flags and fallbacks counted alike.  A fallback
+    without a batched kernel sends the hybrid to the per-trajectory loop, with the same result."""
+    from fluidfilm.core.force_model import BatchForceModel
+    from fluidfilm.rotor.batch import simulate_batch
+
+    jb = paper_bearing()
+    other = LinearBearing(jb, 4.0e5, 250.0)
+    hyb = _linear_hybrid(other if batched_fallback else _NoBatchKernel(other))
+    assert isinstance(hyb, BatchForceModel) and (hyb.batch_force_kernel() is not None) == batched_fallback
+    c = jb.clearance
+    rotors = [Rotor(mass=0.5, imbalance=u) for u in (2e-6, 5e-6, 1e-5)]
+    x0 = np.array([[1e-6, 0.0], [0.0, 0.2 * c], [0.3 * c, 0.0]])
+    batch = simulate_batch(hyb, rotors, 0.02, 1e-4, x0, threads=2, stage_batched=True)
+    n_eval, n_fb = hyb.n_evaluations, hyb.n_fallbacks
+    total = [0, 0]
+    for p in range(3):
+        single = simulate(hyb, rotors[p], 0.02, 1e-4, x0[p])
+        np.testing.assert_array_equal(batch.trajectory(p).x, single.x)
+        assert batch.n_force_evals[p] == single.n_force_evals
+        total[0] += hyb.n_evaluations
+        total[1] += hyb.n_fallbacks
+    assert [n_eval, n_fb] == total and 0 < n_fb < n_eval  # both answers occur

@@ -1,7 +1,7 @@
 """Static proof that every model of the library implements the force-model contract.
 
 Never imported at run time; ``mypy`` (``make lint``) checks these assignments: a model that
-misses a member of ``ForceModel`` / ``AdjustableForceModel`` / ``BatchSettable`` /
+misses a member of ``ForceModel`` / ``AdjustableForceModel`` / ``BatchSettable`` / ``BatchForceModel`` /
 ``LinearPressureModel`` or gets a signature wrong fails it.
 """
 from __future__ import annotations
@@ -10,7 +10,8 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from fluidfilm.surrogate.ensemble import EnsembleForceModel, HybridForceModel
-    from fluidfilm.core.force_model import AdjustableForceModel, BatchSettable, ForceModel, LinearPressureModel
+    from fluidfilm.core.force_model import (AdjustableForceModel, BatchForceModel, BatchSettable, ForceModel,
+                                            LinearPressureModel)
     from fluidfilm.reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
     from fluidfilm.reynolds.feed import GroovedReynoldsSolver
     from fluidfilm.reynolds.sparse_reference import SparseReferenceModel
@@ -28,6 +29,10 @@ if TYPE_CHECKING:
 
     def _batch_settable_models(d: SurrogateForceModel) -> list[BatchSettable]:
         return [d]
+
+    def _batch_force_models(a: ReynoldsSolver, b: GradedReynoldsModel, d: SurrogateForceModel,
+                            e: LinearBearing) -> list[BatchForceModel]:
+        return [a, b, d, e]
 
     def _linear_pressure_models(a: ReynoldsSolver, c: ConicalReynoldsSolver) -> list[LinearPressureModel]:
         return [a, c]

@@ -22,6 +22,9 @@ The members:
 - ``reset_domain_counter()`` / ``domain_report()``: count evaluations outside ``validity``
   from now on / say how many there were (``None`` when none, or when the model is valid everywhere).
 
+Optional: ``BatchForceModel`` (a kernel of many states at once, which ``simulate_batch`` calls once
+per RK4 stage for the whole batch) and ``BatchSettable`` (a per-trajectory control setting).
+
 Adding a model: see docs/adding_a_model.md.
 """
 from __future__ import annotations
@@ -36,6 +39,8 @@ from fluidfilm.core.bearing import ConicalBearing, JournalBearing
 
 #: ``fn(params, x1, x2, v1, v2) -> (F1, F2)``, compiled with numba
 ForceKernel = Callable[..., tuple[float, float]]
+#: ``fn(bparams, x (m, 2), v (m, 2), out (m, 2)) -> None``, compiled with numba: forces [N] into ``out``
+BatchForceKernel = Callable[..., None]
 Bearing = JournalBearing | ConicalBearing
 
 
@@ -180,6 +185,43 @@ class BatchSettable(Protocol):
     def setting_for(self, sleeve: float) -> np.ndarray: ...
 
 
+@runtime_checkable
+class BatchForceModel(Protocol):
+    """A force model with a compiled kernel of many states at once (``simulate_batch`` calls it once per
+    RK4 stage for all running trajectories).
+
+    ``batch_force_kernel(precision, private)`` -> ``(fn, bparams)``: ``fn(bparams, x, v, out)`` writes the
+    forces [N] of the states x (m, 2) [m], v (m, 2) [m/s] (C-contiguous float64) into ``out`` (m, 2), each
+    row what ``force_kernel`` gives for that state (to round-off; exactly, for the reference models).
+    ``precision`` "float64" or "float32": the arithmetic of a surrogate's networks (a reference model
+    computes in float64 either way).  ``private=True``: parameters with their own counters (domain,
+    ensemble flags) and nothing else mutable shared, so that calls on different private parameters may
+    run in concurrent threads; ``merge_counts(bparams)`` adds a private set's counts to the model's own.
+    ``batch_force_kernel`` returns None where this instance has no batched kernel (an ensemble whose
+    members have none); ``simulate_batch`` then steps each trajectory with ``force_kernel``.
+
+    Examples
+    --------
+    >>> from fluidfilm import GradedReynoldsModel, LinearBearing, ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import BatchForceModel
+    >>> b = paper_bearing()
+    >>> [isinstance(m, BatchForceModel) for m in (ReynoldsSolver(b, 16, 8), LinearBearing(b, 1e6, 1e3))]
+    [True, True]
+    """
+
+    def batch_force_kernel(self, precision: str = "float64",
+                           private: bool = False) -> tuple[BatchForceKernel, Any] | None: ...
+
+    def merge_counts(self, bparams: Any) -> None: ...
+
+
+def check_precision(precision: str) -> str:
+    """``precision`` if it is "float64" or "float32", else a ValueError naming it."""
+    if precision not in ("float64", "float32"):
+        raise ValueError(f"precision must be 'float64' or 'float32', got {precision!r}")
+    return precision
+
+
 class FilmGrid(Protocol):
     """What the film-region integrals need of a solver's grid (``reynolds.mesh.FilmMesh`` has it; named
     here as a protocol so that this module, which the surrogates import, does not import the solver)."""
@@ -266,6 +308,9 @@ class ReferenceModel:
     def n_outside_domain(self) -> int:
         """Evaluations outside the validity domain since the last reset: none for a physics-based model."""
         return 0
+
+    def merge_counts(self, bparams: Any) -> None:
+        """Nothing is counted (``BatchForceModel``)."""
 
 
 def as_adjustable(model: ForceModel) -> AdjustableForceModel:

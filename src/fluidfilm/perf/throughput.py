@@ -9,6 +9,8 @@ models and the way they are driven, nothing else.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from fluidfilm.perf.benchmarking import median_seconds
@@ -57,7 +59,8 @@ def monte_carlo_batch(clearance: float, n: int, mass: float = 2.5, seed: int = 0
 
 
 def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batched: bool = True,
-                            repeats: int = 1, seed: int = 0) -> dict:
+                            repeats: int = 1, seed: int = 0, threads: int | None = 1, precision: str = "float64",
+                            stage_batched: bool | None = None) -> dict:
     """Median trajectories per second of ``model`` over ``repeats`` runs of n Monte Carlo trajectories.
 
     Parameters
@@ -76,12 +79,16 @@ def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batch
         Timed runs (median).
     seed : int, default 0
         Seed of the Monte Carlo.
+    threads, precision, stage_batched
+        ``simulate_batch``'s (batched runs only): threads across the batch (default 1; None: all cores),
+        the surrogate networks' arithmetic, and the loop (None: ``simulate_batch``'s choice by batch size).
 
     Returns
     -------
     dict
         ``n``, ``batched``, ``t_end_s``, ``wall_s`` (median wall time of a run [s]),
-        ``trajectories_per_s`` and ``n_ok`` (trajectories that reached ``t_end``).
+        ``trajectories_per_s``, ``n_ok`` (trajectories that reached ``t_end``) and ``n_force_evals`` (of a
+        run, all trajectories); batched runs add ``threads``, ``precision`` and ``stage_batched``.
 
     Examples
     --------
@@ -94,18 +101,25 @@ def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batch
     """
     rotors, x0, v0 = monte_carlo_batch(model.bearing.clearance, n, seed=seed)
     # compile outside the timing
+    kw: dict[str, Any] = {"threads": threads, "precision": precision, "stage_batched": stage_batched}
     if batched:
-        simulate_batch(model, rotors[:1], 2 * dt, dt, x0[:1], v0[:1], record_every=10)
+        simulate_batch(model, rotors[:1], 2 * dt, dt, x0[:1], v0[:1], record_every=10, **kw)
     else:
         simulate(model, rotors[0], 2 * dt, dt, x0[0], v0[0], record_every=10)
     n_ok = [0]
+    n_evals = [0]
 
     def run() -> None:
         if batched:
-            n_ok[0] = int(simulate_batch(model, rotors, t_end, dt, x0, v0, record_every=10).ok.sum())
+            out = simulate_batch(model, rotors, t_end, dt, x0, v0, record_every=10, **kw)
+            n_ok[0], n_evals[0] = int(out.ok.sum()), int(out.n_force_evals.sum())
         else:
-            n_ok[0] = sum(simulate(model, r, t_end, dt, a, b, record_every=10).ok for r, a, b in zip(rotors, x0, v0))
+            runs = [simulate(model, r, t_end, dt, a, b, record_every=10) for r, a, b in zip(rotors, x0, v0)]
+            n_ok[0], n_evals[0] = sum(tr.ok for tr in runs), sum(tr.n_force_evals for tr in runs)
 
     wall = median_seconds(run, repeats, warmup=False)
-    return {"n": n, "batched": batched, "t_end_s": t_end, "wall_s": wall, "trajectories_per_s": n / wall,
-            "n_ok": n_ok[0]}
+    out: dict[str, Any] = {"n": n, "batched": batched, "t_end_s": t_end, "wall_s": wall, "trajectories_per_s": n / wall,
+           "n_ok": n_ok[0], "n_force_evals": n_evals[0]}
+    if batched:
+        out.update(kw)
+    return out

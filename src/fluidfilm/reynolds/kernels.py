@@ -41,6 +41,8 @@ Kernels:
                              (F1, F2); the compiled force kernel the rotor
                              integrator calls
 - ``forces_batch``           many (X, V) pairs, parallel over pairs
+- ``forces_serial``          the same in one thread (a rotor batch's stage kernel,
+                             whose threads run over chunks of trajectories)
 - ``forces_product``         every velocity at every position, one
                              factorisation per position, parallel over positions
 - ``pressure_field``         the full (n_theta, n_z) field of one state
@@ -279,6 +281,21 @@ def film_force(params, x1, x2, v1, v2):
     return integrate_modes(params, q0, qs, qc, v1, v2, params.cavitation, phat)
 
 
+@njit(cache=True, inline="always")
+def kernel_row(kernel, params, x, v, out, p):
+    """out[p] = the one-state ``kernel``'s force at row p of x, v (the batched kernels' loop body)."""
+    f1, f2 = kernel(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+    out[p, 0] = f1
+    out[p, 1] = f2
+
+
+@njit(cache=True, inline="always")
+def kernel_rows(kernel, params, x, v, out):
+    """``kernel_row`` for every row, in the calling thread."""
+    for p in range(x.shape[0]):
+        kernel_row(kernel, params, x, v, out, p)
+
+
 @njit(cache=True, parallel=True)
 def forces_batch(params, x, v, out):
     """Forces for N (position, velocity) pairs, parallel over pairs, by the kernel of ``params.cavitation``
@@ -286,11 +303,19 @@ def forces_batch(params, x, v, out):
     ss = params.cavitation == CAV_SWIFT_STIEBER
     for p in prange(x.shape[0]):
         if ss:
-            f1, f2 = film_force_ss(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
+            kernel_row(film_force_ss, params, x, v, out, p)
         else:
-            f1, f2 = film_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
-        out[p, 0] = f1
-        out[p, 1] = f2
+            kernel_row(film_force, params, x, v, out, p)
+
+
+@njit(cache=True)
+def forces_serial(params, x, v, out):
+    """``forces_batch`` in the calling thread: each row exactly the one-state kernel's force (``simulate_batch``
+    calls it per RK4 stage; its own threads run over chunks of trajectories, numba's pool is not nested)."""
+    if params.cavitation == CAV_SWIFT_STIEBER:
+        kernel_rows(film_force_ss, params, x, v, out)
+    else:
+        kernel_rows(film_force, params, x, v, out)
 
 
 @njit(cache=True, parallel=True)

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing
-from fluidfilm.core.force_model import ReferenceModel
+from fluidfilm.core.force_model import ReferenceModel, check_precision
 from fluidfilm.core.states import as_state_pairs
 from fluidfilm.reynolds import kernels
 from fluidfilm.reynolds.conical import ConicalReynoldsSolver
@@ -74,6 +74,17 @@ def graded_force_ss(params, x1, x2, v1, v2):
     if x1 * x1 + x2 * x2 < params.dense_radius * params.dense_radius:
         return kernels.film_force_ss(params.coarse, x1, x2, v1, v2)
     return kernels.film_force_ss(params.dense, x1, x2, v1, v2)
+
+
+@njit(cache=True)
+def graded_forces(params, x, v, out):
+    """``graded_force`` (``graded_force_ss`` with Swift-Stieber cavitation) of every row of x, v (m, 2) into
+    out (m, 2), in the calling thread (``simulate_batch``'s stage kernel; it runs its own threads over chunks
+    of trajectories)."""
+    if params.coarse.cavitation == kernels.CAV_SWIFT_STIEBER:
+        kernels.kernel_rows(graded_force_ss, params, x, v, out)
+    else:
+        kernels.kernel_rows(graded_force, params, x, v, out)
 
 
 class GradedReynoldsModel(ReferenceModel):
@@ -159,6 +170,12 @@ class GradedReynoldsModel(ReferenceModel):
     @property
     def force_kernel(self):
         return self._kernel, self.params
+
+    def batch_force_kernel(self, precision: str = "float64", private: bool = False):
+        """``(graded_forces, params)`` (``core.force_model.BatchForceModel``): each row exactly ``force_kernel``'s
+        force, in float64 whatever ``precision``; nothing to count, nothing mutable (``private`` changes nothing)."""
+        check_precision(precision)
+        return graded_forces, self.params
 
     def grid_for(self, eps) -> tuple[np.ndarray, np.ndarray]:
         """(n_theta, n_z) the policy uses at eccentricity ratio(s) ``eps``."""

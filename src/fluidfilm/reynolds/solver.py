@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from fluidfilm.core.bearing import JournalBearing
-from fluidfilm.core.force_model import ReferenceModel
+from fluidfilm.core.force_model import ReferenceModel, check_precision
 from fluidfilm.core.states import V_MAX_PHYSICAL, as_state_pairs, check_states
 from fluidfilm.reynolds import kernels
 from fluidfilm.reynolds.mesh import FilmMesh
@@ -212,6 +212,12 @@ class ReynoldsSolver(_GridSolver):
     def force_kernel(self):
         """(compiled function, params): ``fn(params, x1, x2, v1, v2) -> (F1, F2)`` for compiled callers."""
         return self._kernel, self.params
+
+    def batch_force_kernel(self, precision: str = "float64", private: bool = False):
+        """``(kernels.forces_serial, params)`` (``core.force_model.BatchForceModel``): each row exactly
+        ``force_kernel``'s force, in float64 whatever ``precision``; nothing to count, nothing mutable (``private`` changes nothing)."""
+        check_precision(precision)
+        return kernels.forces_serial, self.params
 
     def __repr__(self) -> str:
         return f"ReynoldsSolver({self.n_theta}x{self.n_z}, cavitation={self.cavitation!r})"

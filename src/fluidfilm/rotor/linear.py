@@ -11,7 +11,8 @@ import numpy as np
 from numba import njit
 
 from fluidfilm.core.bearing import JournalBearing
-from fluidfilm.core.force_model import ReferenceModel
+from fluidfilm.core.force_model import ReferenceModel, check_precision
+from fluidfilm.reynolds.kernels import kernel_rows
 
 
 class LinearParams(NamedTuple):
@@ -24,6 +25,12 @@ def linear_force(params, x1, x2, v1, v2):
     """Force kernel (``LinearParams``)."""
     k, c = params.stiffness, params.damping
     return -k * x1 - c * v1, -k * x2 - c * v2
+
+
+@njit(cache=True)
+def linear_forces(params, x, v, out):
+    """``linear_force`` of every row of x, v (m, 2) into out (m, 2) (the batched kernel)."""
+    kernel_rows(linear_force, params, x, v, out)
 
 
 class LinearBearing(ReferenceModel):
@@ -63,6 +70,11 @@ class LinearBearing(ReferenceModel):
     @property
     def force_kernel(self):
         return linear_force, LinearParams(float(self.stiffness), float(self.damping))
+
+    def batch_force_kernel(self, precision: str = "float64", private: bool = False):
+        """``(linear_forces, params)`` (``core.force_model.BatchForceModel``), float64 whatever ``precision``."""
+        check_precision(precision)
+        return linear_forces, self.force_kernel[1]
 
     def forces(self, X, V) -> np.ndarray:
         """-K X - C V [N] for positions X [m] and velocities V [m/s], (..., 2) each."""

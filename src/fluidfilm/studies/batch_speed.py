@@ -39,7 +39,20 @@ def run(cfg) -> dict:
     out = {"rows": rows, "ratios": ratios, "config": plain(cfg),
            "trajectories_per_s_batch_speedup": ratios[str(n_max)]["batched"],
            "trajectories_per_s_single_speedup": by[("surrogate", n_min)]["one_by_one_per_s"] / ref1}
+    # the largest batch again across threads (``threads``; null: all cores), both models the same way
+    threaded = {}
+    for name, model in models.items():
+        r = trajectories_per_second(model, n_max, cfg.t_end, cfg.dt, batched=True, threads=cfg.get("threads"))
+        threaded[name] = {"threads": r["threads"] if r["threads"] is not None else "all",
+                          "batched_per_s": r["trajectories_per_s"], "n_ok": r["n_ok"],
+                          "scaling": r["trajectories_per_s"] / by[(name, n_max)]["batched_per_s"]}
+    out["threads"] = threaded
+    out["trajectories_per_s_batch_speedup_threads"] = (threaded["surrogate"]["batched_per_s"]
+                                                       / threaded["reference"]["batched_per_s"])
+    out["batch_thread_scaling"] = min(t["scaling"] for t in threaded.values())
     io.write_json(cfg.out_json, out)
-    print(f"surrogate / reference at N={n_max} (both batched): {out['trajectories_per_s_batch_speedup']:.1f}x; "
+    print(f"surrogate / reference at N={n_max} (both batched): {out['trajectories_per_s_batch_speedup']:.1f}x at one "
+          f"thread, {out['trajectories_per_s_batch_speedup_threads']:.1f}x across threads (scaling surrogate "
+          f"{threaded['surrogate']['scaling']:.2f}x, reference {threaded['reference']['scaling']:.2f}x); "
           f"one trajectory alone: {out['trajectories_per_s_single_speedup']:.1f}x")
     return out

@@ -17,7 +17,9 @@ meaningless, from being flagged everywhere near the bearing centre).
 
 Both implement ``fluidfilm.core.force_model.ForceModel`` and run in the compiled integrator: the kernel
 ``ensemble_force`` calls the members' kernel on each member's parameters, and the fallback's kernel
-when the hybrid flag is set.  The members must share one kernel (e.g. surrogates of one
+when the hybrid flag is set.  ``ensemble_forces`` does the same for many states at once through the
+members' and the fallback's batched kernels (``BatchForceModel``: ``simulate_batch`` calls it once per
+RK4 stage).  The members must share one kernel (e.g. surrogates of one
 architecture, whose parameters then form a homogeneous tuple for the compiled loop).
 """
 from __future__ import annotations
@@ -31,7 +33,7 @@ from numba import njit
 from numba.core.errors import NumbaExperimentalFeatureWarning
 from numpy.typing import ArrayLike
 
-from fluidfilm.core.force_model import Bearing, ForceModel, ValidityDomain
+from fluidfilm.core.force_model import BatchForceModel, Bearing, ForceModel, ValidityDomain, check_precision
 from fluidfilm.core.states import as_state_pairs
 
 # The members' and the fallback's kernels travel in the parameter tuple as numba first-class functions
@@ -86,6 +88,56 @@ def _ensemble_batch(params, x, v, out):
         f1, f2 = ensemble_force(params, x[p, 0], x[p, 1], v[p, 0], v[p, 1])
         out[p, 0] = f1
         out[p, 1] = f2
+
+
+@njit  # not cached: a signature holding first-class functions cannot be written back (rotor.integrate)
+def ensemble_forces(params, x, v, out):
+    """``ensemble_force`` of every row of x, v (m, 2) into out (m, 2), through the members' batched kernels.
+
+    ``params``: (members' batched kernel, their batched parameters (tuple), the fallback's batched kernel,
+    its parameters, [rel_tol, floor_N, hybrid 0/1], (2,) int64 counts [evaluations, flagged]).  Each member
+    runs once on all m states; mean, spread and flag per state by ``_mean_and_spread``'s arithmetic in its
+    order; the hybrid's flagged states go to the fallback in one call.
+    """
+    member_fn, members, fallback_fn, fallback_params, tol, counts = params
+    n = x.shape[0]
+    k = len(members)
+    forces = np.empty((k, n, 2))
+    j = 0
+    for bp in members:
+        member_fn(bp, x, v, forces[j])
+        j += 1
+    flagged = np.empty(n, dtype=np.int64)
+    n_flag = 0
+    for p in range(n):
+        s1 = 0.0
+        s2 = 0.0
+        for j in range(k):
+            s1 += forces[j, p, 0]
+            s2 += forces[j, p, 1]
+        m1 = s1 / k
+        m2 = s2 / k
+        var = 0.0
+        for j in range(k):
+            var += (forces[j, p, 0] - m1) ** 2 + (forces[j, p, 1] - m2) ** 2
+        out[p, 0] = m1
+        out[p, 1] = m2
+        if math.sqrt(var / (k - 1)) > tol[0] * max(math.hypot(m1, m2), tol[1]):
+            flagged[n_flag] = p
+            n_flag += 1
+    counts[0] += n
+    counts[1] += n_flag
+    if tol[2] > 0.0 and n_flag > 0:
+        xf = np.empty((n_flag, 2))
+        vf = np.empty((n_flag, 2))
+        ff = np.empty((n_flag, 2))
+        for i in range(n_flag):
+            p = flagged[i]
+            xf[i, 0], xf[i, 1], vf[i, 0], vf[i, 1] = x[p, 0], x[p, 1], v[p, 0], v[p, 1]
+        fallback_fn(fallback_params, xf, vf, ff)
+        for i in range(n_flag):
+            out[flagged[i], 0] = ff[i, 0]
+            out[flagged[i], 1] = ff[i, 1]
 
 
 @njit  # not cached: a signature holding first-class functions cannot be written back (rotor.integrate)
@@ -152,6 +204,45 @@ class EnsembleForceModel:
     @property
     def force_kernel(self):
         return ensemble_force, self._params
+
+    def batch_force_kernel(self, precision: str = "float64", private: bool = False):
+        """``(ensemble_forces, params)`` (``core.force_model.BatchForceModel``): every member's batched kernel
+        once per call, in ``precision``, and the fallback's on the flagged states; None where a member or the
+        fallback has no batched kernel or the members' differ (``simulate_batch`` then steps each trajectory
+        with ``force_kernel``).  ``private``: the members', the fallback's and the flag counts of their own
+        (``merge_counts``)."""
+        check_precision(precision)
+        parts = []
+        for m in self.members:
+            part = m.batch_force_kernel(precision, private) if isinstance(m, BatchForceModel) else None
+            if part is None:
+                return None
+            parts.append(part)
+        fb = self.fallback
+        fb_part = parts[0]  # a placeholder the kernel never calls (tol[2] = 0) without a fallback
+        if fb is not None:
+            part = fb.batch_force_kernel(precision, private) if isinstance(fb, BatchForceModel) else None
+            if part is None:
+                return None
+            fb_part = part
+        fn = parts[0][0]
+        if any(f is not fn for f, _ in parts):
+            return None
+        member_bps = tuple(bp for _, bp in parts)
+        fb_fn, fb_bp = fb_part
+        counts = np.zeros(2, dtype=np.int64) if private else self._counts
+        return ensemble_forces, (fn, member_bps, fb_fn, fb_bp, self._tol, counts)
+
+    def merge_counts(self, bparams) -> None:
+        """Add the counts of private batch parameters (members' domain, fallback's, flags) to the model's."""
+        _, member_bps, _, fb_bp, _, counts = bparams
+        for m, bp in zip(self.members, member_bps):
+            if isinstance(m, BatchForceModel):  # every member is, where the parameters were made
+                m.merge_counts(bp)
+        if isinstance(self.fallback, BatchForceModel):
+            self.fallback.merge_counts(fb_bp)
+        if counts is not self._counts:
+            self._counts += counts
 
     @property
     def validity(self) -> ValidityDomain:

@@ -36,9 +36,10 @@ from numba import njit
 
 from fluidfilm import io
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict
-from fluidfilm.core.force_model import ValidityDomain
+from fluidfilm.core.force_model import ValidityDomain, check_precision
 from fluidfilm.core.states import as_state_pairs
-from fluidfilm.surrogate.kernels import COUNTER, SETTING, fast_force_kernel, pack, shape_key
+from fluidfilm.surrogate.kernels import (COUNTER, SETTING, BatchParams, batch_params, fast_force_kernel, forces_batch,
+                                        pack, shape_key)
 from fluidfilm.surrogate.scaling import Scaling, check_whirl_use, network_inputs
 from fluidfilm.surrogate.transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
                          standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb, whirl_direction_nb)
@@ -412,6 +413,7 @@ class SurrogateForceModel:
         self._fast_weights = pack(self, self._fast_key)
         self._setting = self._fast_weights[SETTING:SETTING + 2]
         self._counter = self._fast_weights[COUNTER:COUNTER + 1]  # float64: exact to 2^53 evaluations
+        self._batch_params: dict[str, BatchParams] = {}  # batch_force_kernel's, per precision
         # one flat weight array for all regions: each region's table offsets shifted to its block
         offsets = np.cumsum([0] + [w.size for w, _ in packed])
         tables = [t.copy() for _, t in packed]
@@ -442,6 +444,22 @@ class SurrogateForceModel:
         """The compiled one-state kernel of this model's shape (``surrogate.kernels.fast_force_kernel``),
         equal to the generic ``surrogate_force`` on ``self.params`` to round-off; compiled on first use."""
         return fast_force_kernel(self)
+
+    def batch_force_kernel(self, precision: str = "float64", private: bool = False):
+        """``(surrogate.kernels.forces_batch, BatchParams)`` (``core.force_model.BatchForceModel``): many states
+        per call, the networks in ``precision``; ``private``: the parameters count in their own domain
+        counter (``merge_counts`` adds it to the model's).  They read the model's setting (sleeve) in place
+        and are built once per precision."""
+        check_precision(precision)
+        bp = self._batch_params.get(precision)
+        if bp is None:
+            bp = self._batch_params[precision] = batch_params(self, precision)
+        return forces_batch, (bp._replace(counter=np.zeros(1)) if private else bp)
+
+    def merge_counts(self, bparams: BatchParams) -> None:
+        """Add the domain count of private batch parameters to the model's (``BatchForceModel``)."""
+        if bparams.counter is not self._counter:
+            self._counter[0] += bparams.counter[0]
 
     @property
     def validity(self) -> ValidityDomain:

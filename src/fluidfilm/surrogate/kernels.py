@@ -611,6 +611,8 @@ def forces_batch(bp, x, v, out):
     buf_a = np.empty((bp.width, TILE), dtype=wdt.dtype)
     buf_b = np.empty((bp.width, TILE), dtype=wdt.dtype)
     post = np.empty((5, TILE))  # gain, e_r (2), raw velocity inputs (2, damping structure)
+    y1 = np.empty(TILE)  # the tile's forces before the gain (allocated once per call: a small batch pays per call)
+    y2 = np.empty(TILE)
     for r in range(nr):
         kind, frame, n_extra = bp.regions[r, 0], bp.regions[r, 1], int(bp.regions[r, 2])
         physics = kind >= 1.0
@@ -666,8 +668,6 @@ def forces_batch(bp, x, v, out):
                     g *= drive
                 post[0, j], post[1, j], post[2, j] = g, er1, er2
             y = _mlp_tile(wdt, bp.tables[r], bp.n_layers[r], bp.activation, f32, z, buf_a, buf_b, m)
-            y1 = np.empty(m)
-            y2 = np.empty(m)
             for j in range(m):
                 y1[j] = y[0, j]
                 y2[j] = y[1, j]
