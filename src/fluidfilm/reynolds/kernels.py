@@ -333,6 +333,26 @@ def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
 
 
 @njit(cache=True, inline="always")
+def node_equations(params, x1, x2, v1, v2):
+    """(aw, ae, an, ap, rhs) per angle: node (i, j)'s equation aw p[i-1, j] + ae p[i+1, j]
+    + an (p[i, j-1] + p[i, j+1]) - ap p[i, j] = rhs (the same for every axial row j: H does not depend on z);
+    what the SOR and the active-set solver assemble from."""
+    n = params.n_theta
+    inv_dth, inv_dz2, k_omega, k_v = params.inv_dtheta, params.inv_dzeta2, params.k_omega, params.k_v
+    sin_n, cos_n = params.sin_node, params.cos_node
+    h3, hf, aw, ae = film_coefficients(params, x1 * params.inv_c, x2 * params.inv_c)
+    an = np.empty(n)
+    ap = np.empty(n)
+    rhs = np.empty(n)
+    for i in range(n):
+        im = i - 1 if i > 0 else n - 1
+        an[i] = h3[i] * inv_dz2
+        ap[i] = aw[i] + ae[i] + 2.0 * an[i]
+        rhs[i] = k_omega * (hf[i] - hf[im]) * inv_dth + k_v * (-v1 * sin_n[i] - v2 * cos_n[i])
+    return aw, ae, an, ap, rhs
+
+
+@njit(cache=True, inline="always")
 def sor_sweeps(params, x1, x2, v1, v2, p, fixed, project, omega_sor, tol, max_iter):
     """(Projected) SOR of the discrete Reynolds equation, the node columns ``fixed`` held.
 
@@ -347,17 +367,8 @@ def sor_sweeps(params, x1, x2, v1, v2, p, fixed, project, omega_sor, tol, max_it
     the sweep with its own constants, as when they were written apart.
     """
     n, nz = params.n_theta, p.shape[1]
-    sin_n, cos_n, inv_c = params.sin_node, params.cos_node, params.inv_c
-    inv_dth, inv_dz2, k_omega, k_v = params.inv_dtheta, params.inv_dzeta2, params.k_omega, params.k_v
-    h3, hf, aw, ae = film_coefficients(params, x1 * inv_c, x2 * inv_c)
-    an = np.empty(n)
-    inv_ap = np.empty(n)
-    rhs = np.empty(n)
-    for i in range(n):
-        im = i - 1 if i > 0 else n - 1
-        an[i] = h3[i] * inv_dz2
-        inv_ap[i] = 1.0 / (aw[i] + ae[i] + 2.0 * an[i])
-        rhs[i] = k_omega * (hf[i] - hf[im]) * inv_dth + k_v * (-v1 * sin_n[i] - v2 * cos_n[i])
+    aw, ae, an, ap, rhs = node_equations(params, x1, x2, v1, v2)
+    inv_ap = 1.0 / ap
     for it in range(max_iter):
         dmax = 0.0
         pmax = 0.0
@@ -493,17 +504,7 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter):
     n = params.n_theta
     nz = p.shape[1]
     m = nz - 2
-    inv_c, inv_dth, inv_dz2 = params.inv_c, params.inv_dtheta, params.inv_dzeta2
-    k_omega, k_v, sin_n, cos_n = params.k_omega, params.k_v, params.sin_node, params.cos_node
-    h3, hf, aw, ae = film_coefficients(params, x1 * inv_c, x2 * inv_c)
-    an = np.empty(n)
-    ap = np.empty(n)
-    rhs = np.empty(n)
-    for i in range(n):
-        im = i - 1 if i > 0 else n - 1
-        an[i] = h3[i] * inv_dz2
-        ap[i] = aw[i] + ae[i] + 2.0 * an[i]
-        rhs[i] = k_omega * (hf[i] - hf[im]) * inv_dth + k_v * (-v1 * sin_n[i] - v2 * cos_n[i])
+    aw, ae, an, ap, rhs = node_equations(params, x1, x2, v1, v2)
     symmetric = params.p_supply == 0.0
     mh = (m + 1) // 2 if symmetric else m  # rows solved: j = 1..mh
     centre = symmetric and m % 2 == 1  # row mh is the mid-plane row (halved)
