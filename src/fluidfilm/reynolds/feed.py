@@ -11,8 +11,10 @@ nodes, not a band of finite width.
 
 The groove breaks the separable fast solve, so the discrete system (the same
 conservative finite-difference scheme, grid and Simpson integration as
-``ReynoldsSolver``, see ``kernels``) is solved by (projected) SOR with the
-groove column held fixed.  The grid is rotated so that the groove sits on
+``ReynoldsSolver``, see ``kernels``) is solved with the groove columns held
+fixed: by direct sparse solves (``kernels.active_set_field``: one for the
+linear system, an active-set iteration of them for Swift-Stieber; the
+default) or, with ``method="psor"``, by (projected) SOR.  The grid is rotated so that the groove sits on
 node 0: the computation is done in a frame turned by the groove angle, and
 positions, velocities and forces are rotated in and out.
 """
@@ -27,7 +29,7 @@ from numba import njit
 from fluidfilm.core.bearing import JournalBearing
 from fluidfilm.core.states import as_state_pairs
 from fluidfilm.reynolds import kernels
-from fluidfilm.reynolds.params import FilmParams
+from fluidfilm.reynolds.params import SS_PSOR, FilmParams
 from fluidfilm.reynolds.solver import CAVITATION_MODELS, ReynoldsSolver, _GridSolver
 
 _CAV = {"none": kernels.CAV_NONE, "gumbel": kernels.CAV_GUMBEL, "swift-stieber": kernels.CAV_SWIFT_STIEBER}
@@ -57,7 +59,8 @@ def from_groove_frame(cos_g, sin_g, b1, b2):
 
 @njit(cache=True)
 def grooved_field(gparams, x1, x2, v1, v2, p):
-    """Pressure field in the groove frame (boundaries, groove and cavitation applied); returns sweeps or -1."""
+    """Pressure field in the groove frame (boundaries, groove and cavitation applied); returns the number of
+    SOR sweeps or direct solves (``params.ss_method``), or -1 if they did not converge."""
     params = gparams.film
     cos_g = gparams.cos_groove
     sin_g = gparams.sin_groove
@@ -78,10 +81,14 @@ def grooved_field(gparams, x1, x2, v1, v2, p):
         if fixed[i]:
             for j in range(nz):
                 p[i, j] = p_s
-    # Swift-Stieber projects onto p >= 0 (Cryer's PSOR); the other models solve the linear system
-    # (Gumbel clips afterwards)
-    it = kernels.sor_sweeps(params, y1, y2, w1, w2, p, fixed, cav == kernels.CAV_SWIFT_STIEBER, params.sor_omega,
-                            params.sor_tol, params.sor_max_iter)
+    # Swift-Stieber is the complementarity problem p >= 0 (active-set iteration, or Cryer's PSOR); the
+    # other models solve the linear system (Gumbel clips afterwards)
+    ss = cav == kernels.CAV_SWIFT_STIEBER
+    if params.ss_method == SS_PSOR:
+        it = kernels.sor_sweeps(params, y1, y2, w1, w2, p, fixed, ss, params.sor_omega, params.sor_tol,
+                                params.sor_max_iter)
+    else:
+        it = kernels.active_set_field(params, y1, y2, w1, w2, p, fixed, ss, n * nz)
     if cav == kernels.CAV_GUMBEL:
         for i in range(n):
             for j in range(nz):
@@ -99,7 +106,7 @@ def grooved_force(gparams, x1, x2, v1, v2):
     p = np.empty((n, nz))
     it = grooved_field(gparams, x1, x2, v1, v2, p)
     if it < 0:
-        raise RuntimeError("SOR of the grooved bearing did not converge; raise sor_max_iter")
+        raise RuntimeError("the grooved bearing's solver did not converge (with method='psor': raise sor_max_iter)")
     g1, g2 = kernels.integrate_field(params, p)
     return from_groove_frame(gparams.cos_groove, gparams.sin_groove, g1, g2)
 
@@ -118,11 +125,13 @@ class GroovedReynoldsSolver(_GridSolver):
     +-90 deg from a vertical load line with ``groove_angle=pi/2``);
     ``n_theta`` must be a multiple of it.  ``groove_width`` [rad]: each groove
     holds the supply pressure at the nodes within +-width/2 of its centre (0: a line).
+    ``method``: ``"active-set"`` (direct sparse solves, for every cavitation model; the default) or
+    ``"psor"`` ((projected) SOR with the ``sor_*`` settings, as before; for comparison).
     """
 
     def __init__(self, bearing: JournalBearing, n_theta: int = 60, n_z: int = 31, cavitation: str = "swift-stieber",
                  groove_angle: float = math.pi, n_grooves: int = 1, groove_width: float = 0.0, sor_omega: float | None = None, sor_tol: float = 1e-11,
-                 sor_max_iter: int = 400_000):
+                 sor_max_iter: int = 400_000, method: str = "active-set"):
         if cavitation not in CAVITATION_MODELS:
             raise ValueError(f"unknown cavitation model {cavitation!r}; choose one of {CAVITATION_MODELS}")
         g = float(groove_angle)
@@ -130,8 +139,9 @@ class GroovedReynoldsSolver(_GridSolver):
             raise ValueError(f"groove_angle must be a finite angle in rad, got {groove_angle!r}")
         # the groove-free solver provides the grid, the kernel parameters and the starting field
         self._base = ReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation, sor_omega=sor_omega,
-                                    sor_tol=sor_tol, sor_max_iter=sor_max_iter)
+                                    sor_tol=sor_tol, sor_max_iter=sor_max_iter, method=method)
         self.cavitation = cavitation
+        self.method = method
         self.groove_angle = g
         ng = int(n_grooves)
         if ng < 1 or ng != n_grooves or n_theta % ng:
@@ -183,5 +193,5 @@ class GroovedReynoldsSolver(_GridSolver):
         p = np.empty((self.n_theta, self.n_z))
         it = grooved_field(self.gparams, xa[0, 0], xa[0, 1], va[0, 0], va[0, 1], p)
         if it < 0:
-            raise RuntimeError("SOR of the grooved bearing did not converge; raise sor_max_iter")
+            raise RuntimeError("the grooved bearing's solver did not converge (with method='psor': raise sor_max_iter)")
         return p

@@ -15,12 +15,18 @@ from typing import NamedTuple
 import numpy as np
 
 
+# Swift-Stieber solvers (``FilmParams.ss_method``; the names are ``SS_METHODS``' entries)
+SS_ACTIVE_SET = 0
+SS_PSOR = 1
+SS_METHODS = ("active-set", "psor")
+
+
 class Cavitation(IntEnum):
     """Cavitation rule of the film (the kernels read the integer value).
 
     ``NONE``: full Sommerfeld, negative pressures kept (for verification);
     ``GUMBEL``: half-Sommerfeld, negative pressures set to zero after the linear solve;
-    ``SWIFT_STIEBER``: Reynolds condition as a complementarity problem (projected SOR).
+    ``SWIFT_STIEBER``: Reynolds condition as a complementarity problem (active-set iteration, or projected SOR).
 
     Examples
     --------
@@ -109,6 +115,9 @@ class FilmParams(NamedTuple):
         Mode values at every interior axial node.
     p_supply : float
         Supply pressure [Pa].
+    ss_method : int, default 0
+        Swift-Stieber solver: ``SS_ACTIVE_SET`` (0, direct solves in an active-set iteration) or
+        ``SS_PSOR`` (1, projected SOR with the ``sor_*`` settings).
 
     Examples
     --------
@@ -146,6 +155,7 @@ class FilmParams(NamedTuple):
     sor_max_iter: int
     full_basis: np.ndarray      # mode values at every interior axial node
     p_supply: float             # supply pressure [Pa]
+    ss_method: int = 0          # Swift-Stieber solver: SS_ACTIVE_SET (0) or SS_PSOR (1)
 
 
 class GeneralParams(NamedTuple):

@@ -18,13 +18,13 @@ from fluidfilm.core.force_model import ReferenceModel, check_precision
 from fluidfilm.core.states import V_MAX_PHYSICAL, as_state_pairs, check_states
 from fluidfilm.reynolds import kernels
 from fluidfilm.reynolds.mesh import FilmMesh
-from fluidfilm.reynolds.params import Cavitation, FilmParams
+from fluidfilm.reynolds.params import SS_METHODS, Cavitation, FilmParams
 
 CAVITATION_MODELS = ("gumbel", "swift-stieber", "none")
 
 
 def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str | Cavitation,
-                 sor_omega: float, sor_tol: float, sor_max_iter: int) -> FilmParams:
+                 sor_omega: float, sor_tol: float, sor_max_iter: int, method: str = "active-set") -> FilmParams:
     """Kernel parameters of the cylindrical bearing (``params.FilmParams``: the fields are named there).
 
     The axial modes are the sine modes of the second difference; with no supply
@@ -79,6 +79,7 @@ def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str | Cavi
         sor_omega=float(sor_omega), sor_tol=float(sor_tol), sor_max_iter=int(sor_max_iter),
         full_basis=full_basis,
         p_supply=float(p_s),
+        ss_method=SS_METHODS.index(method),
     )
 
 
@@ -153,20 +154,25 @@ class ReynoldsSolver(_GridSolver):
         Axial nodes, both ends included.
     cavitation : {"gumbel", "swift-stieber", "none"} or Cavitation, default "gumbel"
         ``"gumbel"`` (half-Sommerfeld: negative pressures set to zero after the linear solve; the
-        paper's model), ``"swift-stieber"`` (Reynolds condition as a complementarity problem,
-        projected SOR) or ``"none"`` (full Sommerfeld, negative pressures kept; for verification).
+        paper's model), ``"swift-stieber"`` (Reynolds condition as a complementarity problem, see
+        ``method``) or ``"none"`` (full Sommerfeld, negative pressures kept; for verification).
     sor_omega : float or None, default None
         Relaxation factor of the projected SOR, in (0, 2); None: near the optimum for the grid.
     sor_tol : float, default 1e-10
         Convergence tolerance of the projected SOR (> 0).
     sor_max_iter : int, default 200000
         Iteration limit of the projected SOR.
+    method : {"active-set", "psor"}, default "active-set"
+        Solver of the Swift-Stieber problem: a primal-dual active-set iteration of direct solves
+        (``kernels.active_set_field``: exact up to round-off, typically 3-8 solves) or the projected
+        SOR (``kernels.psor_swift_stieber``, converged to ``sor_tol``; kept for comparison).  Not used
+        by the other cavitation models (one direct solve).
 
     Raises
     ------
     ValueError
-        For a bearing that is not a ``JournalBearing``, an unknown cavitation model, a grid too
-        small for the scheme, or SOR settings out of range (each named).
+        For a bearing that is not a ``JournalBearing``, an unknown cavitation model or method, a grid
+        too small for the scheme, or SOR settings out of range (each named).
 
     Examples
     --------
@@ -186,16 +192,19 @@ class ReynoldsSolver(_GridSolver):
 
     def __init__(self, bearing: JournalBearing, n_theta: int = 30, n_z: int = 30,
                  cavitation: str | Cavitation = "gumbel", sor_omega: float | None = None,
-                 sor_tol: float = 1e-10, sor_max_iter: int = 200_000):
+                 sor_tol: float = 1e-10, sor_max_iter: int = 200_000, method: str = "active-set"):
         if not isinstance(bearing, JournalBearing):
             raise ValueError(f"bearing must be a JournalBearing, got {type(bearing).__name__}")
         if isinstance(cavitation, Cavitation):
             cavitation = cavitation.label
         if cavitation not in CAVITATION_MODELS:
             raise ValueError(f"unknown cavitation model {cavitation!r}; choose one of {CAVITATION_MODELS}")
+        if method not in SS_METHODS:
+            raise ValueError(f"unknown Swift-Stieber method {method!r}; choose one of {SS_METHODS}")
         self._bearing = bearing
         self.mesh = FilmMesh(n_theta, n_z, bearing.length)
         self.cavitation = cavitation
+        self.method = method
         if sor_omega is None:
             # near the optimum of SOR for a Poisson-like operator on this grid
             sor_omega = 2.0 / (1.0 + math.sin(math.pi / max(self.mesh.n_theta, self.mesh.n_z)))
@@ -203,7 +212,7 @@ class ReynoldsSolver(_GridSolver):
             raise ValueError(f"sor_omega must lie in (0, 2), got {sor_omega!r}")
         if not sor_tol > 0.0:
             raise ValueError(f"sor_tol must be positive, got {sor_tol!r}")
-        self.params = build_params(bearing, self.mesh, cavitation, sor_omega, sor_tol, sor_max_iter)
+        self.params = build_params(bearing, self.mesh, cavitation, sor_omega, sor_tol, sor_max_iter, method)
         self._c = bearing.clearance
         self._kernel = kernels.film_force_ss if cavitation == "swift-stieber" else kernels.film_force
 
@@ -258,10 +267,7 @@ class ReynoldsSolver(_GridSolver):
             return p
         np.maximum(p, 0.0, out=p)
         if self.cavitation == "swift-stieber":
-            it = kernels.psor_swift_stieber(self.params, x1, x2, v1, v2, p,
-                                            self.params.sor_omega, self.params.sor_tol, self.params.sor_max_iter)
-            if it < 0:
-                raise RuntimeError("projected SOR did not converge; raise sor_max_iter")
+            kernels.swift_stieber_field(self.params, x1, x2, v1, v2, p)
         return p
 
     def linear_pressure(self, x, v) -> np.ndarray:
