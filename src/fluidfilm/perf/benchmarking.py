@@ -175,9 +175,14 @@ def render(path: Path) -> str:
     'Two runs.'
     """
     data = json.loads(Path(path).read_text())
+
+    def row(cells) -> str:
+        # a '|' inside a cell (e.g. "max |dF|") would end the cell: Markdown escapes it
+        return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"
+
     lines = [f"{data['title']} (`{data['command']}`, {data['date']}, {data['machine']}):", "",
-             "| " + " | ".join(data["header"]) + " |", "|" + "---|" * len(data["header"])]
-    lines += ["| " + " | ".join(r) + " |" for r in data["rows"]]
+             row(data["header"]), "|" + "---|" * len(data["header"])]
+    lines += [row(r) for r in data["rows"]]
     if data.get("notes"):
         lines += ["", data["notes"]]
     return "\n".join(lines) + "\n"
