@@ -103,7 +103,9 @@ def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batch
     # compile outside the timing
     kw: dict[str, Any] = {"threads": threads, "precision": precision, "stage_batched": stage_batched}
     if batched:
-        simulate_batch(model, rotors[:1], 2 * dt, dt, x0[:1], v0[:1], record_every=10, **kw)
+        # the whole batch for two steps: simulate_batch picks its loop by the batch's size (the stage-batched
+        # one from STAGE_BATCHED_MIN_N trajectories), so one trajectory would compile the other loop only
+        simulate_batch(model, rotors, 2 * dt, dt, x0, v0, record_every=10, **kw)
     else:
         simulate(model, rotors[0], 2 * dt, dt, x0[0], v0[0], record_every=10)
     n_ok = [0]
