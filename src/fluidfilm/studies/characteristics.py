@@ -507,7 +507,7 @@ def run(cfg):
     x0 = stab.operating_point(ref, load_along_gravity(loads_for_eccentricities(ref, [ch.step_study_eps])[0]))["X"]
     steps = step_table(ref, x0, ch.step_study_steps)
     steps_sur = {n: step_table(m, x0, ch.step_study_steps) for n, m in surrogates.items()}
-    io.write_csv(tables / "step_csv", pd.concat([steps.assign(model="reference")] +
+    io.write_csv(tables / "step_study.csv", pd.concat([steps.assign(model="reference")] +
                                                      [s.assign(model=n) for n, s in steps_sur.items()]))
     timings = timing({"reference": ref, "reference_converged": conv, **surrogates}, x0, ch.timing_repeats, h)
     io.write_csv(tables / "timing.csv", timings)
