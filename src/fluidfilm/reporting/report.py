@@ -138,6 +138,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
         for _, r in rows.iterrows():
             metrics[f"orbit_rms_pct_{m}_{r.case}"] = float(r.rms_pct)
         metrics[f"satisfactory_cases_{m}"] = int(rows.satisfactory.astype(bool).sum())
+        if "satisfactory_paper_reading" in rows:  # the paper's reading (span and shape, not position)
+            metrics[f"satisfactory_cases_{m}_paper_reading"] = int(rows.satisfactory_paper_reading.astype(bool).sum())
     for name, rep in inp.models.items():
         metrics[f"test_rel_err_median_{name}"] = rep["metrics"]["test_rel_err_median"]
         metrics[f"test_rel_err_p99_{name}"] = rep["metrics"]["test_rel_err_p99"]
