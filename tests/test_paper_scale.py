@@ -79,3 +79,22 @@ def test_flat_keys_name_size_structure_and_variant():
     assert keys["equilibrium_offset_pct_c_ablation_whirl_frame"] == 27.0
     assert keys["satisfactory_cases_single_full_scale"] == 2
     assert keys["train_time_reduction_pct_full_scale_lm"] == pytest.approx(25.0)
+
+
+def test_resolution_is_the_maps_half_range_at_the_equilibrium(reference):
+    """A minmax-mapped network's unit at rest is its half-range of force; times the validation RMS error."""
+    from fluidfilm.studies.paper_scale import resolution
+    from fluidfilm.surrogate.scaling import Scaling
+
+    class _Mapped:
+        boundaries = np.array([0.5])
+        scalings = [Scaling("minmax", 1.0, 1.0, 1.0, 0.0, np.zeros(4), np.ones(4), np.zeros(2), np.array([10.0, 20.0])),
+                    Scaling("minmax", 1.0, 1.0, 1.0, 0.0, np.zeros(4), np.ones(4), np.zeros(2), np.array([300.0, 400.0]))]
+
+    # the rotor's 25 N puts the paper bearing's journal above eps 0.5: the second network, 500 N per unit
+    eq = equilibrium(reference, (0.0, 25.0))
+    r = resolution(_Mapped(), reference, (0.0, 25.0), [{"val_mse": 1.0}, {"val_mse": 1e-4}])
+    assert r["network"] == int(eq["eps"] >= 0.5)
+    unit = [300.0, 400.0] if r["network"] == 1 else [10.0, 20.0]
+    assert r["newton_per_mapped_unit"] == unit
+    assert r["expected_static_error_N"] == pytest.approx(math.hypot(*unit) * (0.01 if r["network"] == 1 else 1.0))

@@ -545,6 +545,12 @@ def paper_scale_records(reports: Path) -> tuple[list[dict], list[str]]:
     return list(seen.values()), sources
 
 
+def _resolution_cell(res: Mapping | None) -> str:
+    if not res:
+        return "-"
+    return f"{math.hypot(*res['newton_per_mapped_unit']):,.0f}; {res['expected_static_error_N']:.0f}"
+
+
 def render_paper_scale(reports: Path) -> str:
     """One row per trained model of the paper_scale study: training, static force error, equilibrium offset and
     the verdicts by both readings."""
@@ -563,6 +569,7 @@ def render_paper_scale(reports: Path) -> str:
                      " / ".join(_num(band.get(f"test_rel_err_median_band_{b}"), ".1%") for b in ("0_0.5", "0.5_0.7", "0.7_1")),
                      f"({err[0]:.0f}, {err[1]:.0f}) N; {100 * math.hypot(*err) / eq['load_N']:.0f} %",
                      f"{100 * r['locus']['error_share_of_load_max']:.0f} %",
+                     _resolution_cell(r.get("resolution")),
                      _num(r["equilibrium_offset_pct_c"], ".1f", " %"),
                      r["satisfactory_cases_position"] or "none", r["satisfactory_cases_paper_reading"] or "none",
                      f"{r.get('paper_verdicts_reproduced_position', '-')} / {r.get('paper_verdicts_reproduced_paper_reading', '-')}"])
@@ -570,7 +577,8 @@ def render_paper_scale(reports: Path) -> str:
             + _table(["model", "samples", "epochs per network", "stop reasons", "training time",
                       "held-out median rel. error, eps 0-0.5 / 0.5-0.7 / > 0.7",
                       "static force error at the reference equilibrium under the rotor's weight; share of the load",
-                      "largest share along the locus (0.25-4 x the weight)", "equilibrium offset [% of c]",
+                      "largest share along the locus (0.25-4 x the weight)",
+                      "one mapped unit at that equilibrium; x the network's val. RMS [N]", "equilibrium offset [% of c]",
                       "satisfactory, 2 %-of-c rule", "satisfactory, the paper's reading (span, shape)",
                       "paper's 7 verdicts reproduced (rule / reading)"], rows))
 

@@ -104,6 +104,26 @@ def equilibrium_offset(model, reference, load) -> dict:
                   "eps_model": float(m["eps"])}
 
 
+def resolution(model, reference, load, networks: list[dict]) -> dict:
+    """What one mapped unit of the network that holds the reference's equilibrium is worth there, in N.
+
+    The network's outputs are forces mapped to [-1, 1] over its rows (``Scaling.forces``): at the
+    equilibrium state (V = 0) one unit is gain x half-range newtons per component.  Times the
+    network's validation RMS error in mapped units it is the static force error to expect there,
+    beside the load the equilibrium has to balance.
+    """
+    from fluidfilm.characteristics.static import equilibrium
+
+    ref = equilibrium(reference, tuple(load))
+    r = int(np.searchsorted(np.asarray(model.boundaries), ref["eps"], side="right"))
+    sc = model.scalings[r]
+    X = np.array([ref["X1"], ref["X2"]])
+    unit = np.abs(np.asarray(sc.gain(X[None, :], np.zeros((1, 2))))[0] * np.asarray(sc.out_std))
+    rms = math.sqrt(networks[r]["val_mse"])
+    return {"network": r, "newton_per_mapped_unit": [float(u) for u in unit], "val_rms_mapped": rms,
+            "expected_static_error_N": float(rms * np.hypot(*unit)), "load_N": float(np.hypot(*load))}
+
+
 def verdicts(rows: list[dict], structure: str) -> dict:
     """Satisfactory cases by both readings, and how many of the paper's seven verdicts each reproduces."""
     paper = PAPER_VERDICTS.get(structure)
@@ -193,7 +213,13 @@ def run_point(frame, meta, testset, point: Mapping, protocol: Mapping, cfg: Mapp
     key = point_key(point, protocol, meta, int(cfg["seed"]))
     path = cache / f"{key}.json"
     if path.exists():
-        return json.loads(path.read_text()) | {"resumed": True}
+        rec = json.loads(path.read_text()) | {"resumed": True}
+        if "resolution" not in rec and (cache / "models" / key).exists():  # a record of before this measure
+            from fluidfilm import load_surrogate
+
+            rec["resolution"] = resolution(load_surrogate(cache / "models" / key), reference, loads["a"],
+                                           rec["networks"])
+        return rec
     t0 = time.perf_counter()
     print(f"paper_scale: {point['label']}: {point['structure']}, {point['n_samples']:,} samples "
           f"(record {path})", flush=True)
@@ -211,6 +237,7 @@ def run_point(frame, meta, testset, point: Mapping, protocol: Mapping, cfg: Mapp
           f"{rep['stop_reasons']}", flush=True)
     rec.update(evaluate(model, reference, references, testset, cfg, point["structure"], loads,
                         cfg["locus_load_factors"]))
+    rec["resolution"] = resolution(model, reference, loads["a"], nets)
     rec["wall_s"] = time.perf_counter() - t0
     model.save(cache / "models" / key)
     io.write_json(path, rec)
