@@ -129,6 +129,20 @@ def render_headline(reports: Path) -> str:
         ["cases satisfactory, split", "a-e (5 of 7)", _num(g("satisfactory_cases_split"), "d", " of 7")],
         ["cases satisfactory, best (ours)", "-", _num(g("satisfactory_cases_best"), "d", " of 7")],
     ]
+    if g("satisfactory_cases_split_paper_reading") is not None:  # the paper's reading: span and shape, not position
+        rows.append(["cases satisfactory by the paper's reading (span and shape after the mean offset), single / split",
+                     "e only / a-e", f"{_num(g('satisfactory_cases_single_paper_reading'), 'd')} / "
+                     f"{_num(g('satisfactory_cases_split_paper_reading'), 'd')} of 7"])
+    sizes = sorted(int(k.rsplit("_", 1)[1]) for k in m if re.fullmatch(r"equilibrium_offset_pct_c_split_\d+", k))
+    largest = "full_scale" if g("equilibrium_offset_pct_c_split_full_scale") is not None else (
+        str(sizes[-1]) if sizes else None)
+    if largest is not None:  # the paper_scale stage: the paper's split at the largest size trained
+        n = "all" if largest == "full_scale" else f"{int(largest):,}"
+        rows.append([f"the paper's split at the largest size trained ({n} samples): cases satisfactory, 2 %-of-c rule / "
+                     "the paper's reading; equilibrium offset", "a-e / a-e; -",
+                     f"{_num(g(f'satisfactory_cases_split_{largest}'), 'd')} / "
+                     f"{_num(g(f'satisfactory_cases_split_{largest}_paper_reading'), 'd')} of 7; "
+                     f"{_num(g(f'equilibrium_offset_pct_c_split_{largest}'), '.1f', ' % of c')}"])
     if g("best_seeds") is not None:  # the ensemble stage: every training seed of best, and their ensemble
         seeds = [k for k in m if k.startswith("seed_study_satisfactory_best")]
         rows.append([f"cases satisfactory, each of best's {g('best_seeds')} training seeds / their ensemble", "-",
