@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import re
 import sys
 from collections.abc import Callable, Mapping
@@ -521,6 +522,59 @@ def render_train_time_full_scale(reports: Path) -> str:
                       "stop reasons", "val. rel. RMSE per network", "val. rel. RMSE", "test rel. RMSE"], rows))
 
 
+#: the paper_scale study's reports, first found first: the pipeline's, the larger sizes', the full scale's, and a
+#: run by hand at 40 k committed before the pipeline's (its own label says so)
+PAPER_SCALE_REPORTS = ("paper_scale.json", "paper_scale_curve.json", "paper_full_scale.json", "paper_scale_40k.json")
+
+
+def paper_scale_records(reports: Path) -> tuple[list[dict], list[str]]:
+    """Every record of the paper_scale reports present (one per label, the first report's), and the reports'
+    sources (file, machine, date, load)."""
+    seen: dict[str, dict] = {}
+    sources = []
+    for name in PAPER_SCALE_REPORTS:
+        if not (reports / name).exists():
+            continue
+        t = _load(reports, name)
+        load = t.get("load_average")
+        sources.append(f"`reports/{name}` ({t['machine']}, {t['date']}"
+                       + (f", load average {load[0]:.1f} at the end" if load else "") + ")")
+        for r in t["records"]:
+            if "from_report" not in r:
+                seen.setdefault(r["label"], r)
+    return list(seen.values()), sources
+
+
+def render_paper_scale(reports: Path) -> str:
+    """One row per trained model of the paper_scale study: training, static force error, equilibrium offset and
+    the verdicts by both readings."""
+    records, sources = paper_scale_records(reports)
+    if not records:
+        return ("Not run yet in this workspace: the `paper_scale` stage (`make reproduce`) writes "
+                "`reports/paper_scale.json` and fills this block.\n")
+    rows = []
+    for r in records:
+        nets = r["networks"]
+        eq = r["equilibrium"]["a"]
+        err = eq["static_force_error_N"]
+        band = r["bands"]
+        rows.append([r["label"], f"{r['n_samples']:,}", ", ".join(str(n["epochs"]) for n in nets),
+                     ", ".join(n["stop_reason"] for n in nets), f"{r['train_time_s']:.0f} s",
+                     " / ".join(_num(band.get(f"test_rel_err_median_band_{b}"), ".1%") for b in ("0_0.5", "0.5_0.7", "0.7_1")),
+                     f"({err[0]:.0f}, {err[1]:.0f}) N; {100 * math.hypot(*err) / eq['load_N']:.0f} %",
+                     f"{100 * r['locus']['error_share_of_load_max']:.0f} %",
+                     _num(r["equilibrium_offset_pct_c"], ".1f", " %"),
+                     r["satisfactory_cases_position"] or "none", r["satisfactory_cases_paper_reading"] or "none",
+                     f"{r.get('paper_verdicts_reproduced_position', '-')} / {r.get('paper_verdicts_reproduced_paper_reading', '-')}"])
+    return ("From " + "; ".join(sources) + ". The paper's verdicts: single e, split a-e.\n\n"
+            + _table(["model", "samples", "epochs per network", "stop reasons", "training time",
+                      "held-out median rel. error, eps 0-0.5 / 0.5-0.7 / > 0.7",
+                      "static force error at the reference equilibrium under the rotor's weight; share of the load",
+                      "largest share along the locus (0.25-4 x the weight)", "equilibrium offset [% of c]",
+                      "satisfactory, 2 %-of-c rule", "satisfactory, the paper's reading (span, shape)",
+                      "paper's 7 verdicts reproduced (rule / reading)"], rows))
+
+
 def render_paper_bands(reports: Path) -> str:
     m = _load(reports, "metrics.json")
     rows = []
@@ -563,6 +617,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "train_time_ci": render_train_time_ci,
     "train_time_full_scale": render_train_time_full_scale,
     "paper_bands": render_paper_bands,
+    "paper_scale": render_paper_scale,
     "batch_speed": render_batch_speed,
     "controller_training": render_controller_training,
     "characteristics_timing": render_characteristics_timing,
