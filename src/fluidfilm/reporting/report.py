@@ -49,6 +49,7 @@ class ReportInputs:
     grading_study: dict | None = None  # reports/grading_study/summary.json, where that stage ran
     ablation: dict | None = None      # reports/ablation/summary.json, where that stage ran
     error_map: dict | None = None     # reports/error_map.json, where that stage ran
+    runup: dict | None = None         # reports/runup.json, where that stage ran
 
 
 def _load(path: Path) -> Any:
@@ -75,7 +76,7 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         controller_training_speed=_load(rd / "controller_training_speed.json"),
         characteristics=optional(charac), ensemble=optional(ens),
         grading_study=optional(rd / "grading_study" / "summary.json"), ablation=optional(rd / "ablation" / "summary.json"),
-        error_map=optional(rd / "error_map.json"))
+        error_map=optional(rd / "error_map.json"), runup=optional(rd / "runup.json"))
 
 
 def _f(x, spec=".1f"):
@@ -170,6 +171,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
         metrics.update(extra)
     if inp.error_map is not None:  # the error map: the seeds' force errors held out and along the reference orbits
         metrics.update(error_map_metrics(inp.error_map))
+    if inp.runup is not None:  # the run-up: onset of whirl from the transient against Lund's threshold
+        metrics.update(inp.runup["metrics"])
     for study in ("grading_study", "ablation"):
         summary = getattr(inp, study)
         if summary is not None:
