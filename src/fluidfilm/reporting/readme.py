@@ -54,7 +54,7 @@ _table = report.markdown_table
 # Stages that the paper's figures and numbers do not need: the workspace's own surrogate (three seeds),
 # its ensemble, error map and batched speed, the grading study, the ablation and the characteristics.
 BEYOND_PAPER_STAGES = ("dataset_orbit", "train_best", "train_best_seeds", "ensemble", "error_map", "batch_speed",
-                       "grading_study", "ablation", "characteristics")
+                       "grading_study", "ablation", "characteristics", "runup")
 
 
 def render_reproduce_timing(reports: Path) -> str:
@@ -398,6 +398,28 @@ def render_error_map(reports: Path) -> str:
                      rows) + worst)
 
 
+def render_runup(reports: Path) -> str:
+    ru = _load(reports, "runup.json")
+    lin = ru["linear"]
+    sch = ru["schedule"]
+    rows = []
+    for name, m in ru["models"].items():
+        if "onset_rpm" not in m:
+            rows.append([name, m["status"], "", "", "", "", ""])
+            continue
+        rows.append([name, _num(m["onset_rpm"], ",.0f"), _num(100 * (m["onset_rpm"] / lin["threshold_rpm"] - 1), "+.2f", " %"),
+                     _num(m["whirl_ratio_at_onset"], ".3f"), _num(m["established_rpm"], ",.0f"), _num(m["gone_rpm"], ",.0f"),
+                     _num(m.get("rate_rpm_s"), ",.0f")])
+    return (f"Lund's linear threshold of the reference ({lin['grid'][0]}x{lin['grid'][1]}, {lin['cavitation']}): "
+            f"**{lin['threshold_rpm']:,.0f} rpm**, whirl ratio {lin['whirl_ratio']:.3f}, eps {lin['eps']:.3f}; rotor "
+            f"{ru['rotor']['mass_kg']:g} kg per bearing, imbalance {ru['rotor']['imbalance_kg_m']:g} kg m; ramp "
+            f"{sch['rate_rpm_s']:,.0f} rpm/s, RK4 step {sch['dt_s']:g} s. Onset: where the sub-synchronous amplitude "
+            f"starts to grow; established / gone: where it crosses {ru['analysis']['whirl_level_c']:g} c on the run-up "
+            f"/ run-down:\n\n"
+            + _table(["run", "onset [rpm]", "vs Lund", "whirl ratio at onset", "established, up [rpm]",
+                      "gone, down [rpm]", "ramp [rpm/s]"], rows))
+
+
 def render_surrogate_goals(reports: Path) -> str:
     m = _load(reports, "metrics.json")
     return (f"Met: **{m['surrogate_goals_met']} of {m['surrogate_goals']}** (`reports/metrics.json`).\n\n"
@@ -655,6 +677,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "grading_study": render_grading_study,
     "ablation": render_ablation,
     "error_map": render_error_map,
+    "runup": render_runup,
     "surrogate_goals": render_surrogate_goals,
     "control": render_control,
     "figures": render_figures,
