@@ -745,7 +745,7 @@ def capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric)
 
 
 @njit(cache=True, error_model="numpy")
-def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transform=True):
+def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transform=True, warm=None, warm_in=False):
     """The discrete Reynolds equation solved directly, as a linear complementarity problem if ``project``.
 
     Same discrete problem as ``sor_sweeps`` (the node columns ``fixed`` held at their values in ``p``, the
@@ -791,7 +791,18 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
     # nodes it takes in wrongly go back in one step (every free node with p < 0 becomes active at once), while
     # cavitated nodes are released only a layer per step (one must see its neighbour's pressure first), so
     # starting wide costs fewer solves: on 30..288 angles about 3-5 .. 8-16 instead of 7 .. 33-53
-    for _ in range(int(round(AS_WIDEN * n)) if project else 0):
+    warm_start = False
+    if warm is not None:
+        if warm.shape[0] != n or warm.shape[1] != mh + 2:
+            raise ValueError("the warm-start free set must have shape (n_theta, rows solved + 2)")
+        if project and warm_in:
+            # the free set of an earlier, nearby state (a caller's continuation): usually right or nearly so
+            warm_start = True
+            for i in range(n):
+                if not fixed[i]:
+                    for j in range(1, mh + 1):
+                        free[i, j] = warm[i, j]
+    for _ in range(int(round(AS_WIDEN * n)) if project and not warm_start else 0):
         f2 = free.copy()
         for i in range(n):
             if fixed[i]:
@@ -946,6 +957,8 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
                         free[i, j] = True
                         changed = True
         if not changed:
+            if warm is not None:
+                warm[:, :] = free
             # round-off negatives (above -thr) are the zeros of cavitated nodes
             for i in range(n):
                 for j in range(1, nz - 1):
