@@ -54,6 +54,9 @@ Kernels:
                              primal-dual active-set iteration of direct sparse
                              Cholesky solves (``envelope_cholesky``,
                              ``envelope_solve``): the default
+- ``capacitance_field``      the active-set iteration's linear solve by the axial
+                             sine transform on runs of node columns and a
+                             capacitance matrix on the active nodes inside them
 - ``swift_stieber_field``    either of them, by ``params.ss_method``
 - ``film_force_ss``          force with Swift-Stieber cavitation
 - ``general_linear_field``   the general path: film thickness h(theta, z)
@@ -768,6 +771,13 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
     ``p_supply == 0`` the field is symmetric about mid-length and only the lower half of the axial nodes is
     solved (the mirror folded into the top row; with an odd number of interior rows the centre row is
     halved to keep the matrix symmetric).
+
+    With ``transform`` (the default) a solve goes instead by the axial sine transform where that is cheaper
+    (``capacitance_field``: wholly cavitated or held node columns cut the ring into runs, each one symmetric
+    tridiagonal system per axial mode, the active nodes inside a run held at zero by a small capacitance
+    system): same free set, same discrete equations, the same solution to round-off.  ``warm``: a bool
+    array (n_theta, rows solved + 2) that receives the final free set; with ``warm_in`` its content is the
+    first free set (an earlier nearby state's) instead of the widened film of ``p``.
 
     ``p``: full (n_theta, n_z) field, updated in place.  Returns the number of linear solves, or -1 if
     ``max_iter`` solves did not settle the active set.
