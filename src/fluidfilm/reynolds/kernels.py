@@ -350,13 +350,16 @@ def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
     nk = params.lam.shape[0]
     q0, qs, qc = position_modes(params, x1 * params.inv_c, x2 * params.inv_c)
     nz = out.shape[1]
+    phat = np.empty(nk)
     for i in range(n):
         out[i, 0] = p_supply
         out[i, nz - 1] = 0.0
+        for k in range(nk):
+            phat[k] = q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]
         for j in range(1, nz - 1):
             acc = 0.0
             for k in range(nk):
-                acc += (q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]) * full_basis[j - 1, k]
+                acc += phat[k] * full_basis[j - 1, k]
             out[i, j] = acc
 
 
