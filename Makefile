@@ -23,6 +23,10 @@
 #                                  docs/paper_experiment.md): reports/train_time_ci.json
 #   make train-time-full-scale     one run per structure on all 4.5 M samples (Adam, same stopping rule):
 #                                  reports/train_time_full_scale.json
+#   make paper-scale-curve         the paper's networks at 640 k and 2.56 M samples (LM, hours):
+#                                  reports/paper_scale_curve.json (resumes where it stopped)
+#   make paper-full-scale          the paper's networks on all 4.5 M samples (LM; the split's eps > 0.7
+#                                  network to LM_BUDGET_S, then Adam): reports/paper_full_scale.json
 PYTHON      ?= python3
 VENV        := .venv
 PY          := $(VENV)/bin/python
@@ -126,6 +130,23 @@ train-time-full-scale: setup
 	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/train_time.py main_study=false full_scale.enabled=true \
 	    cache_dir=cache/train_time_full_scale out=reports/train_time_full_scale.json
 	$(PY) -m fluidfilm.reporting.readme
+
+.PHONY: paper-scale-curve paper-full-scale
+# both resume an interrupted run (finished models and per-epoch LM checkpoints under cache/)
+paper-scale-curve: setup
+	$(PY) experiments/paper_scale.py 'sizes=[640000,2560000]' ablation.enabled=false \
+	    cache_dir=cache/paper_scale_curve out=reports/paper_scale_curve.json \
+	    figure=reports/figures/paper_scale_curve.png \
+	    'include_reports=[reports/paper_scale.json,reports/paper_full_scale.json]'
+
+LM_BUDGET_S ?= 14400
+paper-full-scale: setup
+	$(PY) experiments/paper_scale.py 'sizes=[]' ablation.enabled=false \
+	    full_scale.single.enabled=true full_scale.split.enabled=true full_scale.split_adam.enabled=true \
+	    'full_scale.split.network_protocol={2: {max_time_s: $(LM_BUDGET_S)}}' \
+	    protocol.progress_every_s=0 cache_dir=cache/paper_full_scale out=reports/paper_full_scale.json \
+	    figure=reports/figures/paper_full_scale.png \
+	    'include_reports=[reports/paper_scale.json,reports/paper_scale_curve.json]'
 
 .PHONY: ross-env ross-peer ross-adapter test-ross
 $(ROSS_STAMP): $(ROSS_PINS)
