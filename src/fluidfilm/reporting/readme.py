@@ -175,6 +175,12 @@ def render_headline(reports: Path) -> str:
     ):
         if g(key) is not None:
             rows.append([label, paper, _num(g(key), spec, unit)])
+    peer = reports / "benchmarks" / "ross_peer.json"
+    if peer.exists():  # `make ross-peer`, outside the pipeline (ROSS lives in its own environment)
+        p = json.loads(peer.read_text())
+        if "ross_peer_speedup_lund_thomsen" in p:
+            rows.append(["grooved bearing (Lund & Thomsen), time per operating point, ROSS 3.1 / ours at equal "
+                         "accuracy (`make ross-peer`)", "-", _num(p["ross_peer_speedup_lund_thomsen"], ".1f", "x")])
     if g("surrogate_goals") is not None:
         rows.append(["goals of the fast, accurate surrogate met (docs/results.md)", "-",
                      f"{g('surrogate_goals_met')} of {g('surrogate_goals')}"])
