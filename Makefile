@@ -18,6 +18,7 @@
 #   make ross-peer                 ROSS 3.1 (external peer, its own .venv-ross, Python 3.13) vs ours:
 #                                  benchmarks/bench_ross_peer.py, then the ROSS adapter's report (bench_ross_adapter.py)
 #   make ross-env / test-ross      build .venv-ross only / run the ROSS adapter's tests in it
+#   make universal-weights         copy the trained universal surrogate (models/universal) into the package
 #   make train-time-ci             the training-time study at 3x the pipeline's subsample (12,000 per
 #                                  seed) until its 95 % interval is +-10 points (hours here:
 #                                  docs/paper_experiment.md): reports/train_time_ci.json
@@ -117,6 +118,12 @@ ROSS_FF_STAMP   := $(ROSS_VENV)/.fluidfilm
 # +-10-point interval; this runs the same study (same data, protocol and seeds) at three times the subsample
 # until its interval reaches the same target: does the result hold at a larger size? Interrupted, it
 # resumes at the next seed (cache/train_time_ci).
+# the universal surrogate's shipped weights: copy the pipeline's trained ones (models/universal, stage
+# universal_train) into the package, with their checksums; commit them, then `dvc repro universal_evaluate`
+.PHONY: universal-weights
+universal-weights: setup
+	$(PY) -c "from fluidfilm.studies.universal import install_weights; install_weights('models/universal', 'src/fluidfilm/surrogate/universal_weights')"
+
 .PHONY: train-time-ci
 train-time-ci: setup
 	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/train_time.py samples_per_seed=12000 seeds_max=1000 budget_s=36000 ranking_check.enabled=false \

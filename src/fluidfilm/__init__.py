@@ -9,7 +9,9 @@ Public API (kept stable for scripts, notebooks and outside checks)::
 Every force model (reference solver, graded reference, surrogates) offers
 ``.forces(X, V)``, ``.bearing`` and ``.force_kernel`` (a compiled function
 and its parameters), so the rotor integrator and controllers never care
-which one they run.
+which one they run.  ``universal_bearing(bearing, cavitation)`` is a trained
+surrogate for any plain journal bearing (L/D 0.2-2, no supply pressure), shipped
+with the package: no dataset, training or DVC pull.
 """
 from importlib import metadata as _metadata
 
@@ -18,6 +20,7 @@ from fluidfilm.reynolds import CAVITATION_MODELS, ConicalReynoldsSolver, GradedR
 from fluidfilm.rotor import (LinearBearing, Rotor, SpeedSchedule, Trajectory, equilibrium, equilibrium_locus,
                              load_along_gravity, simulate)
 from fluidfilm.surrogate import SurrogateForceModel, load_surrogate
+from fluidfilm.surrogate.universal import universal_bearing
 
 try:  # one place for the version: pyproject.toml, read from the installed package's metadata
     __version__ = _metadata.version("fluidfilm")
@@ -43,5 +46,6 @@ __all__ = [
     "load_along_gravity",
     "load_surrogate",
     "SurrogateForceModel",
+    "universal_bearing",
     "__version__",
 ]

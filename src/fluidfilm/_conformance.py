@@ -17,11 +17,13 @@ if TYPE_CHECKING:
     from fluidfilm.reynolds.sparse_reference import SparseReferenceModel
     from fluidfilm.rotor.linear import LinearBearing
     from fluidfilm.surrogate.inference import SurrogateForceModel
+    from fluidfilm.surrogate.universal import UniversalBearingModel
 
     def _force_models(a: ReynoldsSolver, b: GradedReynoldsModel, c: ConicalReynoldsSolver,
                       d: SurrogateForceModel, e: LinearBearing, f: SparseReferenceModel,
-                      g: GroovedReynoldsSolver, h: EnsembleForceModel, i: HybridForceModel) -> list[ForceModel]:
-        return [a, b, c, d, e, f, g, h, i]
+                      g: GroovedReynoldsSolver, h: EnsembleForceModel, i: HybridForceModel,
+                      u: UniversalBearingModel) -> list[ForceModel]:
+        return [a, b, c, d, e, f, g, h, i, u]
 
     def _adjustable_models(b: GradedReynoldsModel, c: ConicalReynoldsSolver,
                            d: SurrogateForceModel) -> list[AdjustableForceModel]:
@@ -31,11 +33,12 @@ if TYPE_CHECKING:
         return [d]
 
     def _batch_force_models(a: ReynoldsSolver, b: GradedReynoldsModel, d: SurrogateForceModel,
-                            e: LinearBearing) -> list[BatchForceModel]:
-        return [a, b, d, e]
+                            e: LinearBearing, u: UniversalBearingModel) -> list[BatchForceModel]:
+        return [a, b, d, e, u]
 
-    def _speed_scalable_models(a: ReynoldsSolver, d: SurrogateForceModel, e: LinearBearing) -> list[SpeedScalableModel]:
-        return [a, d, e]
+    def _speed_scalable_models(a: ReynoldsSolver, d: SurrogateForceModel, e: LinearBearing,
+                               u: UniversalBearingModel) -> list[SpeedScalableModel]:
+        return [a, d, e, u]
 
     def _linear_pressure_models(a: ReynoldsSolver, c: ConicalReynoldsSolver) -> list[LinearPressureModel]:
         return [a, c]

@@ -424,6 +424,40 @@ def render_runup(reports: Path) -> str:
             f"/ run-down:\n\n"
             + _table(["run", "onset [rpm]", "vs Lund", "whirl ratio at onset", "established, up [rpm]",
                       "gone, down [rpm]", "ramp [rpm/s]"], rows))
+def render_universal(reports: Path) -> str:
+    u = _load(reports, "universal.json")
+    g = u["goals"]
+
+    def row(what, value, goal, unit="%", scale=100.0, spec=".3g", le=True):
+        v = scale * value
+        met = v <= scale * goal if le else v >= goal
+        return [what, f"{v:{spec}} {unit}".strip(), f"{'≤' if le else '≥'} {scale * goal if le else goal:g} {unit}".strip(),
+                "yes" if met else "no"]
+
+    rb = u["raimondi_boyd"]
+    rows = [row("median relative force error, held-out L/D and bearings", u["universal_rel_err_median"],
+                g["rel_err_median"]),
+            row("99th-percentile relative force error", u["universal_rel_err_p99"], g["rel_err_p99"]),
+            row("K, C along the equilibrium locus (eps 0.1-0.9), direct terms", u["universal_kc_max_rel_err_direct"],
+                g["kc_direct"]),
+            row("K, C along the equilibrium locus, cross terms", u["universal_kc_max_rel_err_cross"], g["kc_cross"]),
+            row("whirl threshold speed", u["universal_whirl_threshold_rel_err"], g["whirl_threshold"]),
+            row("Raimondi & Boyd S, against our plain-bearing reference", rb["max_S_err_vs_reference_pct"] / 100,
+                g["raimondi_boyd_pct"] / 100),
+            row("Raimondi & Boyd attitude, against our plain-bearing reference",
+                rb["max_phi_err_vs_reference_pct"] / 100, g["raimondi_boyd_pct"] / 100),
+            ["Fig. 4 cases satisfactory (paper's bearing, no training on it)",
+             f"{u['satisfactory_cases_universal']} of {u['n_cases']}", f"≥ {g['cases']} of 7",
+             "yes" if u["satisfactory_cases_universal"] >= g["cases"] else "no"],
+            [f"time per force (best model's shape: {u['cost']['force_eval_us_best_shape']:.3f} us, same run)",
+             f"{u['force_eval_us_universal']:.3f} us", f"≤ {u['cost']['force_eval_us_best_shape']:.3f} us",
+             "yes" if u["cost"]["universal_vs_best_cost_ratio"] <= 1.0 else "no"]]
+    by_rule = "; ".join(f"{r}: median {100 * v['median']:.2f} %, p99 {100 * v['p99']:.1f} %"
+                        for r, v in u["by_rule"].items())
+    return (_table(["quantity", "measured", "goal", "met"], rows)
+            + f"\nPer cavitation rule: {by_rule}. Against the published table (its feed at the maximum film "
+              f"thickness, our plain bearing none): S within {rb['max_S_err_pct']:.1f} %, attitude within "
+              f"{rb['max_phi_err_pct']:.1f} %.\n")
 
 
 def render_surrogate_goals(reports: Path) -> str:
@@ -684,6 +718,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "ablation": render_ablation,
     "error_map": render_error_map,
     "runup": render_runup,
+    "universal": render_universal,
     "surrogate_goals": render_surrogate_goals,
     "control": render_control,
     "figures": render_figures,

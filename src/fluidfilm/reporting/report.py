@@ -51,6 +51,7 @@ class ReportInputs:
     error_map: dict | None = None     # reports/error_map.json, where that stage ran
     paper_scale: dict | None = None   # reports/paper_scale.json, where that stage ran
     runup: dict | None = None         # reports/runup.json, where that stage ran
+    universal: dict | None = None     # reports/universal.json, where that stage ran
 
 
 def _load(path: Path) -> Any:
@@ -78,7 +79,8 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         characteristics=optional(charac), ensemble=optional(ens),
         grading_study=optional(rd / "grading_study" / "summary.json"), ablation=optional(rd / "ablation" / "summary.json"),
         error_map=optional(rd / "error_map.json"), paper_scale=optional(rd / "paper_scale.json"),
-        runup=optional(rd / "runup.json"))
+        runup=optional(rd / "runup.json"),
+        universal=optional(rd / "universal.json"))
 
 
 def _f(x, spec=".1f"):
@@ -179,6 +181,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
         metrics.update(paper_scale_metrics(inp.paper_scale))
     if inp.runup is not None:  # the run-up: onset of whirl from the transient against Lund's threshold
         metrics.update(inp.runup["metrics"])
+    if inp.universal is not None:  # the universal plain-bearing surrogate on bearings it never saw
+        metrics.update(universal_metrics(inp.universal))
     for study in ("grading_study", "ablation"):
         summary = getattr(inp, study)
         if summary is not None:
@@ -206,6 +210,15 @@ def paper_scale_metrics(ps: Mapping) -> dict:
                 "static_force_error_share_max_", "train_time_reduction_pct_full_scale_lm",
                 "train_time_converged_full_scale_lm")
     return {k: v for k, v in ps.items() if k.startswith(prefixes)}
+#: the universal surrogate's keys in reports/universal.json, copied into the metrics as they are
+UNIVERSAL_KEYS = ("universal_rel_err_median", "universal_rel_err_p99", "universal_kc_max_rel_err_direct",
+                  "universal_kc_max_rel_err_cross", "universal_whirl_threshold_rel_err", "satisfactory_cases_universal",
+                  "force_eval_us_universal")
+
+
+def universal_metrics(u: Mapping) -> dict:
+    """The universal surrogate's headline numbers (fractions, not per cent; microseconds per force)."""
+    return {k: u[k] for k in UNIVERSAL_KEYS}
 
 
 def error_map_metrics(em: Mapping) -> dict:

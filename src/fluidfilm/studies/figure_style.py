@@ -36,6 +36,14 @@ CAPTIONS: dict[str, str] = {
     "figures/error_map.png": (
         "Where the best surrogate's force errors sit: 99th-percentile relative force error per (ε, |V|) bin "
         "for held-out random states and for states along the reference orbits; n: states in the bin."),
+    "figures/universal_error_map.png": (
+        "The universal plain-bearing surrogate on bearings it never saw: 99th-percentile relative force error "
+        "per held-out L/D and eccentricity bin, random sizes, clearances, speeds and viscosities, for each "
+        "cavitation rule, against the grid-converged reference."),
+    "figures/universal_kc.png": (
+        "The universal surrogate's stiffness and damping along the equilibrium locus of the held-out L/D values: "
+        "largest relative error of the direct and cross terms against the grid-converged reference, per "
+        "eccentricity; lines at the 2 % and 5 % goals."),
     "grading_study/figure.png": (
         "Grading study: held-out and orbit force errors of each dataset grading against the dataset size and "
         "the time the reference model took to make it; labels: the swept values, (n/7): Fig. 4 cases within "

@@ -222,9 +222,11 @@ def pack(model, key=None) -> np.ndarray:
         w[lay.regions + 4 * r:lay.regions + 4 * r + 4] = [sc.clearance, sc.omega, sc.force_scale, sc.power]
         for layers, offs in zip((static, damping), lay.layers[r]):
             for k, ((W, b), (wo, bo)) in enumerate(zip(layers, offs)):
-                # the last layer is a few dot products over the hidden units (its rows contiguous); the
-                # others are axpy updates vectorised over their outputs (columns contiguous)
-                stored = W if k == len(layers) - 1 else W.T
+                # the first layer is axpy updates vectorised over its outputs (columns contiguous); the
+                # others are dot products over the previous layer's units (rows contiguous): a reduction
+                # that reads the parameter vector only, which vectorises (an axpy there would read and write
+                # the same vector, which LLVM does not vectorise: 75x slower at 64 x 64)
+                stored = W.T if k == 0 and len(layers) > 1 else W
                 w[wo:bo] = np.ascontiguousarray(stored).ravel()
                 w[bo:bo + b.size] = b
     return w
@@ -266,11 +268,12 @@ def _net_source(chain, offs, inputs, act, lay, ind, out_names):
             terms = " + ".join(f"w[{wo + i * n_out} + o] * {inputs[i]}" for i in range(n_in))
             lines.append(f"{ind}    a = w[{bo} + o] + {terms}")
         else:
-            lines.append(f"{ind}    w[{dst} + o] = w[{bo} + o]")
-            lines.append(f"{ind}for i in range({n_in}):")
-            lines.append(f"{ind}    hi = w[{src} + i]")
-            lines.append(f"{ind}    for o in range({n_out}):")
-            lines.append(f"{ind}        w[{dst} + o] += w[{wo} + i * {n_out} + o] * hi")
+            # a dot product per output over the previous layer (``pack``: rows contiguous), then the
+            # activation over the layer in a loop of its own (which vectorises)
+            lines.append(f"{ind}    a = w[{bo} + o]")
+            lines.append(f"{ind}    for i in range({n_in}):")
+            lines.append(f"{ind}        a += w[{wo} + o * {n_in} + i] * w[{src} + i]")
+            lines.append(f"{ind}    w[{dst} + o] = a")
             lines.append(f"{ind}for o in range({n_out}):")
             lines.append(f"{ind}    a = w[{dst} + o]")
         lines.append(f"{ind}    w[{dst} + o] = {_act_expr(act, 'a')}")

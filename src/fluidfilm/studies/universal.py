@@ -1,0 +1,400 @@
+"""The universal plain-bearing surrogate: its dataset, its training, and its accuracy on bearings it never
+saw (``experiments/universal.py``; ``part`` = dataset | train | evaluate).
+
+- ``dataset``: the dimensionless dataset (``data.universal``) on Dask, resumable, checksummed.
+- ``train``: one network per cavitation rule (``surrogate.universal_fit``, Lightning, logged to MLflow),
+  written to ``models_dir`` as ``<rule>.npz`` + ``SHA256SUMS``.  The package ships a copy of these under
+  ``src/fluidfilm/surrogate/universal_weights`` (``make universal-weights`` copies them there): the
+  evaluation below always measures the shipped weights, what a user gets.
+- ``evaluate``: the shipped model against the grid-converged reference on held-out L/D values with random
+  sizes, clearances, speeds and viscosities (force errors, an error map over (L/D, eps)); K and C along
+  the equilibrium locus; the whirl threshold; Raimondi & Boyd's S and attitude; the seven Fig. 4 cases
+  on the paper's bearing; the cost per force beside the best model's shape.  Writes
+  ``reports/universal.json`` and figures.
+"""
+from __future__ import annotations
+
+import math
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fluidfilm import io
+from fluidfilm.core.bearing import JournalBearing
+from fluidfilm.workflow.config import bearing_from_cfg
+from fluidfilm.workflow.config_check import ConfigError
+from fluidfilm.workflow.tracking import Logged
+
+PARTS = ("dataset", "train", "evaluate")
+
+
+def check(cfg) -> None:
+    if cfg.part not in PARTS:
+        raise ConfigError(f"part={cfg.part!r}; choose one of {PARTS}")
+
+
+def outputs(cfg) -> dict:
+    if cfg.part == "dataset":
+        return {"dataset_dir": [""]}
+    if cfg.part == "train":
+        return {"models_dir": [""]}
+    return {"report_dir": ["universal.json", "universal_errors.csv"],
+            "figure_dir": ["universal_error_map.png", "universal_kc.png"]}
+
+
+def tracking_run(cfg):
+    return (f"universal_{cfg.part}", None) if cfg.part != "dataset" else (None, None)
+
+
+# ------------------------------------------------------------------------------------------------ dataset
+def _dataset(cfg) -> Logged:
+    from fluidfilm.data.universal import UniversalSpec, generate_universal
+
+    spec = UniversalSpec.from_cfg(dict(cfg.layout))
+    meta = generate_universal(spec, cfg.dataset_dir, scheduler=cfg.dask.scheduler, n_workers=cfg.dask.n_workers)
+    print(f"universal dataset: {meta['n_samples']} rows in {cfg.dataset_dir} "
+          f"({meta['generation_seconds_total']:.0f} s of generation)")
+    return Logged({"n_samples": meta["n_samples"], "generation_seconds": meta["generation_seconds_total"]})
+
+
+# ------------------------------------------------------------------------------------------------ training
+def _train(cfg) -> Logged:
+    from fluidfilm.data.universal import load_universal
+    from fluidfilm.surrogate.universal_fit import train_universal, write_weights
+    from fluidfilm.workflow import tracking
+
+    out = Path(cfg.models_dir)
+    metrics = {}
+    parent = tracking.active_run()
+    for rule in cfg.train.rules:
+        frame, meta = load_universal(cfg.dataset_dir, rule)
+        logger = None
+        if parent is not None:
+            logger = tracking.child_logger_factory(parent, cfg.tracking, f"universal_{rule}")(0).logger()
+        fit = train_universal(frame, power=cfg.train.power, width=cfg.train.width, depth=cfg.train.depth,
+                              adam_epochs=cfg.train.adam_epochs, lbfgs_steps=cfg.train.lbfgs_steps,
+                              batch_size=cfg.train.batch_size, lr=cfg.train.lr, seed=cfg.train.seed, logger=logger)
+        info = {"dataset_hash": meta["config_hash"], "n_rows": int(len(frame)),
+                **{k: v for k, v in fit.items() if k.startswith("val_") or k == "train_seconds"},
+                "width": int(cfg.train.width), "depth": int(cfg.train.depth)}
+        write_weights(fit, rule, meta["spec"]["eps_max"], (meta["spec"]["ld_min"], meta["spec"]["ld_max"]), info,
+                      directory=out)
+        key = rule.replace("-", "_")
+        metrics |= {f"{key}_val_rel_median": fit["val_rel_median"], f"{key}_val_rel_p99": fit["val_rel_p99"],
+                    f"{key}_train_seconds": fit["train_seconds"]}
+        print(f"{rule}: validation relative error of G median {100 * fit['val_rel_median']:.3f} %, p99 "
+              f"{100 * fit['val_rel_p99']:.2f} %, {fit['train_seconds']:.0f} s")
+    return Logged(metrics, [out])
+
+
+# ------------------------------------------------------------------------------------------------ evaluation
+def reference_grid(ld: float, cavitation: str, eps: float, tol: float) -> tuple[int, int]:
+    """The grid-converged reference for a held-out L/D: one step finer than the grid the convergence check
+    accepts at ``tol`` (``data.universal.converged_grid``)."""
+    from fluidfilm.data.universal import N_THETA_LADDER, _n_z, converged_grid
+
+    nt, _, _ = converged_grid(ld, cavitation, eps, tol)
+    finer = N_THETA_LADDER[min(N_THETA_LADDER.index(nt) + 1, len(N_THETA_LADDER) - 1)]
+    return finer, _n_z(finer, ld)
+
+
+def random_bearing(ld: float, rng, ranges) -> JournalBearing:
+    """A bearing of slenderness ``ld`` with diameter, clearance, speed and viscosity drawn (log-uniform) from
+    ``ranges`` (diameter_m, clearance_m, speed_rpm, viscosity_pa_s: [low, high] each)."""
+    def draw(key):
+        lo, hi = ranges[key]
+        return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+
+    d = draw("diameter_m")
+    return JournalBearing(length=ld * d, diameter=d, clearance=draw("clearance_m"), speed_rpm=draw("speed_rpm"),
+                          viscosity=draw("viscosity_pa_s"))
+
+
+def held_out_force_errors(cfg, rng) -> pd.DataFrame:
+    """Relative force errors of the shipped model against the converged reference at random states of random
+    bearings at each held-out L/D (rows: rule, L/D, bearing, eps, |V| / (c omega), rel_err)."""
+    from fluidfilm import ReynoldsSolver
+    from fluidfilm.surrogate.universal import universal_bearing
+
+    ev = cfg.evaluate
+    rows = []
+    for rule in ev.rules:
+        for ld in ev.held_out_ld:
+            grid = reference_grid(float(ld), rule, float(ev.eps_max), float(ev.reference_tol))
+            for k in range(int(ev.n_bearings)):
+                b = random_bearing(float(ld), rng, ev.ranges)
+                model = universal_bearing(b, rule)
+                ref = ReynoldsSolver(b, grid[0], grid[1], cavitation=rule)
+                n = int(ev.n_states)
+                eps = float(ev.eps_max) * np.sqrt(rng.random(n))   # uniform over the disc eps <= eps_max
+                ang = 2 * np.pi * rng.random(n)
+                X = b.clearance * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
+                vmag = float(ev.v_max) * np.sqrt(rng.random(n))    # |V| <= v_max c omega, uniform over the disc
+                vang = 2 * np.pi * rng.random(n)
+                V = b.clearance * b.omega * np.stack([vmag * np.cos(vang), vmag * np.sin(vang)], axis=1)
+                F = model.forces(X, V)
+                F_ref = ref.forces(X, V)
+                rel = np.hypot(*(F - F_ref).T) / np.hypot(*F_ref.T)
+                rows.append(pd.DataFrame({"cavitation": rule, "ld": float(ld), "bearing": k, "eps": eps,
+                                          "v_rel": vmag, "rel_err": rel, "n_theta": grid[0], "n_z": grid[1],
+                                          "speed_rpm": b.speed_rpm, "viscosity": b.viscosity,
+                                          "clearance": b.clearance}))
+            print(f"  {rule} L/D={ld}: reference grid {grid[0]} x {grid[1]}, median "
+                  f"{100 * rows[-1].rel_err.median():.3f} % (last bearing)", flush=True)
+    return pd.concat(rows, ignore_index=True)
+
+
+def kc_along_locus(cfg) -> pd.DataFrame:
+    """K and C of the shipped model and of the converged reference at the reference's equilibria with eps
+    ``kc_eps``, for each held-out L/D (Gumbel and Swift-Stieber); ``coefficient_errors`` rows."""
+    from fluidfilm import ReynoldsSolver
+    from fluidfilm.studies.characteristics import coefficient_errors, coefficient_table, loads_for_eccentricities
+    from fluidfilm.surrogate.universal import universal_bearing
+
+    ev = cfg.evaluate
+    out = []
+    for rule in ev.kc_rules:
+        for ld in ev.held_out_ld:
+            b = JournalBearing(length=0.05 * float(ld), diameter=0.05, clearance=75e-6, speed_rpm=5000.0,
+                               viscosity=0.02)
+            nt, nz = reference_grid(float(ld), rule, float(max(ev.kc_eps)), float(ev.reference_tol))
+            ref = ReynoldsSolver(b, nt, nz, cavitation=rule)
+            loads = loads_for_eccentricities(ref, list(ev.kc_eps))
+            table = coefficient_table({"reference": ref, "universal": universal_bearing(b, rule)}, loads,
+                                      {"default": 1e-4})
+            errors = coefficient_errors(table, "reference")
+            out.append(errors.assign(cavitation=rule, ld=float(ld)))
+    return pd.concat(out, ignore_index=True)
+
+
+def whirl_thresholds(cfg) -> pd.DataFrame:
+    """Onset speed of oil whirl, shipped model vs converged reference, per held-out L/D (Gumbel)."""
+    from fluidfilm import ReynoldsSolver
+    from fluidfilm.characteristics import threshold_speed
+    from fluidfilm.characteristics.static import load_along_gravity
+    from fluidfilm.surrogate.universal import universal_bearing
+
+    ev = cfg.evaluate
+    rows = []
+    for ld in ev.held_out_ld:
+        b = JournalBearing(length=0.05 * float(ld), diameter=0.05, clearance=75e-6, speed_rpm=3000.0,
+                           viscosity=0.01)
+        nt, nz = reference_grid(float(ld), "gumbel", 0.8, float(ev.reference_tol))
+        mass = float(ev.whirl_mass_kg)
+        W = load_along_gravity(mass * 9.81)
+        t_ref = threshold_speed(ReynoldsSolver(b, nt, nz), mass=mass, load=W)
+        t_uni = threshold_speed(universal_bearing(b), mass=mass, load=W)
+        rows.append({"ld": float(ld), "reference_rpm": t_ref["speed_rpm"], "universal_rpm": t_uni["speed_rpm"],
+                     "eps_reference": t_ref.get("eps", float("nan")), "rel_err":
+                     abs(t_uni["speed_rpm"] / t_ref["speed_rpm"] - 1.0)})
+    return pd.DataFrame(rows)
+
+
+def raimondi_boyd(cfg) -> pd.DataFrame:
+    """S and attitude of the shipped Swift-Stieber model at Raimondi & Boyd's eccentricities, beside the
+    published values and our plain-bearing reference (no feed groove; R&B feed at the maximum film)."""
+    from fluidfilm import ReynoldsSolver
+    from fluidfilm.characteristics.published import RAIMONDI_BOYD
+    from fluidfilm.surrogate.universal import universal_bearing
+
+    rows = []
+    for ld, table in RAIMONDI_BOYD.items():
+        b = JournalBearing(length=0.04 * ld, diameter=0.04, clearance=60e-6, speed_rpm=3000.0, viscosity=0.01)
+        model = universal_bearing(b, "swift-stieber")
+        nt, nz = reference_grid(float(ld), "swift-stieber", 0.9, float(cfg.evaluate.reference_tol))
+        ref = ReynoldsSolver(b, nt, nz, cavitation="swift-stieber")
+        for eps, S_pub, phi_pub, *_ in table:
+            if eps > model.eps_max:
+                continue
+            x = np.array([0.0, eps * b.clearance])
+            vals = {}
+            for name, m in (("universal", model), ("reference", ref)):
+                F = m.forces(x, np.zeros(2))
+                vals[name] = (b.sommerfeld(float(np.hypot(*F))), math.degrees(math.atan2(-F[0], -F[1])))
+            rows.append({"ld": ld, "eps": eps, "S_pub": S_pub, "phi_pub": phi_pub,
+                         "S": vals["universal"][0], "phi": vals["universal"][1],
+                         "S_ref": vals["reference"][0], "phi_ref": vals["reference"][1],
+                         "S_err_pct": 100 * (vals["universal"][0] / S_pub - 1),
+                         "phi_err_pct": 100 * (vals["universal"][1] / phi_pub - 1),
+                         "S_err_vs_ref_pct": 100 * (vals["universal"][0] / vals["reference"][0] - 1),
+                         "phi_err_vs_ref_pct": 100 * (vals["universal"][1] / vals["reference"][1] - 1)})
+    return pd.DataFrame(rows)
+
+
+def fig4_cases(cfg) -> pd.DataFrame:
+    """The seven Fig. 4 cases with the shipped Gumbel model on the paper's bearing, against the reference
+    trajectories of the pipeline (``reference_trajectories_dir``), by the 2 %-of-c rule."""
+    from fluidfilm.rotor import Trajectory
+    from fluidfilm.rotor.cases import case_summary, run_case
+    from fluidfilm.surrogate.universal import universal_bearing
+
+    bearing = bearing_from_cfg(cfg.bearing)
+    model = universal_bearing(bearing, "gumbel")
+    rows = []
+    for name in cfg.run_cases:
+        case = cfg.cases[name]
+        ref = Trajectory.from_npz(Path(cfg.reference_trajectories_dir) / f"{name}.npz")
+        traj = run_case(model, cfg.rotor, case, cfg.integrator)
+        s = case_summary(traj, bearing.clearance, cfg.integrator.t_settle, ref, cfg.threshold_pct)
+        rows.append({"case": name, **{k: v for k, v in s.items() if np.isscalar(v)}})
+        print(f"  case {name}: {traj.status}, rms {s.get('rms_pct', float('nan')):.2f} % of c, satisfactory "
+              f"{s.get('satisfactory')}", flush=True)
+    return pd.DataFrame(rows)
+
+
+def force_cost(cfg) -> dict:
+    """Seconds per force of the shipped model's compiled kernel and of the best model's shape (five regions,
+    3-64-2; ``perf.speed.best_shaped_surrogate``), side by side, medians, with the load."""
+    from fluidfilm.perf.speed import best_shaped_surrogate, sample_states, time_per_force_eval
+    from fluidfilm.surrogate.universal import universal_bearing
+
+    bearing = bearing_from_cfg(cfg.bearing)
+    x, v = sample_states(bearing.clearance, n=int(cfg.evaluate.n_timing), eps_max=0.9, v_max=0.05)
+    uni = universal_bearing(bearing, "gumbel")
+    best = best_shaped_surrogate(bearing)
+    load0 = os.getloadavg()[0]
+    t_u, t_b = [], []
+    for _ in range(3):  # interleaved: both see the same machine load
+        t_u.append(time_per_force_eval(uni, x, v))
+        t_b.append(time_per_force_eval(best, x, v))
+    return {"force_eval_us_universal": 1e6 * float(np.median(t_u)), "force_eval_us_best_shape": 1e6 * float(np.median(t_b)),
+            "universal_vs_best_cost_ratio": float(np.median(t_u) / np.median(t_b)),
+            "loadavg_1min": [load0, os.getloadavg()[0]]}
+
+
+def error_map(errors: pd.DataFrame, eps_edges) -> pd.DataFrame:
+    """Median and 99th-percentile relative error per (rule, L/D, eps bin)."""
+    e = errors.assign(eps_bin=pd.cut(errors.eps, list(eps_edges), include_lowest=True))
+    g = e.groupby(["cavitation", "ld", "eps_bin"], observed=True).rel_err
+    return pd.DataFrame({"median": g.median(), "p99": g.quantile(0.99), "n": g.size()}).reset_index()
+
+
+def plot_universal_map(table: pd.DataFrame, eps_edges):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rules = list(dict.fromkeys(table.cavitation))
+    fig, axes = plt.subplots(1, len(rules), figsize=(5.2 * len(rules), 3.6), constrained_layout=True)
+    axes = np.atleast_1d(axes)
+    im = None
+    for ax, rule in zip(axes, rules):
+        t = table[table.cavitation == rule]
+        lds = sorted(set(t.ld))
+        grid = np.full((len(lds), len(eps_edges) - 1), np.nan)
+        for i, ld in enumerate(lds):
+            for j, (_, r) in enumerate(t[t.ld == ld].iterrows()):
+                grid[i, j] = 100 * r.p99
+        im = ax.imshow(grid, aspect="auto", origin="lower", cmap="viridis",
+                       extent=(0, len(eps_edges) - 1, 0, len(lds)))
+        ax.set_xticks(np.arange(len(eps_edges)), [f"{e:g}" for e in eps_edges], fontsize=7)
+        ax.set_yticks(np.arange(len(lds)) + 0.5, [f"{ld:g}" for ld in lds])
+        ax.set_xlabel("eccentricity ratio")
+        ax.set_ylabel("L/D (held out)")
+        ax.set_title(f"{rule}: 99th-percentile relative force error [%]", fontsize=9)
+        for i in range(grid.shape[0]):
+            for j in range(grid.shape[1]):
+                if np.isfinite(grid[i, j]):
+                    ax.text(j + 0.5, i + 0.5, f"{grid[i, j]:.2g}", ha="center", va="center", fontsize=7, color="w")
+    if im is not None:
+        fig.colorbar(im, ax=list(axes), shrink=0.8)
+    return fig
+
+
+def plot_kc(errors: pd.DataFrame):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 3.6), constrained_layout=True)
+    for (rule, kind), g in errors.groupby(["cavitation", "kind"]):
+        worst = g.groupby("eps_ref").rel_err.max()
+        ax.semilogy(worst.index, 100 * worst.values, "o-" if kind == "direct" else "s--", label=f"{rule}, {kind}")
+    ax.axhline(2.0, color="k", lw=0.6)
+    ax.axhline(5.0, color="k", lw=0.6, ls="--")
+    ax.set_xlabel("eccentricity ratio at equilibrium (reference)")
+    ax.set_ylabel("largest relative error of K, C [%]")
+    ax.set_title("Universal model: K and C along the equilibrium locus, held-out L/D", fontsize=9)
+    ax.legend(fontsize=7)
+    return fig
+
+
+def _evaluate(cfg) -> Logged:
+    from fluidfilm.surrogate.universal import load_weights
+
+    ev = cfg.evaluate
+    rng = np.random.default_rng(int(ev.seed))
+    report, figs = Path(cfg.report_dir), Path(cfg.figure_dir)
+    print("held-out force errors", flush=True)
+    errors = held_out_force_errors(cfg, rng)
+    io.write_csv(report / "universal_errors.csv", errors)
+    emap = error_map(errors, ev.eps_edges)
+    io.save_figure(plot_universal_map(emap, list(ev.eps_edges)), figs / "universal_error_map.png", dpi=120)
+    print("K and C along the locus", flush=True)
+    kc = kc_along_locus(cfg)
+    io.save_figure(plot_kc(kc), figs / "universal_kc.png", dpi=120)
+    print("whirl thresholds", flush=True)
+    whirl = whirl_thresholds(cfg)
+    print("Raimondi & Boyd", flush=True)
+    rb = raimondi_boyd(cfg)
+    print("Fig. 4 cases", flush=True)
+    cases = fig4_cases(cfg)
+    cost = force_cost(cfg)
+    out = {
+        "universal_rel_err_median": float(errors.rel_err.median()),
+        "universal_rel_err_p99": float(errors.rel_err.quantile(0.99)),
+        "universal_kc_max_rel_err_direct": float(kc[kc.kind == "direct"].rel_err.max()),
+        "universal_kc_max_rel_err_cross": float(kc[kc.kind == "cross"].rel_err.max()),
+        "universal_whirl_threshold_rel_err": float(whirl.rel_err.max()),
+        "satisfactory_cases_universal": int(cases.satisfactory.sum()),
+        "n_cases": int(len(cases)),
+        "force_eval_us_universal": cost["force_eval_us_universal"],
+        "cost": cost,
+        "by_rule": {rule: {"median": float(g.rel_err.median()), "p99": float(g.rel_err.quantile(0.99)),
+                           "max": float(g.rel_err.max()), "n": int(len(g))}
+                    for rule, g in errors.groupby("cavitation")},
+        "by_ld": {f"{rule}:{ld:g}": {"median": float(g.rel_err.median()), "p99": float(g.rel_err.quantile(0.99))}
+                  for (rule, ld), g in errors.groupby(["cavitation", "ld"])},
+        "kc_by_rule": {f"{rule}:{kind}": float(g.rel_err.max()) for (rule, kind), g in kc.groupby(["cavitation", "kind"])},
+        "whirl": whirl.to_dict(orient="records"),
+        "raimondi_boyd": {"max_S_err_pct": float(rb.S_err_pct.abs().max()),
+                          "max_phi_err_pct": float(rb.phi_err_pct.abs().max()),
+                          "max_S_err_vs_reference_pct": float(rb.S_err_vs_ref_pct.abs().max()),
+                          "max_phi_err_vs_reference_pct": float(rb.phi_err_vs_ref_pct.abs().max()),
+                          "rows": rb.to_dict(orient="records")},
+        "cases": cases.to_dict(orient="records"),
+        "error_map": [{**r, "eps_bin": str(r["eps_bin"])} for r in emap.to_dict(orient="records")],
+        "weights": {rule: load_weights(rule)["info"] for rule in ("gumbel", "swift-stieber")},
+        "goals": {"rel_err_median": 0.005, "rel_err_p99": 0.05, "kc_direct": 0.02, "kc_cross": 0.05,
+                  "whirl_threshold": 0.01, "raimondi_boyd_pct": 2.0, "cases": 7},
+    }
+    io.write_json(report / "universal.json", out)
+    print(f"universal: median {100 * out['universal_rel_err_median']:.3f} %, p99 {100 * out['universal_rel_err_p99']:.2f} %, "
+          f"K/C direct {100 * out['universal_kc_max_rel_err_direct']:.2f} %, cross "
+          f"{100 * out['universal_kc_max_rel_err_cross']:.2f} %, whirl {100 * out['universal_whirl_threshold_rel_err']:.2f} %, "
+          f"cases {out['satisfactory_cases_universal']}/{len(cases)}, {out['force_eval_us_universal']:.3f} us/force")
+    metrics = {k: v for k, v in out.items() if k.startswith(("universal_", "satisfactory_", "force_eval_"))}
+    return Logged(metrics, [report / "universal.json", figs / "universal_error_map.png", figs / "universal_kc.png"])
+
+
+def run(cfg) -> Logged:
+    check(cfg)
+    if cfg.part == "dataset":
+        return _dataset(cfg)
+    if cfg.part == "train":
+        return _train(cfg)
+    return _evaluate(cfg)
+
+
+def install_weights(models_dir, target) -> None:
+    """Copy trained weights (``<rule>.npz`` and ``SHA256SUMS``) into the package's folder (``target``)."""
+    target = Path(target)
+    target.mkdir(parents=True, exist_ok=True)
+    for f in sorted(Path(models_dir).iterdir()):
+        if f.suffix == ".npz" or f.name == "SHA256SUMS":
+            shutil.copy2(f, target / f.name)
