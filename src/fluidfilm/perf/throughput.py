@@ -59,7 +59,7 @@ def monte_carlo_batch(clearance: float, n: int, mass: float = 2.5, seed: int = 0
 
 
 def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batched: bool = True,
-                            repeats: int = 1, seed: int = 0, threads: int | None = 1, precision: str = "float64",
+                            repeats: int = 1, seed: int = 0, threads: int | None = 1, precision: str = "float32",
                             stage_batched: bool | None = None) -> dict:
     """Median trajectories per second of ``model`` over ``repeats`` runs of n Monte Carlo trajectories.
 
@@ -81,7 +81,8 @@ def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batch
         Seed of the Monte Carlo.
     threads, precision, stage_batched
         ``simulate_batch``'s (batched runs only): threads across the batch (default 1; None: all cores),
-        the surrogate networks' arithmetic, and the loop (None: ``simulate_batch``'s choice by batch size).
+        the surrogate networks' arithmetic (default: ``simulate_batch``'s, float32), and the loop (None:
+        ``simulate_batch``'s choice by batch size).
 
     Returns
     -------

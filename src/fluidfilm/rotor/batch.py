@@ -394,7 +394,7 @@ def _rows(value, n: int, what: str) -> np.ndarray:
 def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=None, *, settings=None,
                    eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
                    max_substeps: int = 256, t0: float = 0.0, threads: int | None = None,
-                   precision: str = "float64", stage_batched: bool | None = None) -> BatchTrajectory:
+                   precision: str = "float32", stage_batched: bool | None = None) -> BatchTrajectory:
     """Integrate N rotors (a ``Rotor`` or a sequence of N) in ``model`` from x0, v0 ((2,) or (N, 2)).
 
     Parameters
@@ -416,9 +416,10 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         Threads across the batch (stage-batched path): each runs a contiguous chunk of the trajectories
         with its own domain counter; None: every core this process may use.  The trajectories do not
         depend on it.
-    precision : {"float64", "float32"}, default "float64"
-        Arithmetic of a surrogate's networks in the stage-batched path (``surrogate.kernels.batch_params``:
-        forces within 1e-5 relative of float64); a reference model computes in float64 either way.
+    precision : {"float32", "float64"}, default "float32"
+        Arithmetic of a surrogate's networks in the stage-batched path (its batched kernel: float32 keeps
+        the forces within 1e-5 relative of float64 and costs about half as much; tests/test_batch.py bounds
+        the trajectories' difference); a reference model computes in float64 either way.
     stage_batched : bool or None, default None
         True: the stage-batched loop wherever the model has a batched kernel; False: the per-trajectory
         lockstep loop (one-state kernel); None: stage-batched for batches of at least

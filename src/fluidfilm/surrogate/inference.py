@@ -38,8 +38,9 @@ from fluidfilm import io
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict
 from fluidfilm.core.force_model import ValidityDomain, check_precision
 from fluidfilm.core.states import as_state_pairs
-from fluidfilm.surrogate.kernels import (COUNTER, SETTING, BatchParams, batch_params, fast_force_kernel, forces_batch,
-                                        pack, shape_key)
+from fluidfilm.surrogate.kernels import (COUNTER, SETTING, BatchParams, FastBatchParams, batch_kernel, batch_params,
+                                        batch_shape_key, fast_batch_params, fast_force_kernel, forces_batch, pack,
+                                        shape_key)
 from fluidfilm.surrogate.scaling import Scaling, check_whirl_use, network_inputs
 from fluidfilm.surrogate.transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
                          standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb, whirl_direction_nb)
@@ -430,7 +431,8 @@ class SurrogateForceModel:
         self._fast_weights = pack(self, self._fast_key)
         self._setting = self._fast_weights[SETTING:SETTING + 2]
         self._counter = self._fast_weights[COUNTER:COUNTER + 1]  # float64: exact to 2^53 evaluations
-        self._batch_params: dict[str, BatchParams] = {}  # batch_force_kernel's, per precision
+        self._batch_params: dict[str, BatchParams | FastBatchParams] = {}  # batch_force_kernel's, per precision
+        self._batch_key = batch_shape_key(self)
         # one flat weight array for all regions: each region's table offsets shifted to its block
         offsets = np.cumsum([0] + [w.size for w, _ in packed])
         tables = [t.copy() for _, t in packed]
@@ -472,17 +474,20 @@ class SurrogateForceModel:
         return speed_scaled_force, (fn, params, float(self._bearing.omega))
 
     def batch_force_kernel(self, precision: str = "float64", private: bool = False):
-        """``(surrogate.kernels.forces_batch, BatchParams)`` (``core.force_model.BatchForceModel``): many states
-        per call, the networks in ``precision``; ``private``: the parameters count in their own domain
-        counter (``merge_counts`` adds it to the model's).  They read the model's setting (sleeve) in place
-        and are built once per precision."""
+        """``(fn, params)`` (``core.force_model.BatchForceModel``): many states per call, the networks in
+        ``precision``; ``private``: the parameters count in their own domain counter (``merge_counts`` adds it
+        to the model's).  ``fn`` is the batched kernel generated for this model's shape
+        (``surrogate.kernels.batch_kernel``) where it has one, else ``surrogate.kernels.forces_batch``.  The
+        parameters read the model's setting (sleeve) in place and are built once per precision."""
         check_precision(precision)
         bp = self._batch_params.get(precision)
         if bp is None:
-            bp = self._batch_params[precision] = batch_params(self, precision)
-        return forces_batch, (bp._replace(counter=np.zeros(1)) if private else bp)
+            bp = self._batch_params[precision] = (batch_params(self, precision) if self._batch_key is None
+                                                  else fast_batch_params(self, precision))
+        fn = forces_batch if self._batch_key is None else batch_kernel(self._batch_key, precision)
+        return fn, (bp._replace(counter=np.zeros(1)) if private else bp)
 
-    def merge_counts(self, bparams: BatchParams) -> None:
+    def merge_counts(self, bparams: BatchParams | FastBatchParams) -> None:
         """Add the domain count of private batch parameters to the model's (``BatchForceModel``)."""
         if bparams.counter is not self._counter:
             self._counter[0] += bparams.counter[0]

@@ -158,6 +158,8 @@ class _ProtocolSchema:
 class PaperProtocolSchema(_ProtocolSchema):
     min_grad: float = MISSING
     chunk: int = MISSING
+    workers: Optional[int] = MISSING
+    progress_every_s: Optional[float] = MISSING
 
 
 @dataclass
