@@ -54,6 +54,9 @@ Kernels:
                              primal-dual active-set iteration of direct sparse
                              Cholesky solves (``envelope_cholesky``,
                              ``envelope_solve``): the default
+- ``capacitance_field``      the active-set iteration's linear solve by the axial
+                             sine transform on runs of node columns and a
+                             capacitance matrix on the active nodes inside them
 - ``swift_stieber_field``    either of them, by ``params.ss_method``
 - ``film_force_ss``          force with Swift-Stieber cavitation
 - ``general_linear_field``   the general path: film thickness h(theta, z)
@@ -347,13 +350,16 @@ def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
     nk = params.lam.shape[0]
     q0, qs, qc = position_modes(params, x1 * params.inv_c, x2 * params.inv_c)
     nz = out.shape[1]
+    phat = np.empty(nk)
     for i in range(n):
         out[i, 0] = p_supply
         out[i, nz - 1] = 0.0
+        for k in range(nk):
+            phat[k] = q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]
         for j in range(1, nz - 1):
             acc = 0.0
             for k in range(nk):
-                acc += (q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]) * full_basis[j - 1, k]
+                acc += phat[k] * full_basis[j - 1, k]
             out[i, j] = acc
 
 
@@ -498,8 +504,254 @@ def envelope_solve(first, start, env, inv_diag, r0, n_unknowns, y, x):
             x[k] -= env[sr + k] * xr
 
 
+# --- the active-set iteration's linear solve by the axial sine transform and a capacitance matrix ------------
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def mode_tridiag_factor(params, cols, nc, aw, ae, an):
+    """1 / pivots of the LDL^T factors of one symmetric tridiagonal system per axial mode on the theta run
+    ``cols[:nc]`` (ends held at known values): the run's discrete operator -A in the sine basis, where row r
+    (node column cols[r]) reads (aw + ae - an mu_k) x_r - ae[cols[r-1]] x_{r-1} - ae[cols[r]] x_{r+1}, mu_k
+    the second difference's eigenvalue of mode k.  Diagonally dominant: no pivoting.  Returns (nc, n_modes)."""
+    lam = params.lam
+    nk = lam.shape[0]
+    scale = 1.0 / params.inv_dzeta2
+    dinv = np.empty((nc, nk))
+    for r in range(nc):
+        i = cols[r]
+        base = aw[i] + ae[i]
+        ani = an[i] * scale
+        if r == 0:
+            for k in range(nk):
+                dinv[0, k] = 1.0 / (base - ani * lam[k])
+        else:
+            e = ae[cols[r - 1]]
+            e2 = e * e
+            for k in range(nk):
+                dinv[r, k] = 1.0 / (base - ani * lam[k] - e2 * dinv[r - 1, k])
+    return dinv
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def mode_tridiag_solve(cols, nc, ae, dinv, x, r_first):
+    """In place: x (nc, n_modes) <- T_k^{-1} x for every mode, with the factors of ``mode_tridiag_factor``;
+    rows before ``r_first`` of x must be zero (a unit right-hand side: the forward sweep starts there)."""
+    nk = x.shape[1]
+    for r in range(max(r_first, 1), nc):
+        e = ae[cols[r - 1]]
+        for k in range(nk):
+            x[r, k] += e * dinv[r - 1, k] * x[r - 1, k]
+    for r in range(r_first, nc):
+        for k in range(nk):
+            x[r, k] *= dinv[r, k]
+    for r in range(nc - 2, -1, -1):
+        e = ae[cols[r]]
+        for k in range(nk):
+            x[r, k] += e * dinv[r, k] * x[r + 1, k]
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def transform_column(params, values, m, out, coef):
+    """out[k] += coef * (2 / (m + 1)) * sum_j basis[j, k] values[j + 1]: the sine coefficients of one node
+    column's interior values (rows 1..m of a field column), scaled."""
+    basis = params.full_basis
+    f = coef * 2.0 / (m + 1)
+    for j in range(m):
+        vj = values[j + 1] * f
+        if vj != 0.0:
+            for k in range(out.shape[0]):
+                out[k] += vj * basis[j, k]
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def capacitance_run(params, cols, nc, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric):
+    """Solve the free nodes' equations on one run of node columns ``cols[:nc]`` (its neighbours on both
+    sides held or wholly cavitated) by the axial sine transform and a capacitance matrix; writes p on the
+    run (active nodes at 0, mirrored onto the upper half when ``symmetric``).
+
+    On the whole run the operator -A is one symmetric tridiagonal system per axial mode (the film thickness
+    does not depend on z), solved in O(nc n_modes).  The active nodes inside the run (those of partly
+    cavitated columns) are held at zero by a source mu at each, found from the capacitance system
+    G mu = -p0 on them (G the run's Green's function between active nodes, p0 the field without sources):
+    with s active nodes the extra work is O(s^2 n_modes + s^3).  In the symmetric half field each node
+    stands for itself and its mirror (odd modes only), which the same formulas cover."""
+    n = params.n_theta
+    nz = m + 2
+    basis = params.full_basis
+    sig = params.sig
+    nk = sig.shape[0]
+    two_m1 = 2.0 / (m + 1)
+    dinv = mode_tridiag_factor(params, cols, nc, aw, ae, an)
+    # right-hand side of -A p = -rhs (+ known neighbours) in the sine basis
+    bh = np.empty((nc, nk))
+    for r in range(nc):
+        i = cols[r]
+        for k in range(nk):
+            bh[r, k] = -rhs[i] * sig[k]
+        if p[i, 0] != 0.0:
+            f = an[i] * p[i, 0] * two_m1
+            for k in range(nk):
+                bh[r, k] += f * basis[0, k]
+        if p[i, nz - 1] != 0.0:
+            f = an[i] * p[i, nz - 1] * two_m1
+            for k in range(nk):
+                bh[r, k] += f * basis[m - 1, k]
+    il = cols[0] - 1 if cols[0] > 0 else n - 1
+    if fixed[il]:
+        transform_column(params, p[il], m, bh[0], aw[cols[0]])
+    ir = cols[nc - 1] + 1 if cols[nc - 1] < n - 1 else 0
+    if fixed[ir]:
+        transform_column(params, p[ir], m, bh[nc - 1], ae[cols[nc - 1]])
+    # the active nodes of the run and the columns holding them
+    s = 0
+    for r in range(nc):
+        for j in range(1, mh + 1):
+            if not free[cols[r], j]:
+                s += 1
+    if s > 0:
+        b_src = bh.copy()
+    else:
+        b_src = bh
+    mode_tridiag_solve(cols, nc, ae, dinv, bh, 0)
+    if s > 0:
+        sr = np.empty(s, dtype=np.int64)
+        sj = np.empty(s, dtype=np.int64)
+        sq = np.empty(s, dtype=np.int64)
+        pc = np.empty(nc, dtype=np.int64)
+        npc = 0
+        a = 0
+        for r in range(nc):
+            had = False
+            for j in range(1, mh + 1):
+                if not free[cols[r], j]:
+                    if not had:
+                        pc[npc] = r
+                        npc += 1
+                        had = True
+                    sr[a] = r
+                    sj[a] = j - 1
+                    sq[a] = npc - 1
+                    a += 1
+        # the run's Green's function between the partly cavitated columns, per mode
+        gp = np.empty((npc, npc, nk))
+        col = np.empty((nc, nk))
+        for q in range(npc):
+            col[:, :] = 0.0
+            col[pc[q], :] = 1.0
+            mode_tridiag_solve(cols, nc, ae, dinv, col, pc[q])
+            for q2 in range(npc):
+                for k in range(nk):
+                    gp[q, q2, k] = col[pc[q2], k]
+        # capacitance matrix (symmetric positive definite) and its right-hand side
+        g = np.empty((s, s))
+        y = np.empty(s)
+        for a in range(s):
+            ba = basis[sj[a]]
+            for b in range(a + 1):
+                bb = basis[sj[b]]
+                gab = gp[sq[a], sq[b]]
+                acc = 0.0
+                for k in range(nk):
+                    acc += ba[k] * bb[k] * gab[k]
+                g[a, b] = acc
+            acc = 0.0
+            for k in range(nk):
+                acc += ba[k] * bh[sr[a], k]
+            y[a] = -acc / two_m1
+        # dense Cholesky, lower triangle in place, then the two triangular solves
+        for a in range(s):
+            for b in range(a + 1):
+                acc = g[a, b]
+                for k in range(b):
+                    acc -= g[a, k] * g[b, k]
+                if b == a:
+                    g[a, a] = np.sqrt(acc)
+                else:
+                    g[a, b] = acc / g[b, b]
+        for a in range(s):
+            acc = y[a]
+            for k in range(a):
+                acc -= g[a, k] * y[k]
+            y[a] = acc / g[a, a]
+        for a in range(s - 1, -1, -1):
+            acc = y[a]
+            for k in range(a + 1, s):
+                acc -= g[k, a] * y[k]
+            y[a] = acc / g[a, a]
+        # the sources at the active nodes, and the field once more
+        for a in range(s):
+            f = two_m1 * y[a]
+            ba = basis[sj[a]]
+            for k in range(nk):
+                b_src[sr[a], k] += f * ba[k]
+        mode_tridiag_solve(cols, nc, ae, dinv, b_src, 0)
+        bh = b_src
+    # back to the nodes
+    for r in range(nc):
+        i = cols[r]
+        for j in range(1, mh + 1):
+            val = 0.0
+            if free[i, j]:
+                bj = basis[j - 1]
+                for k in range(nk):
+                    val += bj[k] * bh[r, k]
+            p[i, j] = val
+            if symmetric:
+                p[i, m + 1 - j] = val
+
+
 @njit(cache=True, error_model="numpy")
-def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter):
+def capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric):
+    """The free nodes' equations solved run by run (``capacitance_run``) if that is cheaper than the envelope
+    Cholesky factorisation: needs a wholly cavitated or held node column (else the runs close into a ring),
+    and is chosen by an operation count against the factorisation's.  Returns whether it solved."""
+    n = params.n_theta
+    nk = params.lam.shape[0]
+    boundary = np.empty(n, dtype=np.bool_)
+    b0 = -1
+    env_cost = 0.0
+    s_tot = 0
+    n_part = 0
+    n_run = 0
+    for i in range(n):
+        c = 0
+        if not fixed[i]:
+            for j in range(1, mh + 1):
+                if free[i, j]:
+                    c += 1
+        boundary[i] = fixed[i] or c == 0
+        if boundary[i]:
+            b0 = i
+        else:
+            n_run += 1
+            s_tot += mh - c
+            if c < mh:
+                n_part += 1
+        env_cost += 0.5 * c * mh * mh
+    if b0 < 0:
+        return False
+    cap_cost = (s_tot * s_tot * (nk + s_tot / 3.0) + n_part * n_run * nk * 3.0 + n_run * nk * (mh + 8.0))
+    if cap_cost > env_cost:
+        return False
+    cols = np.empty(n, dtype=np.int64)
+    t = 0
+    while t < n:
+        i = (b0 + 1 + t) % n
+        if boundary[i]:
+            if not fixed[i]:
+                for j in range(1, m + 1):
+                    p[i, j] = 0.0
+            t += 1
+            continue
+        nc = 0
+        while t < n and not boundary[(b0 + 1 + t) % n]:
+            cols[nc] = (b0 + 1 + t) % n
+            nc += 1
+            t += 1
+        capacitance_run(params, cols, nc, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric)
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transform=True, warm=None, warm_in=False):
     """The discrete Reynolds equation solved directly, as a linear complementarity problem if ``project``.
 
     Same discrete problem as ``sor_sweeps`` (the node columns ``fixed`` held at their values in ``p``, the
@@ -523,6 +775,13 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter):
     solved (the mirror folded into the top row; with an odd number of interior rows the centre row is
     halved to keep the matrix symmetric).
 
+    With ``transform`` (the default) a solve goes instead by the axial sine transform where that is cheaper
+    (``capacitance_field``: wholly cavitated or held node columns cut the ring into runs, each one symmetric
+    tridiagonal system per axial mode, the active nodes inside a run held at zero by a small capacitance
+    system): same free set, same discrete equations, the same solution to round-off.  ``warm``: a bool
+    array (n_theta, rows solved + 2) that receives the final free set; with ``warm_in`` its content is the
+    first free set (an earlier nearby state's) instead of the widened film of ``p``.
+
     ``p``: full (n_theta, n_z) field, updated in place.  Returns the number of linear solves, or -1 if
     ``max_iter`` solves did not settle the active set.
     """
@@ -545,7 +804,18 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter):
     # nodes it takes in wrongly go back in one step (every free node with p < 0 becomes active at once), while
     # cavitated nodes are released only a layer per step (one must see its neighbour's pressure first), so
     # starting wide costs fewer solves: on 30..288 angles about 3-5 .. 8-16 instead of 7 .. 33-53
-    for _ in range(int(round(AS_WIDEN * n)) if project else 0):
+    warm_start = False
+    if warm is not None:
+        if warm.shape[0] != n or warm.shape[1] != mh + 2:
+            raise ValueError("the warm-start free set must have shape (n_theta, rows solved + 2)")
+        if project and warm_in:
+            # the free set of an earlier, nearby state (a caller's continuation): usually right or nearly so
+            warm_start = True
+            for i in range(n):
+                if not fixed[i]:
+                    for j in range(1, mh + 1):
+                        free[i, j] = warm[i, j]
+    for _ in range(int(round(AS_WIDEN * n)) if project and not warm_start else 0):
         f2 = free.copy()
         for i in range(n):
             if fixed[i]:
@@ -567,112 +837,118 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter):
     c0 = -1
     count = np.empty(n, dtype=np.int64)
     for it in range(max_iter):
-        # order: the columns after one with the fewest free nodes (held columns have none), that one last
-        best = mh + 1
-        for i in range(n):
-            cnt = 0
-            for j in range(1, mh + 1):
-                if free[i, j]:
-                    cnt += 1
-            count[i] = cnt
-            if cnt < best:
-                best = cnt
-        if c0 < 0 or count[c0] > best:
+        if transform and capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric):
+            nu_old = 0  # the envelope factor no longer matches: a later envelope solve starts afresh
+        else:
+            # order: the columns after one with the fewest free nodes (held columns have none), that one last
+            best = mh + 1
             for i in range(n):
-                if count[i] == best:
-                    c0 = i
-                    break
-            nu_old = 0  # a new ordering: nothing to reuse
-        # number the free nodes; r0 = the first whose node differs from the last ordering's
-        nu = 0
-        r0 = -1
-        for t in range(n):
-            i = (c0 + 1 + t) % n
-            for j in range(mh + 2):
-                if 1 <= j <= mh and free[i, j]:
-                    if r0 < 0 and (nu >= nu_old or node_i[nu] != i or node_j[nu] != j):
-                        r0 = nu
-                    idx[i, j] = nu
-                    node_i[nu] = i
-                    node_j[nu] = j
-                    nu += 1
+                cnt = 0
+                for j in range(1, mh + 1):
+                    if free[i, j]:
+                        cnt += 1
+                count[i] = cnt
+                if cnt < best:
+                    best = cnt
+            if c0 < 0 or count[c0] > best:
+                for i in range(n):
+                    if count[i] == best:
+                        c0 = i
+                        break
+                nu_old = 0  # a new ordering: nothing to reuse
+            # number the free nodes; r0 = the first whose node differs from the last ordering's
+            nu = 0
+            r0 = -1
+            for t in range(n):
+                i = (c0 + 1 + t) % n
+                for j in range(mh + 2):
+                    if 1 <= j <= mh and free[i, j]:
+                        if r0 < 0 and (nu >= nu_old or node_i[nu] != i or node_j[nu] != j):
+                            r0 = nu
+                        idx[i, j] = nu
+                        node_i[nu] = i
+                        node_j[nu] = j
+                        nu += 1
+                    else:
+                        idx[i, j] = -1
+            if r0 < 0:
+                r0 = nu
+            nu_old = nu
+            # envelope from r0 on: the lowest-numbered coupled unknown of each row
+            total = start[r0] if r0 > 0 else 0
+            for r in range(r0, nu):
+                i, j = node_i[r], node_j[r]
+                im = i - 1 if i > 0 else n - 1
+                ip = i + 1 if i < n - 1 else 0
+                f = r
+                for q in (idx[im, j], idx[ip, j], idx[i, j - 1], idx[i, j + 1]):
+                    if 0 <= q < f:
+                        f = q
+                first[r] = f
+                start[r] = total
+                total += r - f + 1
+            start[nu] = total
+            if env.shape[0] < total:
+                grown = np.empty(2 * total)
+                grown[: env.shape[0]] = env
+                env = grown
+            # assemble K = -(rows of A) on the free nodes (scaled by 1/2 on a centre row) and its right-hand side
+            for r in range(r0, nu):
+                i, j = node_i[r], node_j[r]
+                im = i - 1 if i > 0 else n - 1
+                ip = i + 1 if i < n - 1 else 0
+                s = 0.5 if (centre and j == mh) else 1.0
+                sr = start[r] - first[r]
+                for k in range(start[r], start[r + 1]):
+                    env[k] = 0.0
+                env[sr + r] = s * (ap[i] - an[i] if (folded and j == mh) else ap[i])
+                br = -rhs[i]
+                # theta neighbours: free (matrix), held (known value), active (p = 0)
+                q = idx[im, j]
+                if q >= 0:
+                    if q < r:
+                        env[sr + q] -= s * aw[i]
+                elif fixed[im]:
+                    br += aw[i] * p[im, j]
+                q = idx[ip, j]
+                if q >= 0:
+                    if q < r:
+                        env[sr + q] -= s * ae[i]
+                elif fixed[ip]:
+                    br += ae[i] * p[ip, j]
+                # axial neighbour below: the end row (known) or a node (twice on a centre row: its mirror above)
+                a_dn = 2.0 * an[i] if (centre and j == mh) else an[i]
+                q = idx[i, j - 1]
+                if j == 1:
+                    br += a_dn * p[i, 0]
+                elif 0 <= q < r:
+                    env[sr + q] -= s * a_dn
+                # axial neighbour above: a node, the far end row, or nothing (the mirror, folded or centre)
+                if not symmetric and j == m:
+                    br += an[i] * p[i, nz - 1]
                 else:
-                    idx[i, j] = -1
-        if r0 < 0:
-            r0 = nu
-        nu_old = nu
-        # envelope from r0 on: the lowest-numbered coupled unknown of each row
-        total = start[r0] if r0 > 0 else 0
-        for r in range(r0, nu):
-            i, j = node_i[r], node_j[r]
-            im = i - 1 if i > 0 else n - 1
-            ip = i + 1 if i < n - 1 else 0
-            f = r
-            for q in (idx[im, j], idx[ip, j], idx[i, j - 1], idx[i, j + 1]):
-                if 0 <= q < f:
-                    f = q
-            first[r] = f
-            start[r] = total
-            total += r - f + 1
-        start[nu] = total
-        if env.shape[0] < total:
-            grown = np.empty(2 * total)
-            grown[: env.shape[0]] = env
-            env = grown
-        # assemble K = -(rows of A) on the free nodes (scaled by 1/2 on a centre row) and its right-hand side
-        for r in range(r0, nu):
-            i, j = node_i[r], node_j[r]
-            im = i - 1 if i > 0 else n - 1
-            ip = i + 1 if i < n - 1 else 0
-            s = 0.5 if (centre and j == mh) else 1.0
-            sr = start[r] - first[r]
-            for k in range(start[r], start[r + 1]):
-                env[k] = 0.0
-            env[sr + r] = s * (ap[i] - an[i] if (folded and j == mh) else ap[i])
-            br = -rhs[i]
-            # theta neighbours: free (matrix), held (known value), active (p = 0)
-            q = idx[im, j]
-            if q >= 0:
-                if q < r:
-                    env[sr + q] -= s * aw[i]
-            elif fixed[im]:
-                br += aw[i] * p[im, j]
-            q = idx[ip, j]
-            if q >= 0:
-                if q < r:
-                    env[sr + q] -= s * ae[i]
-            elif fixed[ip]:
-                br += ae[i] * p[ip, j]
-            # axial neighbour below: the end row (known) or a node (twice on a centre row: its mirror above)
-            a_dn = 2.0 * an[i] if (centre and j == mh) else an[i]
-            q = idx[i, j - 1]
-            if j == 1:
-                br += a_dn * p[i, 0]
-            elif 0 <= q < r:
-                env[sr + q] -= s * a_dn
-            # axial neighbour above: a node, the far end row, or nothing (the mirror, folded or centre)
-            if not symmetric and j == m:
-                br += an[i] * p[i, nz - 1]
-            else:
-                q = idx[i, j + 1]
-                if 0 <= q < r:
-                    env[sr + q] -= s * an[i]
-            y[r] = s * br
-        envelope_cholesky(first, start, env, inv_diag, r0, nu)
-        envelope_solve(first, start, env, inv_diag, r0, nu, y, x)
-        # write the field back (active nodes at 0), mirrored onto the upper half
+                    q = idx[i, j + 1]
+                    if 0 <= q < r:
+                        env[sr + q] -= s * an[i]
+                y[r] = s * br
+            envelope_cholesky(first, start, env, inv_diag, r0, nu)
+            envelope_solve(first, start, env, inv_diag, r0, nu, y, x)
+            # write the field back (active nodes at 0), mirrored onto the upper half
+            for i in range(n):
+                if fixed[i]:
+                    continue
+                for j in range(1, mh + 1):
+                    q = idx[i, j]
+                    val = x[q] if q >= 0 else 0.0
+                    p[i, j] = val
+                    if symmetric:
+                        p[i, m + 1 - j] = val
         pmax = 0.0
         for i in range(n):
-            if fixed[i]:
-                continue
-            for j in range(1, mh + 1):
-                q = idx[i, j]
-                val = x[q] if q >= 0 else 0.0
-                p[i, j] = val
-                if symmetric:
-                    p[i, m + 1 - j] = val
-                if val > pmax:
-                    pmax = val
+            if not fixed[i]:
+                for j in range(1, mh + 1):
+                    if p[i, j] > pmax:
+                        pmax = p[i, j]
         if not project:
             return it + 1
         # update the active set; unchanged means solved
@@ -694,6 +970,8 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter):
                         free[i, j] = True
                         changed = True
         if not changed:
+            if warm is not None:
+                warm[:, :] = free
             # round-off negatives (above -thr) are the zeros of cavitated nodes
             for i in range(n):
                 for j in range(1, nz - 1):
