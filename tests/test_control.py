@@ -293,9 +293,9 @@ def _vec_pair(model, rotor_cfg, controller_cfg, n_envs, **scenario):
 
 def _assert_same_transitions(venv, dummy, actions_per_step, rtol=1e-9):
     """Both vector envs from reset through the action rows: observations, rewards, dones, truncation flags,
-    terminal observations equal to round-off; returns the dones seen."""
+    terminal observations equal to round-off; returns the dones seen and which of them were contacts."""
     np.testing.assert_allclose(venv.reset(), dummy.reset(), rtol=rtol, atol=1e-7)
-    seen = []
+    seen, contacts = [], []
     for actions in actions_per_step:
         o1, r1, d1, i1 = venv.step(np.asarray(actions))
         o2, r2, d2, i2 = dummy.step(np.asarray(actions))
@@ -310,7 +310,9 @@ def _assert_same_transitions(venv, dummy, actions_per_step, rtol=1e-9):
             if "terminal_observation" in a:
                 np.testing.assert_allclose(a["terminal_observation"], b["terminal_observation"], rtol=rtol, atol=1e-7)
         seen.append(d1.copy())
-    return np.array(seen)
+        contacts.append([a["terminated"] for a in i1])
+        venv.distinct_times = max(getattr(venv, "distinct_times", 1), len({e.t for e in venv.envs}))
+    return np.array(seen), np.array(contacts)
 
 
 def test_vector_env_transitions_equal_the_single_envs(active_surrogate, rotor_cfg, controller_cfg):
@@ -322,15 +324,15 @@ def test_vector_env_transitions_equal_the_single_envs(active_surrogate, rotor_cf
                             t_end=0.2)
     rng = np.random.default_rng(3)
     rows = [[0, 4, 2, rng.integers(5)] for _ in range(3)] + [list(rng.integers(0, 5, 4)) for _ in range(10)]
-    dones = _assert_same_transitions(venv, dummy, rows)
+    dones, contacts = _assert_same_transitions(venv, dummy, rows)
     assert venv.n_batches == len(rows)  # one batch per step for a surrogate, whatever the sleeves and times
-    terminated = [h["terminated"] for e in venv.envs for h in e.history]
-    assert dones.sum() >= 2 and any(terminated)  # contacts ended episodes
-    assert len({e.t for e in venv.envs}) > 1  # the environments run at different times after the autoresets
+    assert contacts.sum() >= 2 and not (contacts & ~dones).any()  # contacts ended episodes
+    assert venv.distinct_times > 1  # the environments ran at different times after the autoresets
     # the quick scenario (5 decisions): every environment reaches the time limit and restarts at t = 0
     venv, dummy = _vec_pair(active_surrogate, rotor_cfg, controller_cfg, 4)
     n = venv.envs[0].scenario.n_decisions
-    dones = _assert_same_transitions(venv, dummy, [[1, 2, 3, 2]] * (n + 1))
+    dones, contacts = _assert_same_transitions(venv, dummy, [[1, 2, 3, 2]] * (n + 1))
+    assert not contacts.any()
     assert dones[n - 1].all() and not dones[:n - 1].any() and not dones[n].any()
     assert all(e.t == e.scenario.control_interval for e in venv.envs)
     active_surrogate.set_sleeve(0.0)

@@ -76,7 +76,7 @@ class ActiveBearingVecEnv(VecEnv):
     (3, 7)
     >>> obs, rewards, dones, infos = venv.step(np.array([0, 1, 2]))
     >>> obs.shape, [round(float(r), 3) for r in rewards], dones.tolist()
-    ((3, 7), [-5.062, -4.645, -4.406], [False, False, False])
+    ((3, 7), [-3.078, -4.645, -7.673], [False, False, False])
     """
 
     def __init__(self, model: ForceModel, rotor: Rotor, sleeve_positions, scenario: Scenario = Scenario(),

@@ -245,6 +245,7 @@ class DQNSchema:
     exploration_fraction: float = MISSING
     exploration_final_eps: float = MISSING
     net_arch: list[int] = MISSING
+    torch_threads: int = MISSING
 
 
 @dataclass
