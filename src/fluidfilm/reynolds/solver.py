@@ -193,7 +193,8 @@ class ReynoldsSolver(_GridSolver):
         Iteration limit of the projected SOR.
     method : {"active-set", "psor"}, default "active-set"
         Solver of the Swift-Stieber problem: a primal-dual active-set iteration of direct solves
-        (``kernels.active_set_field``: exact up to round-off, typically 3-8 solves) or the projected
+        (``kernels.active_set_field``: exact up to round-off, typically 3-8 solves, most by the axial sine
+        transform with a capacitance matrix on the cavitated nodes) or the projected
         SOR (``kernels.psor_swift_stieber``, converged to ``sor_tol``; kept for comparison).  Not used
         by the other cavitation models (one direct solve).
 

@@ -233,6 +233,7 @@ class RewardSchema:
 @dataclass
 class DQNSchema:
     total_timesteps: int = MISSING
+    n_envs: int = MISSING
     learning_rate: float = MISSING
     buffer_size: int = MISSING
     learning_starts: int = MISSING
