@@ -1,27 +1,31 @@
-"""ns per force of the surrogate's kernels and the reference, side by side, for N = 1, 64, 1024, 65536 states.
+"""ns per force of every surrogate shape and the reference, N = 1, 64, 1024, 65536 states, beside the
+arithmetic floor of each network, and batched trajectories per second (``make bench``).
 
-    python benchmarks/bench_surrogate_kernels.py [--model models/best] [--quick] [--trajectories-only]
+    python benchmarks/bench_surrogate_kernels.py [--quick] [--trajectories-only]
 
-Arms (one run, one process, the same states for all):
+Part 1 (reports/benchmarks/surrogate_kernels.json), one process, one thread, the same states for every arm:
 
 - reference: the graded Reynolds model (``GradedReynoldsModel`` on the paper bearing), its one-state kernel;
-- generic: ``inference.surrogate_force``, the surrogate kernel before issue #27;
-- fast: the one-state kernel generated for the model's shape (``surrogate.kernels.fast_force_kernel``);
-- batch f64 / batch f32: ``surrogate.kernels.forces_batch`` on all N states at once, the network in float64
-  or float32.
+- paper single / paper split: the paper's network shapes (4 -> 50 -> 2 tanh, one region or three);
+- best: the best model's shapes (five blended regions, whirl frame, 3 -> 64 -> 2 tanh): its one-state fast
+  kernel (``surrogate.kernels.fast_force_kernel``) and its batched kernel;
+- ensemble: three members of the best model's shapes, their mean through the members' batched kernel.
 
-Every arm runs inside a compiled loop (the one-state kernels over the N states, the batched kernel once per
-pass), repeated until about 2e5 forces were evaluated per sample, so N = 1 measures the kernel and not
-Python's call overhead; the figure is the median over the samples (``median_seconds``).  Then one trajectory
-(``simulate``, 20 ms of rotor time at dt = 1e-5 s) of the fast surrogate and of the reference.  The
-surrogate is ``--model`` where that folder holds a saved model, else one with the best model's shapes and
-random weights (``perf.speed.best_shaped_surrogate``: the cost does not depend on the weights' values).
+Each surrogate's batched kernel (what ``simulate_batch`` calls once per RK4 stage: the kernel generated for
+its shape, ``surrogate.kernels.batch_kernel``) runs with its networks in float64 and in float32.  Where
+``models/<name>`` holds a trained model (a DVC output) it is used; otherwise a model of the same shapes with
+random weights (``perf.speed.best_shaped_surrogate``, ``perf.speed.paper_shaped_surrogate``: the cost does
+not depend on the weights' values), and the output says so.  Every arm runs inside a compiled loop, repeated
+until about 1e5 forces per sample (N = 1 measures the kernel, not Python's call overhead); medians.
 
-Last, batched trajectories (``perf.throughput.trajectories_per_second``, ``simulate_batch``): N = 1024 Monte
-Carlo trajectories of 5 ms each, the surrogate (float64 and float32 networks, and the per-trajectory lockstep
-loop it had before) and the graded reference run the same way (one batched-kernel call per RK4 stage), at one
-thread and at all cores; trajectories per second and the ratios (reports/benchmarks/batch_trajectories.json;
-``--trajectories-only`` runs just this part).
+The floor beside each network: its multiply-adds per force at the GEMM rate this machine measures (numpy,
+one thread, float64 and float32) plus its tanh units at the measured cost of the rational tanh in a
+vectorised loop; one region's network per force (a state in a blend zone costs two).
+
+Part 2 (reports/benchmarks/batch_trajectories.json): N = 1024 Monte Carlo trajectories of 5 ms each through
+``simulate_batch`` (``perf.throughput.trajectories_per_second``), the best-shaped surrogate (float32 and
+float64 networks, and the per-trajectory lockstep loop) against the graded reference run the same way, at
+one thread and at all cores; the load average is recorded around each part.
 """
 from __future__ import annotations
 
@@ -33,13 +37,14 @@ from pathlib import Path
 
 import numpy as np
 from numba import njit
+from threadpoolctl import threadpool_limits
 
-from fluidfilm import GradedReynoldsModel, Rotor, load_surrogate, paper_bearing, simulate
+from fluidfilm import GradedReynoldsModel, load_surrogate, paper_bearing
 from fluidfilm.perf.benchmarking import machine, median_seconds, write_benchmark
-from fluidfilm.perf.speed import best_shaped_surrogate, sample_states
+from fluidfilm.perf.speed import best_shaped_surrogate, paper_shaped_surrogate, sample_states
 from fluidfilm.perf.throughput import trajectories_per_second
-from fluidfilm.surrogate.inference import surrogate_force
-from fluidfilm.surrogate.kernels import batch_params, compile_seconds, forces_batch
+from fluidfilm.surrogate.ensemble import EnsembleForceModel
+from fluidfilm.surrogate.kernels import tanh32, tanh64
 
 SIZES = (1, 64, 1024, 65536)
 #: batched trajectories: how many, and the rotor time of each [s]
@@ -57,17 +62,73 @@ def _one_state_passes(kernel, params, x, v, passes):
 
 
 @njit
-def _batch_passes(bp, x, v, out, passes):
+def _batch_passes(fn, bp, x, v, out, passes):
     acc = 0.0
     for _ in range(passes):
-        forces_batch(bp, x, v, out)
+        fn(bp, x, v, out)
         acc += out[0, 0]
     return acc
 
 
+@njit(error_model="numpy", fastmath={"contract", "reassoc"})
+def _tanh_loop(a, passes, f32):
+    acc = a[0] - a[0]
+    for _ in range(passes):
+        for i in range(a.size):
+            acc += tanh32(a[i]) if f32 else tanh64(a[i])
+    return acc
+
+
+def floors() -> dict:
+    """GEMM rate [flop/s] (numpy, one thread) and ns per rational tanh in a vectorised loop, per precision."""
+    out = {}
+    rng = np.random.default_rng(0)
+    for dt, f32 in (("float64", False), ("float32", True)):
+        a = rng.normal(size=(4096, 64)).astype(dt)
+        b = rng.normal(size=(64, 64)).astype(dt)
+        with threadpool_limits(1):
+            t = median_seconds(lambda a=a, b=b: a @ b, 9, calls=20)
+        z = rng.normal(0, 3, 4096).astype(dt)
+        _tanh_loop(z, 1, f32)
+        tt = median_seconds(lambda z=z, f32=f32: _tanh_loop(z, 50, f32), 7, warmup=False)
+        out[dt] = {"gemm_flops_per_s": 2 * 4096 * 64 * 64 / t, "ns_per_tanh": 1e9 * tt / (50 * z.size)}
+    return out
+
+
+def network_floor_ns(model, fl: dict) -> float:
+    """Multiply-adds of one region's network at the GEMM rate plus its tanh units (module doc)."""
+    layers = model.networks[0] if model.structure == "plain" else [layer for net in model.networks[0] for layer in net]
+    macs = sum(np.size(W) for W, _ in layers)
+    units = sum(np.shape(W)[0] for W, _ in layers[:-1])
+    return 1e9 * 2 * macs / fl["gemm_flops_per_s"] + units * fl["ns_per_tanh"]
+
+
+def models(bearing) -> tuple[dict, list]:
+    """name -> surrogate (trained where models/<name> holds one, else random weights of its shapes)."""
+    made = {"paper single": ("models/paper_single", lambda: paper_shaped_surrogate(bearing)),
+            "paper split": ("models/paper_split", lambda: paper_shaped_surrogate(bearing, split=True)),
+            "best": ("models/best", lambda: best_shaped_surrogate(bearing))}
+    out, random = {}, []
+    for name, (path, shaped) in made.items():
+        if (Path(path) / "model.json").exists():
+            out[name] = load_surrogate(path)
+        else:
+            out[name] = shaped()
+            random.append(name)
+    seeds = [Path(f"models/best{s}") for s in ("", "_s1", "_s2")]
+    if all((p / "model.json").exists() for p in seeds):
+        out["ensemble"] = EnsembleForceModel([load_surrogate(p) for p in seeds], name="ensemble of 3")
+    else:
+        out["ensemble"] = EnsembleForceModel([best_shaped_surrogate(bearing, seed=s) for s in range(3)],
+                                             name="ensemble of 3")
+        random.append("ensemble")
+    return out, random
+
+
 def _ns_per_force(run, n, passes, repeats):
     run(1)  # compile
-    return 1e9 * median_seconds(lambda: run(passes), repeats, warmup=False) / (n * passes)
+    # the CPU time of this thread: on a machine shared with other processes the wall time mostly measures them
+    return 1e9 * median_seconds(lambda: run(passes), repeats, warmup=False, clock=time.thread_time) / (n * passes)
 
 
 def batch_trajectories(model, reference, label: str, quick: bool) -> None:
@@ -75,8 +136,9 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
     cores (module doc); written unless ``quick``."""
     n = 64 if quick else N_TRAJECTORIES
     all_cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-    arms = [("reference (graded)", reference, {"stage_batched": True}), ("surrogate f64", model, {"stage_batched": True}),
+    arms = [("reference (graded)", reference, {"stage_batched": True}),
             ("surrogate f32", model, {"precision": "float32", "stage_batched": True}),
+            ("surrogate f64", model, {"precision": "float64", "stage_batched": True}),
             ("surrogate lockstep (before)", model, {"stage_batched": False})]
     header = ["arm", "threads", "trajectories/s", "ns per force", "n_ok", "vs reference"]
     rows = []
@@ -91,7 +153,9 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
                 if threads > 1 and kw.get("stage_batched") is False:
                     continue  # the lockstep loop runs in one thread
                 repeats = 1 if m is reference else 3
-                r = trajectories_per_second(m, n, T_END, repeats=repeats, threads=threads, **kw)
+                # one thread: the CPU time of this thread (the batch runs in it); all cores: wall time
+                r = trajectories_per_second(m, n, T_END, repeats=repeats, threads=threads,
+                                            clock=time.thread_time if threads == 1 else None, **kw)
                 rate = r["trajectories_per_s"]
                 if m is reference:
                     ref_rate[threads] = rate
@@ -102,7 +166,8 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
     scaling = {name: float(rows[i + len(arms)][2]) / float(rows[i][2]) for i, (name, _, _) in enumerate(arms[:3])
                } if all_cores > 1 else {}
     note = ("Ratios at equal threads, both models through the same stage-batched simulate_batch "
-            "(threads: contiguous chunks of the batch, one thread each). "
+            "(threads: contiguous chunks of the batch, one thread each); one thread timed by the thread's CPU "
+            "time, all cores by wall time. "
             + (f"Scaling {all_cores} threads / 1: " + ", ".join(f"{k} {v:.2f}x" for k, v in scaling.items()) + ". "
                if scaling else "")
             + f"Load average before / after: {load[0]:.2f} / {os.getloadavg()[0]:.2f} on {all_cores} cores; on a "
@@ -117,77 +182,78 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--model", default="models/best")
     ap.add_argument("--quick", action="store_true", help="fewer forces per sample, no file written")
     ap.add_argument("--trajectories-only", action="store_true", help="only the batched trajectories")
     args = ap.parse_args()
     bearing = paper_bearing()
-    if (Path(args.model) / "model.json").exists():
-        model, label = load_surrogate(args.model), args.model
-    else:
-        model, label = best_shaped_surrogate(bearing), "best-shaped, random weights (no trained model here)"
+    surrogates, random = models(bearing)
+    label = ("random weights of the trained models' shapes for " + ", ".join(random) + " (no trained model in "
+             "models/ here)") if random else "the trained models of models/"
+    print(f"machine: {machine()}; surrogates: {label}")
     reference = GradedReynoldsModel(bearing)
     if args.trajectories_only:
-        print(f"machine: {machine()}; surrogate: {label}")
-        batch_trajectories(model, reference, label, args.quick)
+        batch_trajectories(surrogates["best"], reference, label, args.quick)
         return
-    per_sample, repeats = (2e4, 3) if args.quick else (2e5, 7)
-    t0 = time.perf_counter()
-    fast_kernel, fast_params = model.force_kernel
-    compile_fast = compile_seconds.get(model._fast_key, time.perf_counter() - t0)
-    bp64, bp32 = batch_params(model, "float64"), batch_params(model, "float32")
-    print(f"machine: {machine()}; surrogate: {label}")
-    header = ["N", "reference (graded)", "generic", "fast", "batch f64", "batch f32",
-              "ref/fast", "ref/batch f64", "ref/batch f32"]
+    load0 = os.getloadavg()
+    fl = floors()
+    print("floors: " + ", ".join(f"{dt}: GEMM {v['gemm_flops_per_s'] / 1e9:.1f} Gflop/s, rational tanh "
+                                 f"{v['ns_per_tanh']:.2f} ns" for dt, v in fl.items()))
+    per_sample, repeats = (2e4, 3) if args.quick else (1e5, 5)
+    states = {n: sample_states(bearing.clearance, n=n, eps_max=0.8, v_max=0.05, seed=1) for n in SIZES}
+    arms = [("reference (graded)", "one-state", reference, None)]
+    for name, m in surrogates.items():
+        if name == "best":
+            arms.append((name, "one-state fast", m, None))
+        for dt in ("float64", "float32"):
+            arms.append((name, f"batched {dt}", m, dt))
+    header = ["model", "kernel"] + [f"N = {n}" for n in SIZES] + ["floor", "ref/this at N = 1024"]
     rows = []
-    print(("{:>7}" + "{:>20}" + "{:>10}" * 4 + "{:>15}" * 3).format(*header))
+    ref_1024 = None
+    print(("{:>20}{:>18}" + "{:>12}" * (len(SIZES) + 2)).format(*header[:-1], "ref/this"))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        for n in SIZES:
-            x, v = sample_states(model.clearance, n=max(n, 1), eps_max=0.8, v_max=0.05, seed=1)
-            out = np.empty_like(x)
-            passes = max(1, int(per_sample // n))
-            ref_passes = max(1, passes // 20)  # the reference is ~30x slower: fewer forces, same sampling
-            ns = {
-                "reference": _ns_per_force(lambda k: _one_state_passes(*reference.force_kernel, x, v, k), n,
-                                           ref_passes, repeats if n < 65536 else 3),
-                "generic": _ns_per_force(lambda k: _one_state_passes(surrogate_force, model.params, x, v, k), n,
-                                         passes, repeats),
-                "fast": _ns_per_force(lambda k: _one_state_passes(fast_kernel, fast_params, x, v, k), n, passes,
-                                      repeats),
-                "batch64": _ns_per_force(lambda k: _batch_passes(bp64, x, v, out, k), n, passes, repeats),
-                "batch32": _ns_per_force(lambda k: _batch_passes(bp32, x, v, out, k), n, passes, repeats),
-            }
-            row = [n, f"{ns['reference']:.0f}", f"{ns['generic']:.0f}", f"{ns['fast']:.0f}", f"{ns['batch64']:.0f}",
-                   f"{ns['batch32']:.0f}", f"{ns['reference'] / ns['fast']:.1f}x",
-                   f"{ns['reference'] / ns['batch64']:.1f}x", f"{ns['reference'] / ns['batch32']:.1f}x"]
+        for name, kernel, m, dt in arms:
+            ns = []
+            for n in SIZES:
+                x, v = states[n]
+                out = np.empty_like(x)
+                passes = max(1, int(per_sample // n))
+                if dt is None:
+                    fn, params = m.force_kernel
+                    if m is reference:
+                        passes = max(1, passes // 20)  # ~30x slower: fewer forces, same sampling
+                else:
+                    fn, params = m.batch_force_kernel(dt)
+
+                def run(k, fn=fn, params=params, x=x, v=v, out=out, one=dt is None):
+                    return _one_state_passes(fn, params, x, v, k) if one else _batch_passes(fn, params, x, v, out, k)
+
+                ns.append(_ns_per_force(run, n, passes, repeats if n < 65536 or m is not reference else 1))
+            if m is reference:
+                ref_1024 = ns[SIZES.index(1024)]
+            members = m.members if isinstance(m, EnsembleForceModel) else [m]
+            floor = "" if m is reference else \
+                f"{sum(network_floor_ns(mm, fl[dt or 'float64']) for mm in members):.0f}"
+            row = [name, kernel] + [f"{t:.0f}" for t in ns] + [floor, f"{ref_1024 / ns[SIZES.index(1024)]:.1f}x"]
             rows.append(row)
-            print(("{:>7}" + "{:>20}" + "{:>10}" * 4 + "{:>15}" * 3).format(*row))
-        # one trajectory, the same integrator and start for both models; the time per force evaluation inside
-        # it (a random-weight surrogate's orbit is not the reference's and may stop early)
-        rotor = Rotor(mass=2.5, imbalance=5e-4 * 2.5)
-        x0 = [0.0, 0.3 * model.clearance]
-        per_eval, status = {}, {}
-        for name, m in (("fast", model), ("reference", reference)):
-            traj = simulate(m, rotor, t_end=0.02, x0=x0)  # compiles the (uncached) loop for the surrogate
-            wall = median_seconds(lambda m=m: simulate(m, rotor, t_end=0.02, x0=x0), 5 if name == "fast" else 3,
-                                  warmup=False)
-            per_eval[name] = wall / traj.n_force_evals
-            status[name] = f"{traj.status}, {traj.n_force_evals} force evaluations"
-    ratio = per_eval["reference"] / per_eval["fast"]
-    traj_note = (f"one trajectory (simulate, 20 ms at dt = 1e-5 s), time per force evaluation inside it: surrogate "
-                 f"{per_eval['fast'] * 1e9:.0f} ns ({status['fast']}), reference {per_eval['reference'] * 1e9:.0f} ns "
-                 f"({status['reference']}): {ratio:.1f}x")
-    print(traj_note + f"; fast kernel compiled in {compile_fast:.2f} s")
+            print(("{:>20}{:>18}" + "{:>12}" * (len(SIZES) + 2)).format(*row))
+    load1 = os.getloadavg()
+    note = (f"ns per force, medians. Surrogates: {label}. Floor: the network's multiply-adds at the measured "
+            "one-thread GEMM rate (" + ", ".join(f"{dt} {v['gemm_flops_per_s'] / 1e9:.1f} Gflop/s"
+                                                for dt, v in fl.items())
+            + ") plus its tanh units at the measured rational tanh ("
+            + ", ".join(f"{dt} {v['ns_per_tanh']:.2f} ns" for dt, v in fl.items())
+            + "), one region's network per force (the one-state rows: float64). Every arm in a compiled loop, timed "
+            "by this thread's CPU time (the wall time on a shared machine mostly measures the other processes). "
+            f"Load average (1 min) before / after: {load0[0]:.1f} / {load1[0]:.1f} on {os.cpu_count()} cores: "
+            "the machine was shared with other work, so absolute times are high bounds; the ratios are "
+            "measured side by side.")
+    print(note)
     if not args.quick:
-        write_benchmark(
-            "surrogate_kernels", f"ns per force of the surrogate ({label}) and the graded reference, by number of "
-            "states N, medians, one process, one thread", header, rows,
-            notes=(traj_note[0].upper() + traj_note[1:] + ". The fast kernel of this shape "
-                   f"compiled in {compile_fast:.2f} s. Every arm in a compiled loop; the machine was shared with "
-                   "other work while measured, so absolute times vary from run to run; the ratios are measured "
-                   "side by side."))
-    batch_trajectories(model, reference, label, args.quick)
+        write_benchmark("surrogate_kernels", "ns per force by number of states N: the graded reference, the "
+                        "surrogates' one-state and batched kernels, one process, one thread", header, rows,
+                        notes=note)
+    batch_trajectories(surrogates["best"], reference, label, args.quick)
 
 
 if __name__ == "__main__":

@@ -216,7 +216,7 @@ def test_stage_batched_surrogate_mixed_batch_of_contact_substeps_and_a_normal_or
     rotors = [rotor, dataclasses.replace(rotor, external_force=(0.0, 30000.0)), rotor]
     x0 = np.array([[0.1 * c, 0.0], [0.0, 0.5 * c], [0.0, 0.88 * c]])
     n_steps = 200
-    batch = simulate_batch(model, rotors, 0.002, 1e-5, x0, threads=2, stage_batched=True)
+    batch = simulate_batch(model, rotors, 0.002, 1e-5, x0, threads=2, stage_batched=True, precision="float64")
     n_outside = model.n_outside_domain  # the whole batch's (simulate resets the counter)
     singles = [simulate(model, rotors[p], 0.002, 1e-5, x0[p]) for p in range(3)]
     assert batch.ok.tolist() == [True, False, True]

@@ -6,7 +6,11 @@
 - Levenberg-Marquardt reaches numpy's least-squares solution of a linear model and
   scipy.optimize.least_squares' solution of a nonlinear one;
 - the network's analytical Jacobian equals finite differences, the block-structured J^T J the plain one;
-- a paper network trained on a smooth function fits it and stops by the validation rule.
+- a paper network trained on a smooth function fits it and stops by the validation rule;
+- J^T J accumulated by several threads is bitwise the one-thread sum; a run interrupted mid-way and
+  started again from its checkpoint ends with the weights of an uninterrupted run, bitwise
+  (the SIGKILL version: tests/faults/test_training_faults.py);
+- a min-max map after the physics kinds' division with power 0 is the paper's map.
 """
 from __future__ import annotations
 
@@ -16,11 +20,13 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
+from fluidfilm.surrogate import protocol as protocol_module
 from fluidfilm.surrogate.levenberg_marquardt import (LMSettings, init_nguyen_widrow, levenberg_marquardt,
-                                                     mlp_forward, mlp_jacobian, normal_equations,
+                                                     mlp_forward, mlp_jacobian, mlp_sse, normal_equations,
                                                      normal_equations_dense)
-from fluidfilm.surrogate.protocol import (NetworkData, ValidationStop, divide_random, subsample,
-                                          time_to_accuracy, train_network_adam, train_network_lm)
+from fluidfilm.surrogate.protocol import (NetworkData, ValidationStop, divide_random, load_lm_checkpoint,
+                                          minmax_scaling, subsample, time_to_accuracy, train_network_adam,
+                                          train_network_lm)
 from fluidfilm.surrogate.scaling import Scaling
 
 
@@ -200,3 +206,138 @@ def test_time_to_accuracy_takes_the_first_epoch_at_the_target():
                         {"history": {"wall_s": [0.5, 1.0], "val_sq_N2": [3.0, 2.0]}}]}
     assert time_to_accuracy(rep, [4.0, 3.0]) == pytest.approx(2.0 + 0.5)
     assert time_to_accuracy(rep, [0.5, 3.0]) is None
+
+
+def test_threads_accumulate_the_normal_equations_bitwise_as_one_thread_does():
+    rng = np.random.default_rng(5)
+    Z = rng.uniform(-1, 1, (5000, 4))
+    Y = rng.uniform(-1, 1, (5000, 2))
+    th = init_nguyen_widrow(4, 50, 2, rng)
+    one = normal_equations(th, Z, Y, 50, chunk=512, workers=1)
+    for w in (2, 3, 8):
+        many = normal_equations(th, Z, Y, 50, chunk=512, workers=w)
+        for a, b in zip(one, many):
+            np.testing.assert_array_equal(a, b)
+        assert mlp_sse(th, Z, Y, 50, chunk=700, workers=w) == mlp_sse(th, Z, Y, 50, chunk=700, workers=1)
+    # and it is the plain J^T J (independent truth, not only self-consistency)
+    dense = normal_equations_dense(th, Z, Y, 50, chunk=1000)
+    np.testing.assert_allclose(one[0], dense[0], rtol=1e-10, atol=1e-10 * np.abs(dense[0]).max())
+    with pytest.raises(ValueError, match="-1"):
+        normal_equations(th, Z, Y, 50, workers=-1)
+
+
+class _Interrupt(Exception):
+    pass
+
+
+def test_an_interrupted_lm_run_resumes_from_its_checkpoint_to_the_uninterrupted_weights(tmp_path, monkeypatch,
+                                                                                         capsys):
+    data = _toy_data(1500, seed=4)
+    whole = train_network_lm(data, n_hidden=10, seed=1, workers=1)
+    assert whole["stop_reason"] == "validation" and whole["epochs"] > 12
+    # the same run, two threads, stopped (as by Ctrl-C) in the middle of epoch 9 after its checkpoints
+    calls = {"n": 0}
+    real = protocol_module.normal_equations
+
+    def dies_at_epoch_9(*a, **k):
+        calls["n"] += 1
+        if calls["n"] == 9:
+            raise _Interrupt
+        return real(*a, **k)
+
+    ck = tmp_path / "net.npz"
+    monkeypatch.setattr(protocol_module, "normal_equations", dies_at_epoch_9)
+    with pytest.raises(_Interrupt):
+        train_network_lm(data, n_hidden=10, seed=1, workers=2, checkpoint=ck)
+    state = load_lm_checkpoint(ck)
+    assert state["epoch"] == 8 and state["reason"] is None and len(state["hist"]["val_mse"]) == 8
+    monkeypatch.setattr(protocol_module, "normal_equations", real)
+    capsys.readouterr()
+    resumed = train_network_lm(data, n_hidden=10, seed=1, workers=2, checkpoint=ck, progress_every_s=0.0)
+    out = capsys.readouterr().out
+    assert "resuming at epoch 8" in out
+    for (wa, ba), (wb, bb) in zip(whole["layers"], resumed["layers"]):
+        np.testing.assert_array_equal(wa, wb)
+        np.testing.assert_array_equal(ba, bb)
+    for k in ("epochs", "best_epoch", "stop_reason", "val_mse", "test_mse"):
+        assert resumed[k] == whole[k], k
+    assert resumed["history"]["val_mse"] == whole["history"]["val_mse"]
+    # a progress line per epoch after the resume, the last one saying why it stopped
+    lines = [ln for ln in out.splitlines() if ": epoch " in ln]
+    assert len(lines) == whole["epochs"] - 8 and lines[-1].endswith("stopped: validation")
+    assert "rest: at least" in lines[0]
+    # the finished checkpoint: the same call returns the same network without training
+    again = train_network_lm(data, n_hidden=10, seed=1, workers=1, checkpoint=ck)
+    np.testing.assert_array_equal(again["layers"][0][0], whole["layers"][0][0])
+    assert again["epochs"] == whole["epochs"]
+    # a checkpoint of other data is not used
+    other = train_network_lm(_toy_data(1500, seed=5), n_hidden=10, seed=1, checkpoint=ck)
+    assert "belongs to other data" in capsys.readouterr().out
+    assert not np.array_equal(other["layers"][0][0], whole["layers"][0][0])
+
+
+def test_min_max_map_after_a_constant_force_factor_is_the_papers_map():
+    from fluidfilm import paper_bearing
+
+    b = paper_bearing()
+    rng = np.random.default_rng(0)
+    r = rng.uniform(0, 0.9, 300) * b.clearance
+    a = rng.uniform(0, 2 * np.pi, 300)
+    X = np.stack([r * np.sin(a), r * np.cos(a)], 1)
+    V = rng.uniform(-0.2, 0.2, (300, 2))
+    F = rng.uniform(-1e3, 1e3, (300, 2))
+    paper = minmax_scaling(X, V, F, b)
+    physics = minmax_scaling(X, V, F, b, "physics", power=0.0)
+    np.testing.assert_allclose(physics.inputs(X, V), paper.inputs(X, V), atol=1e-12)
+    np.testing.assert_allclose(physics.targets(X, V, F), paper.targets(X, V, F), atol=1e-12)
+    # every map sends the rows' extremes to -1 and +1, and gives the forces back
+    for sc in (paper, physics, minmax_scaling(X, V, F, b, "physics_v", power=0.0),
+               minmax_scaling(X, V, F, b, "physics", "whirl", power=0.0)):
+        y = sc.targets(X, V, F)
+        np.testing.assert_allclose([y.min(axis=0), y.max(axis=0)], [[-1, -1], [1, 1]], atol=1e-12)
+        np.testing.assert_allclose(sc.forces(X, V, y), F, rtol=1e-9, atol=1e-9)
+
+
+def _synthetic_frame(n=1500, seed=0):
+    """Rows in the dataset's columns over eps 0-0.9 with a smooth force (not a film: the protocol's plumbing)."""
+    import pandas as pd
+
+    from fluidfilm import paper_bearing
+
+    b = paper_bearing()
+    rng = np.random.default_rng(seed)
+    eps = rng.uniform(0.0, 0.9, n)
+    a = rng.uniform(0, 2 * np.pi, n)
+    X1, X2 = eps * b.clearance * np.sin(a), eps * b.clearance * np.cos(a)
+    V1, V2 = rng.uniform(-0.2, 0.2, (2, n))
+    F1 = 100 * np.sin(3 * eps) * np.cos(a) + 50 * V1 / (1 - eps ** 2)
+    F2 = -100 * eps ** 2 * np.sin(a) + 50 * V2 / (1 - eps ** 2)
+    frame = pd.DataFrame({"X1": X1, "X2": X2, "V1": V1, "V2": V2, "F1": F1, "F2": F2, "eps": eps})
+    meta = {"bearing": b.to_dict(), "spec": {"velocity_sections": [{"eps_low": 0.0, "eps_high": 1.0, "v_max": 0.2}]}}
+    return frame, meta
+
+
+def test_a_second_arm_with_another_protocol_for_one_network_resumes_the_others_finished(tmp_path, capsys):
+    """The full-scale plan: LM for every network (the last one to a time budget), then the same split with the
+    last network by Adam; the LM networks below come back from their checkpoints, not retrained."""
+    from fluidfilm.surrogate.protocol import train_protocol_model
+
+    frame, meta = _synthetic_frame()
+    proto = {"name": "paper", "max_epochs": 40, "workers": 2, "threads": 1}
+    lm, rep_lm = train_protocol_model(frame, meta, proto, [0.5, 0.7], n_hidden=8, checkpoint_dir=tmp_path,
+                                      network_protocol={2: {"max_time_s": 1e-9}})
+    assert rep_lm["stop_reasons"][2] == "max_time" and not rep_lm["converged"]
+    capsys.readouterr()
+    adam, rep_adam = train_protocol_model(frame, meta, proto, [0.5, 0.7], n_hidden=8, checkpoint_dir=tmp_path,
+                                          network_protocol={"2": {"name": "adam", "max_epochs": 3, "batch_size": 64}})
+    out = capsys.readouterr().out
+    assert out.count("resuming at epoch") == 2  # networks 0 and 1
+    for r in (0, 1):
+        a, b = rep_lm["networks"][r], rep_adam["networks"][r]
+        assert (a["epochs"], a["stop_reason"], a["val_mse"]) == (b["epochs"], b["stop_reason"], b["val_mse"])
+        # the time it took, not the time of the second call (which only read the checkpoint)
+        assert b["train_time_s"] == pytest.approx(a["train_time_s"], abs=0.5)
+        np.testing.assert_array_equal(lm.networks[r][0][0], adam.networks[r][0][0])
+    assert rep_adam["networks"][2]["protocol"] == "adam" and rep_adam["networks"][2]["epochs"] <= 3
+    with pytest.raises(ValueError, match="'sgd'"):
+        train_protocol_model(frame, meta, proto, [0.5, 0.7], n_hidden=8, network_protocol={0: {"name": "sgd"}})

@@ -9,7 +9,7 @@ import pytest
 from fluidfilm import (JournalBearing, LinearBearing, ReynoldsSolver, Rotor, equilibrium, equilibrium_locus,
                        paper_bearing, simulate)
 from fluidfilm.rotor.integrate import Trajectory
-from fluidfilm.rotor.metrics import compare_orbits, orbit_stats
+from fluidfilm.rotor.metrics import compare_orbits, is_satisfactory, is_satisfactory_paper_reading, orbit_stats
 
 C = 120e-6
 
@@ -141,6 +141,34 @@ def test_orbit_metrics_on_known_orbits():
     assert orbit_stats(ref, C, 0.0)["span"] == pytest.approx(0.6, rel=1e-3)
     stopped = Trajectory(t=t[:10], x=ref.x[:10], v=ref.v[:10], status="contact: ...")
     assert compare_orbits(stopped, ref, C, 0.0)["rms_pct"] == math.inf
+
+
+def test_paper_reading_judges_amplitude_and_shape_and_the_position_rule_judges_position_too():
+    t = np.linspace(0, 0.1, 2001)
+    w = 2 * np.pi * 50
+    centre = np.array([0.1 * C, 0.4 * C])  # an elliptic orbit off the bearing's centre, like a loaded journal's
+    x = centre + C * np.stack([0.2 * np.cos(w * t), 0.1 * np.sin(w * t + 0.3)], 1)
+    ref = Trajectory(t=t, x=x, v=np.zeros_like(x), status="ok")
+    # shifted by 10 % of c: same span and shape, wrong place
+    shifted = Trajectory(t=t, x=x + np.array([0.06 * C, -0.08 * C]), v=ref.v, status="ok")
+    d = compare_orbits(shifted, ref, C, t_settle=0.0)
+    assert d["mean_offset_pct"] == pytest.approx(10.0, rel=1e-9)
+    assert d["shape_pct"] == pytest.approx(0.0, abs=1e-9) and d["span_err_pct"] == pytest.approx(0.0, abs=1e-9)
+    assert is_satisfactory_paper_reading(d, 2.0) and not is_satisfactory(d, 2.0)
+    # scaled by 1.3 about its own mean position: same place, amplitude 30 % too large
+    m = x.mean(axis=0)
+    scaled = Trajectory(t=t, x=m + 1.3 * (x - m), v=ref.v, status="ok")
+    d = compare_orbits(scaled, ref, C, t_settle=0.0)
+    assert d["mean_offset_pct"] < 1e-9
+    assert d["span_err_pct"] == pytest.approx(0.3 * 40.0, rel=1e-3)  # 30 % of the 0.4 c span along X1
+    assert d["shape_pct"] > 2.0
+    assert not is_satisfactory_paper_reading(d, 2.0) and not is_satisfactory(d, 2.0)
+    # the reference itself passes both; a run that stopped fails both
+    d = compare_orbits(ref, ref, C, t_settle=0.0)
+    assert is_satisfactory_paper_reading(d, 2.0) and is_satisfactory(d, 2.0)
+    stopped = Trajectory(t=t[:10], x=x[:10], v=ref.v[:10], status="contact: ...")
+    d = compare_orbits(stopped, ref, C, 0.0)
+    assert not is_satisfactory_paper_reading(d, 2.0) and not is_satisfactory(d, 2.0)
 
 
 @pytest.mark.parametrize("kwargs, match", [

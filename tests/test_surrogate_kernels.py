@@ -171,16 +171,37 @@ def test_simulate_follows_the_same_orbit_and_counts_the_same_with_the_fast_kerne
 FLOAT32_REL = 1e-5
 
 
-def _batch(model, X, V, dtype="float64"):
+def _batch(model, X, V, dtype="float64", kernel="model"):
+    """The batched forces: the model's own batched kernel (``kernel="model"``: the one generated for its
+    shape where it has one) or the shape-independent ``forces_batch``."""
     from fluidfilm.surrogate.kernels import batch_params, forces_batch
 
     out = np.empty_like(X)
-    forces_batch(batch_params(model, dtype), np.ascontiguousarray(X), np.ascontiguousarray(V), out)
+    if kernel == "model":
+        fn, bp = model.batch_force_kernel(dtype)
+    else:
+        fn, bp = forces_batch, batch_params(model, dtype)
+    fn(bp, np.ascontiguousarray(X), np.ascontiguousarray(V), out)
     return out
 
 
+def test_every_plain_surrogate_shape_has_a_generated_batched_kernel():
+    """The generated batched kernel serves every plain-structure shape of the library's surrogates (the
+    damping structure keeps ``forces_batch``), and the model hands it to ``simulate_batch``."""
+    from fluidfilm.surrogate.kernels import batch_kernel, batch_shape_key, forces_batch
+
+    for name, (model, _) in _surrogates().items():
+        key = batch_shape_key(model)
+        fn, _ = model.batch_force_kernel("float32")
+        if model.structure == "damping":
+            assert key is None and fn is forces_batch, name
+        else:
+            assert key is not None and fn is batch_kernel(key, "float32"), name
+
+
+@pytest.mark.parametrize("kernel", ["model", "forces_batch"])
 @pytest.mark.parametrize("name", sorted(_surrogates()))
-def test_the_batched_kernel_equals_the_generic_one_and_counts_alike(name):
+def test_the_batched_kernel_equals_the_generic_one_and_counts_alike(name, kernel):
     model, sleeve = _surrogates()[name]
     if sleeve is not None:
         model.set_sleeve(sleeve)
@@ -190,21 +211,22 @@ def test_the_batched_kernel_equals_the_generic_one_and_counts_alike(name):
     generic = _generic(model, X, V)
     n_generic = model.n_outside_domain
     model.reset_domain_counter()
-    batched = _batch(model, X, V)
+    batched = _batch(model, X, V, kernel=kernel)
     assert model.n_outside_domain == n_generic
     rel = np.linalg.norm(batched - generic, axis=1) / np.linalg.norm(generic, axis=1)
     assert rel.max() < KERNEL_REL, (name, rel.max())
 
 
+@pytest.mark.parametrize("kernel", ["model", "forces_batch"])
 @pytest.mark.parametrize("name", ["best_shaped", "surrogate_std", "surrogate_split"])
-def test_the_float32_network_keeps_the_forces_within_1e_5_of_float64(name):
+def test_the_float32_network_keeps_the_forces_within_1e_5_of_float64(name, kernel):
     """Relative to max(|F|, the sample's RMS force): near a zero of the force (a random network's output
     cancelling) float32 rounding of the hidden units is a larger share of a vanishing force (measured: 4e-5
     of |F| at a state where |F| is 0.7 % of the RMS force, 3.4e-6 of the RMS force there)."""
     model, _ = _surrogates()[name]
     X, V = sample_states(model.clearance, n=20000, eps_max=0.93, v_max=0.1, seed=6)
-    f64 = _batch(model, X, V)
-    f32 = _batch(model, X, V, "float32")
+    f64 = _batch(model, X, V, kernel=kernel)
+    f32 = _batch(model, X, V, "float32", kernel=kernel)
     size = np.linalg.norm(f64, axis=1)
     err = np.linalg.norm(f32 - f64, axis=1)
     rel = err / np.maximum(size, np.sqrt(np.mean(size**2)))

@@ -10,7 +10,7 @@ from numba import njit
 
 from fluidfilm.perf.benchmarking import median_seconds
 
-__all__ = ["sample_states", "time_per_force_eval", "best_shaped_surrogate"]
+__all__ = ["sample_states", "time_per_force_eval", "best_shaped_surrogate", "paper_shaped_surrogate"]
 
 
 @njit  # not cached: numba's on-disk cache cannot always pickle a specialisation on a function argument
@@ -134,3 +134,46 @@ def best_shaped_surrogate(bearing, seed: int = 0, restoring: bool = True):
                                 rng.normal(0, 0.1, 3), 1 + rng.random(3), out_mean, 1 + rng.random(2), "whirl"))
     return SurrogateForceModel(bearing, nets, scalings, "tanh", boundaries=(0.3, 0.5, 0.7, 0.85), blend_width=0.04,
                                domain=[[0.0, 0.95, 0.2]], eps_max=0.95, name="best-shaped (random weights)")
+
+
+def paper_shaped_surrogate(bearing, split: bool = False, seed: int = 0):
+    """An untrained surrogate with the shapes of the paper's networks (conf/model/paper_single.yaml): one
+    4 -> 50 -> 2 tanh network on the standardised Cartesian state, or (``split``) one per eccentricity
+    region at 0.5 and 0.7 without blending (conf/split/paper.yaml); random weights.  What the speed of the
+    paper's models depends on, where no trained one is at hand.
+
+    Parameters
+    ----------
+    bearing : JournalBearing
+        The bearing.
+    split : bool, default False
+        Three regions (the paper's split model) instead of one.
+    seed : int, default 0
+        Seed of the random weights and scalings.
+
+    Returns
+    -------
+    SurrogateForceModel
+
+    Examples
+    --------
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.perf.speed import paper_shaped_surrogate
+    >>> paper_shaped_surrogate(paper_bearing(), split=True)
+    SurrogateForceModel('paper-split-shaped (random weights)', 3 network(s), boundaries=[0.5, 0.7], 1056 parameters)
+    """
+    from fluidfilm.surrogate import Scaling, SurrogateForceModel
+
+    rng = np.random.default_rng(seed)
+    n_regions = 3 if split else 1
+    c, omega = bearing.clearance, bearing.omega
+    nets, scalings = [], []
+    for _ in range(n_regions):
+        nets.append([(rng.normal(0, 1 / 2, (50, 4)), rng.normal(0, 0.1, 50)),
+                     (rng.normal(0, 1 / np.sqrt(50), (2, 50)), rng.normal(0, 0.1, 2))])
+        scalings.append(Scaling("standard", c, omega, bearing.force_scale, 0.0, np.zeros(4),
+                                np.array([0.5 * c, 0.5 * c, 0.02, 0.02]) * (1 + rng.random(4)),
+                                rng.normal(0, 10, 2), 100 * (1 + rng.random(2)), "cartesian"))
+    name = "paper-split-shaped (random weights)" if split else "paper-single-shaped (random weights)"
+    return SurrogateForceModel(bearing, nets, scalings, "tanh", boundaries=(0.5, 0.7) if split else (),
+                               blend_width=0.0, name=name)

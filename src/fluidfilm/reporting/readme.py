@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import re
 import sys
 from collections.abc import Callable, Mapping
@@ -53,7 +54,7 @@ _table = report.markdown_table
 # Stages that the paper's figures and numbers do not need: the workspace's own surrogate (three seeds),
 # its ensemble, error map and batched speed, the grading study, the ablation and the characteristics.
 BEYOND_PAPER_STAGES = ("dataset_orbit", "train_best", "train_best_seeds", "ensemble", "error_map", "batch_speed",
-                       "grading_study", "ablation", "characteristics")
+                       "grading_study", "ablation", "characteristics", "runup")
 
 
 def render_reproduce_timing(reports: Path) -> str:
@@ -128,6 +129,20 @@ def render_headline(reports: Path) -> str:
         ["cases satisfactory, split", "a-e (5 of 7)", _num(g("satisfactory_cases_split"), "d", " of 7")],
         ["cases satisfactory, best (ours)", "-", _num(g("satisfactory_cases_best"), "d", " of 7")],
     ]
+    if g("satisfactory_cases_split_paper_reading") is not None:  # the paper's reading: span and shape, not position
+        rows.append(["cases satisfactory by the paper's reading (span and shape after the mean offset), single / split",
+                     "e only / a-e", f"{_num(g('satisfactory_cases_single_paper_reading'), 'd')} / "
+                     f"{_num(g('satisfactory_cases_split_paper_reading'), 'd')} of 7"])
+    sizes = sorted(int(k.rsplit("_", 1)[1]) for k in m if re.fullmatch(r"equilibrium_offset_pct_c_split_\d+", k))
+    largest = "full_scale" if g("equilibrium_offset_pct_c_split_full_scale") is not None else (
+        str(sizes[-1]) if sizes else None)
+    if largest is not None:  # the paper_scale stage: the paper's split at the largest size trained
+        n = "all" if largest == "full_scale" else f"{int(largest):,}"
+        rows.append([f"the paper's split at the largest size trained ({n} samples): cases satisfactory, 2 %-of-c rule / "
+                     "the paper's reading; equilibrium offset", "a-e / a-e; -",
+                     f"{_num(g(f'satisfactory_cases_split_{largest}'), 'd')} / "
+                     f"{_num(g(f'satisfactory_cases_split_{largest}_paper_reading'), 'd')} of 7; "
+                     f"{_num(g(f'equilibrium_offset_pct_c_split_{largest}'), '.1f', ' % of c')}"])
     if g("best_seeds") is not None:  # the ensemble stage: every training seed of best, and their ensemble
         seeds = [k for k in m if k.startswith("seed_study_satisfactory_best")]
         rows.append([f"cases satisfactory, each of best's {g('best_seeds')} training seeds / their ensemble", "-",
@@ -160,6 +175,12 @@ def render_headline(reports: Path) -> str:
     ):
         if g(key) is not None:
             rows.append([label, paper, _num(g(key), spec, unit)])
+    peer = reports / "benchmarks" / "ross_peer.json"
+    if peer.exists():  # `make ross-peer`, outside the pipeline (ROSS lives in its own environment)
+        p = json.loads(peer.read_text())
+        if "ross_peer_speedup_lund_thomsen" in p:
+            rows.append(["grooved bearing (Lund & Thomsen), time per operating point, ROSS 3.1 / ours at equal "
+                         "accuracy (`make ross-peer`)", "-", _num(p["ross_peer_speedup_lund_thomsen"], ".1f", "x")])
     if g("surrogate_goals") is not None:
         rows.append(["goals of the fast, accurate surrogate met (docs/results.md)", "-",
                      f"{g('surrogate_goals_met')} of {g('surrogate_goals')}"])
@@ -383,6 +404,28 @@ def render_error_map(reports: Path) -> str:
                      rows) + worst)
 
 
+def render_runup(reports: Path) -> str:
+    ru = _load(reports, "runup.json")
+    lin = ru["linear"]
+    sch = ru["schedule"]
+    rows = []
+    for name, m in ru["models"].items():
+        if "onset_rpm" not in m:
+            rows.append([name, m["status"], "", "", "", "", ""])
+            continue
+        rows.append([name, _num(m["onset_rpm"], ",.0f"), _num(100 * (m["onset_rpm"] / lin["threshold_rpm"] - 1), "+.2f", " %"),
+                     _num(m["whirl_ratio_at_onset"], ".3f"), _num(m["established_rpm"], ",.0f"), _num(m["gone_rpm"], ",.0f"),
+                     _num(m.get("rate_rpm_s"), ",.0f")])
+    return (f"Lund's linear threshold of the reference ({lin['grid'][0]}x{lin['grid'][1]}, {lin['cavitation']}): "
+            f"**{lin['threshold_rpm']:,.0f} rpm**, whirl ratio {lin['whirl_ratio']:.3f}, eps {lin['eps']:.3f}; rotor "
+            f"{ru['rotor']['mass_kg']:g} kg per bearing, imbalance {ru['rotor']['imbalance_kg_m']:g} kg m; ramp "
+            f"{sch['rate_rpm_s']:,.0f} rpm/s, RK4 step {sch['dt_s']:g} s. Onset: where the sub-synchronous amplitude "
+            f"starts to grow; established / gone: where it crosses {ru['analysis']['whirl_level_c']:g} c on the run-up "
+            f"/ run-down:\n\n"
+            + _table(["run", "onset [rpm]", "vs Lund", "whirl ratio at onset", "established, up [rpm]",
+                      "gone, down [rpm]", "ramp [rpm/s]"], rows))
+
+
 def render_surrogate_goals(reports: Path) -> str:
     m = _load(reports, "metrics.json")
     return (f"Met: **{m['surrogate_goals_met']} of {m['surrogate_goals']}** (`reports/metrics.json`).\n\n"
@@ -521,6 +564,67 @@ def render_train_time_full_scale(reports: Path) -> str:
                       "stop reasons", "val. rel. RMSE per network", "val. rel. RMSE", "test rel. RMSE"], rows))
 
 
+#: the paper_scale study's reports, first found first: the pipeline's, the larger sizes', the full scale's, and a
+#: run by hand at 40 k committed before the pipeline's (its own label says so)
+PAPER_SCALE_REPORTS = ("paper_scale.json", "paper_scale_curve.json", "paper_full_scale.json", "paper_scale_40k.json")
+
+
+def paper_scale_records(reports: Path) -> tuple[list[dict], list[str]]:
+    """Every record of the paper_scale reports present (one per label, the first report's), and the reports'
+    sources (file, machine, date, load)."""
+    seen: dict[str, dict] = {}
+    sources = []
+    for name in PAPER_SCALE_REPORTS:
+        if not (reports / name).exists():
+            continue
+        t = _load(reports, name)
+        load = t.get("load_average")
+        sources.append(f"`reports/{name}` ({t['machine']}, {t['date']}"
+                       + (f", load average {load[0]:.1f} at the end" if load else "") + ")")
+        for r in t["records"]:
+            if "from_report" not in r:
+                seen.setdefault(r["label"], r)
+    return list(seen.values()), sources
+
+
+def _resolution_cell(res: Mapping | None) -> str:
+    if not res:
+        return "-"
+    return f"{math.hypot(*res['newton_per_mapped_unit']):,.0f}; {res['expected_static_error_N']:.0f}"
+
+
+def render_paper_scale(reports: Path) -> str:
+    """One row per trained model of the paper_scale study: training, static force error, equilibrium offset and
+    the verdicts by both readings."""
+    records, sources = paper_scale_records(reports)
+    if not records:
+        return ("Not run yet in this workspace: the `paper_scale` stage (`make reproduce`) writes "
+                "`reports/paper_scale.json` and fills this block.\n")
+    rows = []
+    for r in records:
+        nets = r["networks"]
+        eq = r["equilibrium"]["a"]
+        err = eq["static_force_error_N"]
+        band = r["bands"]
+        rows.append([r["label"], f"{r['n_samples']:,}", ", ".join(str(n["epochs"]) for n in nets),
+                     ", ".join(n["stop_reason"] for n in nets), f"{r['train_time_s']:.0f} s",
+                     " / ".join(_num(band.get(f"test_rel_err_median_band_{b}"), ".1%") for b in ("0_0.5", "0.5_0.7", "0.7_1")),
+                     f"({err[0]:.0f}, {err[1]:.0f}) N; {100 * math.hypot(*err) / eq['load_N']:.0f} %",
+                     f"{100 * r['locus']['error_share_of_load_max']:.0f} %",
+                     _resolution_cell(r.get("resolution")),
+                     _num(r["equilibrium_offset_pct_c"], ".1f", " %"),
+                     r["satisfactory_cases_position"] or "none", r["satisfactory_cases_paper_reading"] or "none",
+                     f"{r.get('paper_verdicts_reproduced_position', '-')} / {r.get('paper_verdicts_reproduced_paper_reading', '-')}"])
+    return ("From " + "; ".join(sources) + ". The paper's verdicts: single e, split a-e.\n\n"
+            + _table(["model", "samples", "epochs per network", "stop reasons", "training time",
+                      "held-out median rel. error, eps 0-0.5 / 0.5-0.7 / > 0.7",
+                      "static force error at the reference equilibrium under the rotor's weight; share of the load",
+                      "largest share along the locus (0.25-4 x the weight)",
+                      "one mapped unit at that equilibrium; x the network's val. RMS [N]", "equilibrium offset [% of c]",
+                      "satisfactory, 2 %-of-c rule", "satisfactory, the paper's reading (span, shape)",
+                      "paper's 7 verdicts reproduced (rule / reading)"], rows))
+
+
 def render_paper_bands(reports: Path) -> str:
     m = _load(reports, "metrics.json")
     rows = []
@@ -563,6 +667,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "train_time_ci": render_train_time_ci,
     "train_time_full_scale": render_train_time_full_scale,
     "paper_bands": render_paper_bands,
+    "paper_scale": render_paper_scale,
     "batch_speed": render_batch_speed,
     "controller_training": render_controller_training,
     "characteristics_timing": render_characteristics_timing,
@@ -578,6 +683,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "grading_study": render_grading_study,
     "ablation": render_ablation,
     "error_map": render_error_map,
+    "runup": render_runup,
     "surrogate_goals": render_surrogate_goals,
     "control": render_control,
     "figures": render_figures,

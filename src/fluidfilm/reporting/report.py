@@ -49,6 +49,8 @@ class ReportInputs:
     grading_study: dict | None = None  # reports/grading_study/summary.json, where that stage ran
     ablation: dict | None = None      # reports/ablation/summary.json, where that stage ran
     error_map: dict | None = None     # reports/error_map.json, where that stage ran
+    paper_scale: dict | None = None   # reports/paper_scale.json, where that stage ran
+    runup: dict | None = None         # reports/runup.json, where that stage ran
 
 
 def _load(path: Path) -> Any:
@@ -75,7 +77,8 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         controller_training_speed=_load(rd / "controller_training_speed.json"),
         characteristics=optional(charac), ensemble=optional(ens),
         grading_study=optional(rd / "grading_study" / "summary.json"), ablation=optional(rd / "ablation" / "summary.json"),
-        error_map=optional(rd / "error_map.json"))
+        error_map=optional(rd / "error_map.json"), paper_scale=optional(rd / "paper_scale.json"),
+        runup=optional(rd / "runup.json"))
 
 
 def _f(x, spec=".1f"):
@@ -138,6 +141,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
         for _, r in rows.iterrows():
             metrics[f"orbit_rms_pct_{m}_{r.case}"] = float(r.rms_pct)
         metrics[f"satisfactory_cases_{m}"] = int(rows.satisfactory.astype(bool).sum())
+        if "satisfactory_paper_reading" in rows:  # the paper's reading (span and shape, not position)
+            metrics[f"satisfactory_cases_{m}_paper_reading"] = int(rows.satisfactory_paper_reading.astype(bool).sum())
     for name, rep in inp.models.items():
         metrics[f"test_rel_err_median_{name}"] = rep["metrics"]["test_rel_err_median"]
         metrics[f"test_rel_err_p99_{name}"] = rep["metrics"]["test_rel_err_p99"]
@@ -170,6 +175,10 @@ def headline_metrics(inp: ReportInputs) -> dict:
         metrics.update(extra)
     if inp.error_map is not None:  # the error map: the seeds' force errors held out and along the reference orbits
         metrics.update(error_map_metrics(inp.error_map))
+    if inp.paper_scale is not None:  # the paper's networks at larger sizes and the recipe's ingredients
+        metrics.update(paper_scale_metrics(inp.paper_scale))
+    if inp.runup is not None:  # the run-up: onset of whirl from the transient against Lund's threshold
+        metrics.update(inp.runup["metrics"])
     for study in ("grading_study", "ablation"):
         summary = getattr(inp, study)
         if summary is not None:
@@ -188,6 +197,15 @@ def headline_metrics(inp: ReportInputs) -> dict:
     metrics["surrogate_goals_met"] = sum(g["met"] is True for g in surrogate_goals(metrics))
     metrics["surrogate_goals"] = len(SURROGATE_GOALS)
     return metrics
+
+
+def paper_scale_metrics(ps: Mapping) -> dict:
+    """The paper_scale study's flat keys (``studies.paper_scale.summary_keys``: per size and structure, per
+    ablation variant, at full scale) as they are in its report."""
+    prefixes = ("satisfactory_cases_", "equilibrium_offset_pct_c_", "orbit_rms_pct_max_", "train_time_s_",
+                "static_force_error_share_max_", "train_time_reduction_pct_full_scale_lm",
+                "train_time_converged_full_scale_lm")
+    return {k: v for k, v in ps.items() if k.startswith(prefixes)}
 
 
 def error_map_metrics(em: Mapping) -> dict:

@@ -4,7 +4,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from fluidfilm.rotor.integrate import Trajectory, simulate
-from fluidfilm.rotor.metrics import compare_orbits, is_satisfactory, orbit_stats
+from fluidfilm.rotor.metrics import compare_orbits, is_satisfactory, is_satisfactory_paper_reading, orbit_stats
 from fluidfilm.rotor.model import Rotor
 
 
@@ -34,4 +34,5 @@ def case_summary(traj: Trajectory, clearance: float, t_settle: float, ref: Traje
         out.update(d)
         if threshold_pct is not None:
             out["satisfactory"] = is_satisfactory(d, threshold_pct)
+            out["satisfactory_paper_reading"] = is_satisfactory_paper_reading(d, threshold_pct)
     return out

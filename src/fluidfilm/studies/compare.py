@@ -255,9 +255,14 @@ def run(cfg):
         for grid in grids:
             summary[f"speedup_force_eval_{name}_vs_{grid}"] = per_eval[grid] / per_eval[name]
         summary[f"satisfactory_cases_{name}"] = "".join(rows[rows.satisfactory == True].case)  # noqa: E712
+        # the paper's own reading: span and shape after removing the mean offset (rotor.metrics)
+        summary[f"satisfactory_cases_{name}_paper_reading"] = "".join(
+            rows[rows.satisfactory_paper_reading == True].case)  # noqa: E712
         for _, r in rows.iterrows():
             summary[f"orbit_rms_pct_{name}_{r.case}"] = float(r.rms_pct)
             summary[f"orbit_hausdorff_pct_{name}_{r.case}"] = float(r.hausdorff_pct)
+            summary[f"orbit_span_err_pct_{name}_{r.case}"] = float(r.span_err_pct)
+            summary[f"orbit_shape_pct_{name}_{r.case}"] = float(r.shape_pct)
             # per trajectory: force evaluations outside the surrogate's training domain (logged, not warned once)
             summary[f"outside_domain_evals_{name}_{r.case}"] = float(r.n_outside_domain)
     summary.update({k: v for k, v in sparse_speed.items() if k != "sparse_per_case"})

@@ -38,8 +38,9 @@ from fluidfilm import io
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict
 from fluidfilm.core.force_model import ValidityDomain, check_precision
 from fluidfilm.core.states import as_state_pairs
-from fluidfilm.surrogate.kernels import (COUNTER, SETTING, BatchParams, batch_params, fast_force_kernel, forces_batch,
-                                        pack, shape_key)
+from fluidfilm.surrogate.kernels import (COUNTER, SETTING, BatchParams, FastBatchParams, batch_kernel, batch_params,
+                                        batch_shape_key, fast_batch_params, fast_force_kernel, forces_batch, pack,
+                                        shape_key)
 from fluidfilm.surrogate.scaling import Scaling, check_whirl_use, network_inputs
 from fluidfilm.surrogate.transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
                          standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb, whirl_direction_nb)
@@ -262,6 +263,23 @@ def _surrogate_batch(params, x, v, out):
         out[p, 1] = f2
 
 
+# not cached: its parameters hold a compiled kernel (numba's cache must not see such types)
+@njit
+def speed_scaled_force(sparams, omega, x1, x2, v1, v2):
+    """A speed kernel from the exact speed scaling: F(X, V; omega) = s F(X, V/s; omega_ref), s = omega/omega_ref.
+
+    ``sparams``: (the one-state kernel, its parameters, omega_ref [rad/s]).  For a network whose inputs are
+    dimensionless (X/c, V/(c omega)) and whose force scale is mu omega R L (R/c)^2, this is exactly the
+    network with omega and the force scale of its scaling row set to the new speed (the 'whirl' frame:
+    u = (eps - 2 v_t, 2 v_r) in units of c omega, |u| and the force scale, both linear in 1/omega and omega);
+    at omega = omega_ref it is the kernel's own force to the bit.
+    """
+    kernel, params, w_ref = sparams
+    s = omega / w_ref
+    f1, f2 = kernel(params, x1, x2, v1 / s, v2 / s)
+    return s * f1, s * f2
+
+
 def pack_network(layers: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
     """[(W (out, in), b (out,)), ...] -> flat weights (each W stored transposed) and a
     (n_layers, 4) table of [weight offset, bias offset, n_in, n_out]."""
@@ -413,7 +431,8 @@ class SurrogateForceModel:
         self._fast_weights = pack(self, self._fast_key)
         self._setting = self._fast_weights[SETTING:SETTING + 2]
         self._counter = self._fast_weights[COUNTER:COUNTER + 1]  # float64: exact to 2^53 evaluations
-        self._batch_params: dict[str, BatchParams] = {}  # batch_force_kernel's, per precision
+        self._batch_params: dict[str, BatchParams | FastBatchParams] = {}  # batch_force_kernel's, per precision
+        self._batch_key = batch_shape_key(self)
         # one flat weight array for all regions: each region's table offsets shifted to its block
         offsets = np.cumsum([0] + [w.size for w, _ in packed])
         tables = [t.copy() for _, t in packed]
@@ -445,18 +464,30 @@ class SurrogateForceModel:
         equal to the generic ``surrogate_force`` on ``self.params`` to round-off; compiled on first use."""
         return fast_force_kernel(self)
 
+    def speed_kernel(self):
+        """``(speed_scaled_force, (kernel, params, omega_ref))`` for a network in the 'whirl' frame on a
+        cylindrical bearing, whose force scales exactly with the shaft speed (``speed_scaled_force``); None
+        for every other frame (its network was trained at one speed: it refuses a speed schedule)."""
+        if not isinstance(self._bearing, JournalBearing) or any(sc.frame != "whirl" for sc in self.scalings):
+            return None
+        fn, params = self.force_kernel
+        return speed_scaled_force, (fn, params, float(self._bearing.omega))
+
     def batch_force_kernel(self, precision: str = "float64", private: bool = False):
-        """``(surrogate.kernels.forces_batch, BatchParams)`` (``core.force_model.BatchForceModel``): many states
-        per call, the networks in ``precision``; ``private``: the parameters count in their own domain
-        counter (``merge_counts`` adds it to the model's).  They read the model's setting (sleeve) in place
-        and are built once per precision."""
+        """``(fn, params)`` (``core.force_model.BatchForceModel``): many states per call, the networks in
+        ``precision``; ``private``: the parameters count in their own domain counter (``merge_counts`` adds it
+        to the model's).  ``fn`` is the batched kernel generated for this model's shape
+        (``surrogate.kernels.batch_kernel``) where it has one, else ``surrogate.kernels.forces_batch``.  The
+        parameters read the model's setting (sleeve) in place and are built once per precision."""
         check_precision(precision)
         bp = self._batch_params.get(precision)
         if bp is None:
-            bp = self._batch_params[precision] = batch_params(self, precision)
-        return forces_batch, (bp._replace(counter=np.zeros(1)) if private else bp)
+            bp = self._batch_params[precision] = (batch_params(self, precision) if self._batch_key is None
+                                                  else fast_batch_params(self, precision))
+        fn = forces_batch if self._batch_key is None else batch_kernel(self._batch_key, precision)
+        return fn, (bp._replace(counter=np.zeros(1)) if private else bp)
 
-    def merge_counts(self, bparams: BatchParams) -> None:
+    def merge_counts(self, bparams: BatchParams | FastBatchParams) -> None:
         """Add the domain count of private batch parameters to the model's (``BatchForceModel``)."""
         if bparams.counter is not self._counter:
             self._counter[0] += bparams.counter[0]

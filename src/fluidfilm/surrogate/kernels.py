@@ -28,6 +28,13 @@ holds what the integrator runs instead:
   runs the network arithmetic in float32 with Eigen's rational ``tanh32``
   (within 4e-7 relative of ``math.tanh``), forces within 1e-5 relative of
   float64 (tested).
+- ``batch_kernel(batch_shape_key(model), dtype)``: the batched kernel generated per model shape, what
+  ``simulate_batch`` calls once per RK4 stage (``forces_batch``'s signature; ``fast_batch_params`` makes
+  its parameters): per state in order the inputs, frame and gain without a branch (vectorised), the
+  domain count and region(s) as selects, a counting sort by region, each region's network on tiles with
+  literal widths and its last hidden layer fused with the output layer, then the blend, gain and frame
+  per state.  Equal to the generic kernel to round-off (float64; one reciprocal per division) or within
+  1e-5 relative (float32 networks), tested on every surrogate shape of the test models.
 
 The training-domain counter keeps its meaning: every evaluation outside the
 domain adds one to the model's counter, exactly as the generic kernel
@@ -54,7 +61,8 @@ import numpy as np
 from numba import njit, types
 
 __all__ = ["tanh64", "tanh32", "fast_force_kernel", "shape_key", "pack", "kernel_source", "compiled_kernel",
-           "compile_seconds", "BatchParams", "batch_params", "forces_batch", "TILE"]
+           "compile_seconds", "BatchParams", "batch_params", "forces_batch", "TILE", "FastBatchParams",
+           "batch_shape_key", "fast_batch_params", "batch_kernel_source", "batch_kernel"]
 
 # ---------------------------------------------------------------------------------------------- tanh
 
@@ -687,3 +695,341 @@ def forces_batch(bp, x, v, out):
                     f1, f2 = f1 * er1 + f2 * er2, f1 * er2 - f2 * er1
                 out[p, 0] += ent_w[t0 + j] * f1
                 out[p, 1] += ent_w[t0 + j] * f2
+
+
+# ---------------------------------------------------------------------------------------------- batched, per shape
+
+class FastBatchParams(NamedTuple):
+    """Parameters of a batched kernel generated per model shape (``batch_kernel``)."""
+
+    weights: np.ndarray   # flat folded weights in the network's arithmetic type (float64 or float32)
+    consts: np.ndarray    # float64 [c, omega, eps_max, blend, boundaries..., domain rows..., power per region]
+    counter: np.ndarray   # the model's domain counter (float64 view, mutable; a private one per thread)
+    setting: np.ndarray   # the model's setting [1/c^2, sleeve...] (view, mutable)
+
+
+def batch_shape_key(model) -> tuple | None:
+    """What a generated batched kernel depends on (``batch_kernel``), or None where the model's shape has none.
+
+    Parameters
+    ----------
+    model : SurrogateForceModel
+
+    Returns
+    -------
+    tuple or None
+        ``shape_key(model)``; None for the damping structure, for regions that differ in scaling family,
+        frame, extra inputs, sleeve gain, clearance or speed, and for extra inputs into a network without a
+        hidden layer (``forces_batch`` serves those).
+    """
+    key = shape_key(model)
+    structure, act, regions, nb, blending, n_dom = key
+    if structure != "plain" or (regions[0][2] and any(len(r[5]) < 2 for r in regions)):
+        return None
+    rows = [sc.kernel_row() for sc in model.scalings]
+    common = {(int(r[0]) >= 1, int(r[19]), int(r[20]), bool(r[21] == 1.0), float(r[1]), float(r[2])) for r in rows}
+    if len(common) != 1:
+        return None
+    return key
+
+
+def _batch_layout(key):
+    """Per region: [(W offset, b offset, n_out, n_in)] of its folded layers in the flat weights; the size."""
+    off, out = 0, []
+    for region in key[2]:
+        layers = []
+        for n_out, n_in in region[5]:
+            layers.append((off, off + n_out * n_in, n_out, n_in))
+            off += n_out * n_in + n_out
+        out.append(layers)
+    return out, off
+
+
+def fast_batch_params(model, dtype: str = "float64") -> FastBatchParams:
+    """The parameters of ``model``'s generated batched kernel (``batch_kernel``), its networks in ``dtype``.
+
+    The input standardisation is folded into the first layer; the output's and, for the physics scalings,
+    the force scale (times c_r^2 where the gain follows the sleeve) into the last.
+
+    Parameters
+    ----------
+    model : SurrogateForceModel
+        A model whose ``batch_shape_key`` is not None.
+    dtype : {"float64", "float32"}, default "float64"
+        The networks' arithmetic.
+
+    Returns
+    -------
+    FastBatchParams
+    """
+    if dtype not in ("float64", "float32"):
+        raise ValueError(f"dtype must be 'float64' or 'float32', got {dtype!r}")
+    key = batch_shape_key(model)
+    if key is None:
+        raise ValueError(f"{model.name}: no generated batched kernel for this shape (use forces_batch)")
+    layout, size = _batch_layout(key)
+    w = np.zeros(max(size, 1))
+    out_bias = []  # the output layers' biases stay float64 (added after the network: module doc)
+    for r, ((static, _), sc) in enumerate(zip(_folded_networks(model), model.scalings)):
+        physics = sc.kernel_row()[0] >= 1.0
+        gain = sc.force_scale * (sc.clearance ** 2 if sc.sleeve_gain else 1.0) if physics else 1.0
+        for k, ((W, b), (wo, bo, _, _)) in enumerate(zip(static, layout[r])):
+            if k == len(static) - 1:
+                W, b = W * gain, b * gain
+                out_bias += list(b)
+                b = np.zeros_like(b)
+            w[wo:bo] = np.ascontiguousarray(W).ravel()
+            w[bo:bo + b.size] = b
+    sc0 = model.scalings[0]
+    consts = np.concatenate([[sc0.clearance, sc0.omega, model.eps_max, model.blend_width],
+                             np.asarray(model.boundaries, dtype=np.float64).ravel(),
+                             np.asarray(model.domain, dtype=np.float64).ravel(),
+                             [sc.power for sc in model.scalings], out_bias])
+    return FastBatchParams(w.astype(dtype), consts, model._counter, model._setting)
+
+
+def _dense_rows(n_out, n_in, wo, bo, src, ind, body, n_terms=None, bias="w[{bo} + o]"):
+    """Lines: for each output o of a layer (rows of ``n_in`` weights from ``wo``), its pre-activation ``a``
+    over the tile, then ``body`` (lines using ``a``, ``o`` and ``j``, inside ``for j``).  ``src``: "T" (the
+    tile's first ``n_terms`` inputs T[i, j], an unrolled sum) or a buffer name (rows of the previous layer)."""
+    bias = bias.format(bo=bo)
+    L = [f"{ind}for o in range({n_out}):"]
+    if src == "T":
+        n_terms = n_in if n_terms is None else n_terms
+        L += [f"{ind}    c{i} = w[{wo} + o * {n_in} + {i}]" for i in range(n_terms)]
+        L.append(f"{ind}    bb = {bias}")
+        expr = "bb + " + " + ".join(f"c{i} * T[{i}, j]" for i in range(n_terms))
+        L += [f"{ind}    for j in range(m):", f"{ind}        a = {expr}"]
+    else:
+        L += [f"{ind}    bb = {bias}", f"{ind}    for j in range(m):", f"{ind}        acc[j] = bb",
+              f"{ind}    for i in range({n_in}):", f"{ind}        ci = w[{wo} + o * {n_in} + i]",
+              f"{ind}        for j in range(m):", f"{ind}            acc[j] += ci * {src}[i, j]",
+              f"{ind}    for j in range(m):", f"{ind}        a = acc[j]"]
+    L += [f"{ind}        {line}" for line in body]
+    return L
+
+
+def _batch_net_source(layers, act_fn, ind, n_terms, bias0):
+    """Lines evaluating one region's folded network on the tile's first ``n_terms`` inputs T[:, :m] into
+    Y1t, Y2t (``bias0``: the first layer's bias expression)."""
+    wo_l, bo_l, _, n_hid_l = layers[-1]
+    # the output layer's bias (in the constants, float64) is added after the network: a force dominated by it
+    # (the output's mean) keeps float64 precision there
+    L = [f"{ind}for j in range(m):", f"{ind}    Y1t[j] = 0.0", f"{ind}    Y2t[j] = 0.0"]
+    if len(layers) == 1:
+        L += [f"{ind}for j in range(m):"]
+        for r, name in ((0, "Y1t"), (1, "Y2t")):
+            expr = " + ".join(f"w[{wo_l + r * n_hid_l + i}] * T[{i}, j]" for i in range(n_terms))
+            L.append(f"{ind}    {name}[j] += {expr}")
+        return L
+    L += [f"{ind}u1s = w[{wo_l}:{wo_l + n_hid_l}]", f"{ind}u2s = w[{wo_l + n_hid_l}:{wo_l + 2 * n_hid_l}]"]
+    src = "T"
+    for k, (wo, bo, n_out, n_in) in enumerate(layers[:-1]):
+        kw = {"n_terms": n_terms, "bias": bias0} if k == 0 else {}
+        if k == len(layers) - 2:
+            # the last hidden layer fused with the output layer: its activations never leave the registers
+            body = [f"h = {act_fn}(a)", "Y1t[j] += u1 * h", "Y2t[j] += u2 * h"]
+            lines = _dense_rows(n_out, n_in, wo, bo, src, ind, body, **kw)
+            lines[1:1] = [f"{ind}    u1 = u1s[o]", f"{ind}    u2 = u2s[o]"]  # unit o's output weights
+            L += lines
+        else:
+            dst = "HA" if src != "HA" else "HB"
+            L += _dense_rows(n_out, n_in, wo, bo, src, ind, [f"{dst}[o, j] = {act_fn}(a)"], **kw)
+            src = dst
+    return L
+
+
+_ACT_BATCH = {"tanh": "tanh_n", "relu": "relu_n", "silu": "silu_n", "sigmoid": "sigmoid_n"}
+
+
+def batch_kernel_source(key) -> str:
+    """Python source of the batched kernel of a model shape, compiled by ``batch_kernel``.
+
+    Parameters
+    ----------
+    key : tuple
+        ``batch_shape_key(model)`` (not None).
+
+    Returns
+    -------
+    str
+        The source of ``batch_kernel(bp, x, v, out)``: ``forces_batch``'s signature and meaning, in four
+        passes (docs/fast_surrogates.md): per state the inputs, frame, gain, domain count and region(s)
+        without a branch; a counting sort by region; each region's network on tiles, its last hidden layer
+        fused with the output layer; per state the regions' outputs blended, the gain and the frame back.
+    """
+    structure, act, regions, nb, blending, n_dom = key
+    layout, _ = _batch_layout(key)
+    kind0, frame, n_extra, sleeve = regions[0][0], regions[0][1], regions[0][2], regions[0][3]
+    physics = kind0 >= 1
+    polar = frame >= 1
+    n_in = (3 if polar else 4)
+    any_kind2 = any(r[0] == 2 for r in regions)
+    nr = len(regions)
+    width = max([n for r in layout for (_, _, n, _) in r] + [1])
+    uniform_gain = physics and len({(r[0], r[4]) for r in regions}) == 1 and regions[0][4]
+    ind1 = "    "
+    ind2 = ind1 + "    "
+    L = ["def batch_kernel(bp, x, v, out):",
+         f"{ind1}w = bp.weights", f"{ind1}q = bp.consts", f"{ind1}inv_c2 = bp.setting[0]", f"{ind1}n = x.shape[0]",
+         f"{ind1}Z = np.empty(({n_in}, n), dtype=w.dtype)",
+         f"{ind1}G = np.empty(n)", f"{ind1}E1 = np.empty(n)", f"{ind1}E2 = np.empty(n)", f"{ind1}DD = np.empty(n)",
+         f"{ind1}KV = np.empty(n)", f"{ind1}EPS = np.empty(n)", f"{ind1}VA = np.empty(n)",
+         f"{ind1}RA = np.empty(n, dtype=np.int64)", f"{ind1}RB = np.empty(n, dtype=np.int64)", f"{ind1}WB = np.empty(n)",
+         f"{ind1}c = q[0]", f"{ind1}omega = q[1]"]
+    if sleeve:
+        L.append(f"{ind1}c = 1.0 / math.sqrt(inv_c2)")
+    L += [f"{ind1}cw = c * omega", f"{ind1}gs = {'inv_c2' if sleeve else '1.0'}", f"{ind1}eps_max = q[2]",
+          f"{ind1}blend = q[3]", f"{ind1}half = 0.5 * blend",
+          f"{ind1}inv_blend = 1.0 / blend if blend > 0.0 else 0.0"]
+    L += [f"{ind1}bd{b} = q[{4 + b}]" for b in range(nb)]
+    for s in range(n_dom):
+        L += [f"{ind1}dl{s} = q[{4 + nb + 3 * s}]", f"{ind1}dh{s} = q[{5 + nb + 3 * s}]", f"{ind1}dv{s} = q[{6 + nb + 3 * s}]"]
+    # 1a. per state, in order, without branches (vectorises): inputs, frame, gains
+    L += [f"{ind1}inv_c = 1.0 / c", f"{ind1}inv_cw = 1.0 / cw", f"{ind1}sc2 = math.sqrt(inv_c2)"]
+    L += [f"{ind1}for p in range(n):",
+          f"{ind2}x1 = x[p, 0]", f"{ind2}x2 = x[p, 1]", f"{ind2}v1 = v[p, 0]", f"{ind2}v2 = v[p, 1]",
+          f"{ind2}r2 = x1 * x1 + x2 * x2", f"{ind2}e2 = r2 * inv_c2", f"{ind2}rr = math.sqrt(r2)", f"{ind2}EPS[p] = rr * sc2",
+          f"{ind2}VA[p] = max(abs(v1), abs(v2))", f"{ind2}drive = 1.0"]
+    # (one reciprocal per division of the one-state kernel's expressions: equal to round-off)
+    if polar:
+        L += [f"{ind2}at0 = 1.0 if rr == 0.0 else 0.0", f"{ind2}inv = 1.0 / (rr + at0)",
+              f"{ind2}er1 = x1 * inv", f"{ind2}er2 = x2 * inv + at0",
+              f"{ind2}z0 = rr * inv_c", f"{ind2}z1 = (v1 * er1 + v2 * er2) * inv_cw", f"{ind2}z2 = (v1 * er2 - v2 * er1) * inv_cw"]
+        if frame == 2:
+            L += [f"{ind2}ua = z0 - 2.0 * z2", f"{ind2}ub = 2.0 * z1", f"{ind2}drive = math.sqrt(ua * ua + ub * ub)",
+                  f"{ind2}zero = 1.0 if drive == 0.0 else 0.0", f"{ind2}inv = 1.0 / (drive + zero)",
+                  f"{ind2}z1 = ua * inv + zero", f"{ind2}z2 = ub * inv"]
+        L += [f"{ind2}Z[0, p] = z0", f"{ind2}Z[1, p] = z1", f"{ind2}Z[2, p] = z2", f"{ind2}E1[p] = er1", f"{ind2}E2[p] = er2"]
+    elif physics:
+        L += [f"{ind2}Z[0, p] = x1 * inv_c", f"{ind2}Z[1, p] = x2 * inv_c", f"{ind2}Z[2, p] = v1 * inv_cw",
+              f"{ind2}Z[3, p] = v2 * inv_cw"]
+    else:
+        L += [f"{ind2}Z[0, p] = x1", f"{ind2}Z[1, p] = x2", f"{ind2}Z[2, p] = v1", f"{ind2}Z[3, p] = v2"]
+    if physics:
+        L += [f"{ind2}d = 1.0 - e2"] + ([] if uniform_gain else [f"{ind2}DD[p] = d"])
+        L.append(f"{ind2}G[p] = gs * drive / (d * math.sqrt(d))" if uniform_gain else f"{ind2}G[p] = gs * drive")
+        if any_kind2:
+            L.append(f"{ind2}KV[p] = 1.0 + math.sqrt(v1 * v1 + v2 * v2) * inv_cw")
+        if uniform_gain and any_kind2:
+            L.append(f"{ind2}G[p] *= KV[p]")
+    # 1b. the domain count and the region(s) of every state, as selects (vectorises)
+    L += [f"{ind1}outside = 0", f"{ind1}for p in range(n):", f"{ind2}eps = EPS[p]", f"{ind2}vmax = 0.0", f"{ind2}hit = False"]
+    for s in range(n_dom):  # the first row holding eps (the last one also beyond its top) bounds the velocities
+        cond = f"(eps >= dl{s}) & (eps < dh{s})" + (f" | (eps >= dh{s})" if s == n_dom - 1 else "")
+        L += [f"{ind2}now = (~hit) & ({cond})", f"{ind2}vmax = dv{s} if now else vmax", f"{ind2}hit = hit | now"]
+    L += [f"{ind2}outside += 1 if ((eps > eps_max) | (hit & (VA[p] > vmax))) else 0", f"{ind2}r = 0"]
+    L += [f"{ind2}r += 1 if eps >= bd{b} else 0" for b in range(nb)]
+    L += [f"{ind2}ra = r", f"{ind2}rb = {nr}", f"{ind2}wb = 0.0"]  # rb = nr: no second region (a bucket never evaluated)
+    if blending:
+        for b in reversed(range(nb)):  # the first boundary in order wins, as in the generic kernel
+            L += [f"{ind2}lo = bd{b} - half", f"{ind2}t = (eps - lo) * inv_blend", f"{ind2}inz = (eps >= lo) & (eps < bd{b} + half)",
+                  f"{ind2}ra = {b} if inz else ra", f"{ind2}rb = {b + 1} if inz else rb",
+                  f"{ind2}wb = t * t * (3.0 - 2.0 * t) if inz else wb"]
+    L += [f"{ind2}RA[p] = ra", f"{ind2}RB[p] = rb", f"{ind2}WB[p] = wb"]
+    L.append(f"{ind1}bp.counter[0] += outside")
+    # 2. each region's entries (state, weight), in state order; PA[p], PB[p]: where state p's results go
+    L += [f"{ind1}start = np.zeros({nr + 2}, dtype=np.int64)", f"{ind1}for p in range(n):",
+          f"{ind2}start[RA[p] + 1] += 1", f"{ind2}start[RB[p] + 1] += 1",
+          f"{ind1}for r in range({nr + 1}):", f"{ind1}    start[r + 1] += start[r]",
+          f"{ind1}fill = start[:{nr + 1}].copy()", f"{ind1}ent = np.empty(start[{nr + 1}], dtype=np.int64)",
+          f"{ind1}went = np.empty(start[{nr + 1}])", f"{ind1}YE1 = np.zeros(start[{nr + 1}] + 1)",
+          f"{ind1}YE2 = np.zeros(start[{nr + 1}] + 1)",
+          f"{ind1}PA = np.empty(n, dtype=np.int64)", f"{ind1}PB = np.empty(n, dtype=np.int64)",
+          f"{ind1}for p in range(n):",
+          f"{ind2}k = fill[RA[p]]", f"{ind2}ent[k] = p", f"{ind2}went[k] = 1.0 - WB[p]", f"{ind2}fill[RA[p]] = k + 1",
+          f"{ind2}PA[p] = k",
+          f"{ind2}k = fill[RB[p]]", f"{ind2}ent[k] = p", f"{ind2}went[k] = WB[p]", f"{ind2}fill[RB[p]] = k + 1",
+          # the second region's result; none (the extra bucket, not evaluated): the zero after the last entry
+          f"{ind2}PB[p] = k if RB[p] < {nr} else start[{nr + 1}]"]
+    # 3. each region's network on tiles of its states
+    L += [f"{ind1}T = np.empty(({n_in}, {TILE}), dtype=w.dtype)", f"{ind1}Y1t = np.empty({TILE}, dtype=w.dtype)",
+          f"{ind1}Y2t = np.empty({TILE}, dtype=w.dtype)", f"{ind1}acc = np.empty({TILE}, dtype=w.dtype)",
+          f"{ind1}HA = np.empty(({width}, {TILE}), dtype=w.dtype)", f"{ind1}HB = np.empty(({width}, {TILE}), dtype=w.dtype)"]
+    if n_extra:
+        L.append(f"{ind1}wx = np.empty({width}, dtype=w.dtype)")
+    for r, region in enumerate(regions):
+        kind, _, _, _, p15 = region[:5]
+        layers = list(layout[r])
+        ind3 = ind1 + "    "
+        L += [f"{ind1}for t0 in range(start[{r}], start[{r + 1}], {TILE}):",
+              f"{ind3}m = min({TILE}, start[{r + 1}] - t0)",
+              f"{ind3}for j in range(m):", f"{ind3}    p = ent[t0 + j]"]
+        L += [f"{ind3}    T[{i}, j] = Z[{i}, p]" for i in range(n_in)]
+        n_tot = layers[0][3]
+        if n_extra:
+            # the extra inputs (the sleeve) are the same for every state: folded into the first layer's bias
+            wo, bo, n_out0, _ = layers[0]
+            L += [f"{ind3}for o in range({n_out0}):", f"{ind3}    wx[o] = w[{bo} + o]"]
+            for k in range(n_extra):
+                L += [f"{ind3}    wx[o] += w[{wo} + o * {n_tot} + {n_in + k}] * bp.setting[{1 + k}]"]
+        L += _batch_net_source(layers, _ACT_BATCH[act], ind3, n_in, "wx[o]" if n_extra else "w[{bo} + o]")
+        ob = 4 + nb + 3 * n_dom + nr + 2 * r
+        L += [f"{ind3}ob1 = q[{ob}]", f"{ind3}ob2 = q[{ob + 1}]"]
+        gain = "went[t0 + j]"
+        if physics and not uniform_gain:
+            gain += " / (DD[p] * math.sqrt(DD[p]))" if p15 else f" * DD[p] ** -q[{4 + nb + 3 * n_dom + r}]"
+            if kind == 2:
+                gain += " * KV[p]"
+        L += [f"{ind3}for j in range(m):"]
+        if gain != "went[t0 + j]":
+            L.append(f"{ind3}    p = ent[t0 + j]")
+        L += [f"{ind3}    gw = {gain}",
+              f"{ind3}    YE1[t0 + j] = gw * (Y1t[j] + ob1)", f"{ind3}    YE2[t0 + j] = gw * (Y2t[j] + ob2)"]
+    # 4. per state in order: its one or two regions' results, the gain and the frame back
+    L += [f"{ind1}for p in range(n):", f"{ind2}y1 = YE1[PA[p]] + YE1[PB[p]]", f"{ind2}y2 = YE2[PA[p]] + YE2[PB[p]]"]
+    if physics:
+        L += [f"{ind2}f1 = y1 * G[p]", f"{ind2}f2 = y2 * G[p]"]
+    else:
+        L += [f"{ind2}f1 = y1", f"{ind2}f2 = y2"]
+    if polar:
+        L += [f"{ind2}out[p, 0] = f1 * E1[p] + f2 * E2[p]", f"{ind2}out[p, 1] = f1 * E2[p] - f2 * E1[p]"]
+    else:
+        L += [f"{ind2}out[p, 0] = f1", f"{ind2}out[p, 1] = f2"]
+    return "\n".join(L) + "\n"
+
+
+@njit(inline="always", error_model="numpy")
+def _relu(x):
+    return max(x, 0.0)
+
+
+@njit(inline="always", error_model="numpy")
+def _silu(x):
+    return x / (1.0 + math.exp(-x))
+
+
+@njit(inline="always", error_model="numpy")
+def _sigmoid(x):
+    return 1.0 / (1.0 + math.exp(-x))
+
+
+_COMPILED_BATCH: dict[tuple, Any] = {}
+
+
+def batch_kernel(key, dtype: str = "float64"):
+    """The batched kernel of a model shape (``batch_shape_key``) with its networks in ``dtype``, compiled
+    once per process (``batch_kernel_source``); ``compile_seconds[(key, dtype)]`` records the time.
+
+    Parameters
+    ----------
+    key : tuple
+        ``batch_shape_key(model)`` (not None).
+    dtype : {"float64", "float32"}, default "float64"
+        The networks' arithmetic (``tanh64`` or ``tanh32``).
+
+    Returns
+    -------
+    numba dispatcher
+        ``fn(bp, x, v, out)``: ``forces_batch``'s signature, ``bp`` a ``FastBatchParams``.
+    """
+    fn = _COMPILED_BATCH.get((key, dtype))
+    if fn is None:
+        source = batch_kernel_source(key)
+        namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np,
+                                     "tanh_n": tanh32 if dtype == "float32" else tanh64, "relu_n": _relu,
+                                     "silu_n": _silu, "sigmoid_n": _sigmoid}
+        exec(compile(source, f"<surrogate batch kernel {len(_COMPILED_BATCH)}>", "exec"), namespace)
+        fn = njit(error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)(namespace["batch_kernel"])
+        _COMPILED_BATCH[(key, dtype)] = fn
+    return fn

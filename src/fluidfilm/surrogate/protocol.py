@@ -31,20 +31,25 @@ sqrt(sum |F_pred - F|^2 / sum |F|^2) in newtons.
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from fluidfilm import io
 from fluidfilm.core.bearing import bearing_from_dict
 from fluidfilm.data.schema import relative_force_errors
 from fluidfilm.surrogate.fit import regions
 from fluidfilm.surrogate.inference import SurrogateForceModel
-from fluidfilm.surrogate.levenberg_marquardt import (LMSettings, init_nguyen_widrow, levenberg_marquardt, mlp_forward, mlp_sse,
-                                  normal_equations, unpack)
+from fluidfilm.surrogate.levenberg_marquardt import (FINAL_REASONS, LMResult, LMSettings, init_nguyen_widrow,
+                                                    levenberg_marquardt, mlp_forward, mlp_sse, normal_equations,
+                                                    resolve_workers, unpack)
 from fluidfilm.surrogate.scaling import Scaling
 
 PROTOCOLS = ("paper", "adam")
@@ -119,28 +124,63 @@ class NetworkData:
     z: dict
     y: dict
     F: dict
+    X: dict | None = None  # positions and velocities per part (a non-affine map needs them for forces)
+    V: dict | None = None
 
 
-def network_data(frame: pd.DataFrame, parts: Mapping[str, np.ndarray], bearing) -> NetworkData:
-    """Fit the min-max map on all rows of the network (training, validation and test) and map each part."""
+#: the paper's map: min-max of (X1, X2, V1, V2) and (F1, F2), cartesian
+PAPER_MAP: dict[str, str | float] = {"kind": "minmax", "frame": "cartesian", "power": 0.0}
+
+
+def minmax_scaling(X, V, F, bearing, kind: str = "minmax", frame: str = "cartesian", power: float = 0.0) -> Scaling:
+    """A ``Scaling`` of ``kind``/``frame`` whose affine part is the min-max map to [-1, 1] (``mapminmax``).
+
+    ``kind`` "minmax" is the paper's map.  The physics kinds divide the force first (by the film
+    scale, (1 - eps^2)^-power and, for ``physics_v``, 1 + |V|/(c omega); the ``whirl`` frame by the
+    drive |u|) and then map min-max instead of standardising, so that an ablation changes one
+    ingredient: with power 0 in the cartesian frame, ``physics`` is the paper's map up to rounding
+    (a min-max map is invariant to a constant factor).
+    """
+    sc = Scaling.fit(kind, X, V, F, bearing.clearance, bearing.omega, bearing.force_scale, power=power, frame=frame)
+    if kind != "minmax":
+        from fluidfilm.surrogate.scaling import _centre_half_range
+
+        sc.in_mean, sc.in_std = _centre_half_range(sc._raw_inputs(X, V))
+        sc.out_mean, sc.out_std = _centre_half_range(sc._raw_targets(X, V, F))
+    return sc
+
+
+def network_data(frame: pd.DataFrame, parts: Mapping[str, np.ndarray], bearing,
+                 scaling: Mapping | None = None) -> NetworkData:
+    """Fit the min-max map on all rows of the network (training, validation and test) and map each part.
+
+    ``scaling``: {"kind", "frame", "power"} of ``minmax_scaling`` (default ``PAPER_MAP``)."""
     rows = np.concatenate(list(parts.values()))
     X = frame[["X1", "X2"]].to_numpy()[rows]
     V = frame[["V1", "V2"]].to_numpy()[rows]
     F = frame[OUTPUTS].to_numpy()[rows]
-    sc = Scaling.fit("minmax", X, V, F, bearing.clearance, bearing.omega, bearing.force_scale, power=0.0)
-    z, y, f = {}, {}, {}
+    m = dict(PAPER_MAP) | dict(scaling or {})
+    sc = minmax_scaling(X, V, F, bearing, str(m["kind"]), str(m["frame"]), float(str(m["power"])))
+    z, y, f, xs, vs = {}, {}, {}, {}, {}
     for name, idx in parts.items():
-        Xp = frame[["X1", "X2"]].to_numpy()[idx]
-        Vp = frame[["V1", "V2"]].to_numpy()[idx]
+        xs[name] = Xp = frame[["X1", "X2"]].to_numpy()[idx]
+        vs[name] = Vp = frame[["V1", "V2"]].to_numpy()[idx]
         f[name] = frame[OUTPUTS].to_numpy()[idx]
         z[name] = np.ascontiguousarray(sc.inputs(Xp, Vp))
         y[name] = np.ascontiguousarray(sc.targets(Xp, Vp, f[name]))
-    return NetworkData(sc, z, y, f)
+    return NetworkData(sc, z, y, f, xs, vs)
 
 
-def _physical_sq(scaling: Scaling, y_pred: np.ndarray, F: np.ndarray) -> float:
-    """sum |F_pred - F|^2 [N^2] for network outputs in mapped units (affine map: no state needed)."""
-    Fp = y_pred * scaling.out_std + scaling.out_mean
+def _physical_sq(data: NetworkData, part: str, y_pred: np.ndarray) -> float:
+    """sum |F_pred - F|^2 [N^2] over a part's rows for network outputs in mapped units."""
+    sc = data.scaling
+    F = data.F[part]
+    if sc.kind == "minmax":  # affine map: no state needed
+        Fp = y_pred * sc.out_std + sc.out_mean
+    else:
+        if data.X is None or data.V is None:
+            raise ValueError(f"a {sc.kind!r} map needs the rows' positions and velocities (NetworkData.X, .V)")
+        Fp = sc.forces(data.X[part], data.V[part], y_pred)
     return float(((Fp - F) ** 2).sum())
 
 
@@ -149,35 +189,131 @@ def _layers(theta, n_in, n_hidden, n_out=2):
     return [(W1.copy(), b1.copy()), (W2.copy(), b2.copy())]
 
 
+def _fingerprint(*parts) -> str:
+    """sha256 of arrays and JSON-able values: what a checkpoint belongs to."""
+    h = hashlib.sha256()
+    for p in parts:
+        if isinstance(p, np.ndarray):
+            h.update(str((p.shape, p.dtype.str)).encode())
+            h.update(np.ascontiguousarray(p).tobytes())
+        else:
+            h.update(json.dumps(p, sort_keys=True, default=str).encode())
+    return h.hexdigest()
+
+
+def save_lm_checkpoint(path, state: dict) -> None:
+    """Write a Levenberg-Marquardt checkpoint (arrays and a JSON record) atomically (``fluidfilm.io``)."""
+    arrays = {k: np.asarray(v, dtype=np.float64) for k, v in state.items() if isinstance(v, np.ndarray)}
+    record = {k: v for k, v in state.items() if not isinstance(v, np.ndarray)}
+    with io.atomic_path(path, ".npz") as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, record=np.array(json.dumps(record)), **arrays)  # type: ignore[arg-type]
+
+
+def load_lm_checkpoint(path) -> dict | None:
+    """The state ``save_lm_checkpoint`` wrote, or None when there is no file."""
+    path = Path(path)
+    if not path.exists():
+        return None
+    with np.load(path, allow_pickle=False) as f:
+        out = json.loads(str(f["record"]))
+        out.update({k: f[k].copy() for k in f.files if k != "record"})
+    return out
+
+
 def train_network_lm(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_fail: int = 6,
-                     settings: LMSettings | None = None, chunk: int = 8192) -> dict:
-    """Levenberg-Marquardt on the training rows, stopped by the validation rule; the best epoch's weights."""
+                     settings: LMSettings | None = None, chunk: int = 8192, workers: int | None = 1,
+                     checkpoint: str | Path | None = None, progress_every_s: float | None = None,
+                     label: str = "lm") -> dict:
+    """Levenberg-Marquardt on the training rows, stopped by the validation rule; the best epoch's weights.
+
+    ``workers`` threads accumulate J^T J (None or 0: every core; the weights do not depend on it).
+    ``checkpoint``: a file (.npz) written atomically after every epoch with the weights, mu, the
+    epoch, the best validation weights and error, the stopping rule's count and the history; a
+    call with the same data and settings finds it and resumes, to the weights an uninterrupted run
+    ends with (a checkpoint of other data or settings is not used: the run starts afresh).
+    ``progress_every_s``: a progress line at most this often (0: every epoch; None: silent), with
+    the time per epoch and bounds on the rest.
+    """
     z_tr, y_tr = data.z["train"], data.y["train"]
     z_va, y_va = data.z["val"], data.y["val"]
     if len(z_tr) == 0 or len(z_va) == 0:
         raise ValueError(f"a network needs training and validation rows, got {len(z_tr)} and {len(z_va)}")
+    s = settings or LMSettings()
     n_in, n_out = z_tr.shape[1], y_tr.shape[1]
     theta0 = init_nguyen_widrow(n_in, n_hidden, n_out, np.random.default_rng(seed))
+    workers = resolve_workers(workers)
     stop = ValidationStop(max_fail)
     hist: dict[str, list[float]] = {"wall_s": [], "val_mse": [], "val_sq_N2": [], "train_mse": []}
+    # the caps (max_epochs, max_time_s) are not part of it: a run stopped by one continues when it is raised
+    key = _fingerprint(z_tr, y_tr, z_va, y_va, theta0,
+                       {"n_hidden": n_hidden, "max_fail": int(max_fail), "chunk": int(chunk), "mu": s.mu,
+                        "mu_dec": s.mu_dec, "mu_inc": s.mu_inc, "mu_max": s.mu_max, "min_grad": s.min_grad})
+    start = load_lm_checkpoint(checkpoint) if checkpoint is not None else None
+    if start is not None and start.get("key") != key:
+        print(f"    {label}: checkpoint {checkpoint} belongs to other data or settings: starting afresh", flush=True)
+        start = None
+    if start is not None:
+        stop.best, stop.best_epoch, stop.fails = float(start["best"]), int(start["best_epoch"]), int(start["fails"])
+        stop.best_weights = start["best_weights"]
+        hist = {k: list(v) for k, v in start["hist"].items()}
+        print(f"    {label}: resuming at epoch {start['epoch']} ({start['wall_s']:.0f} s done; best validation mse "
+              f"{stop.best:.4g} at epoch {stop.best_epoch})", flush=True)
+    else:
+        # the starting point counts as epoch 0 of the validation record, as in the tool
+        pred0, _ = mlp_forward(theta0, z_va, n_hidden, n_out)
+        stop.update(0, float(((pred0 - y_va) ** 2).mean()), theta0)
+    last_line = [-math.inf]
 
     def on_epoch(epoch, theta, wall):
         pred, _ = mlp_forward(theta, z_va, n_hidden, n_out)
         mse = float(((pred - y_va) ** 2).mean())
         hist["wall_s"].append(wall)
         hist["val_mse"].append(mse)
-        hist["val_sq_N2"].append(_physical_sq(data.scaling, pred, data.F["val"]))
+        hist["val_sq_N2"].append(_physical_sq(data, "val", pred))
         return stop.update(epoch, mse, theta)
 
-    # the starting point counts as epoch 0 of the validation record, as in the tool
-    pred0, _ = mlp_forward(theta0, z_va, n_hidden, n_out)
-    stop.update(0, float(((pred0 - y_va) ** 2).mean()), theta0)
-    res = levenberg_marquardt(theta0, lambda t: normal_equations(t, z_tr, y_tr, n_hidden, chunk),
-                              lambda t: mlp_sse(t, z_tr, y_tr, n_hidden), y_tr.size, settings, on_epoch)
+    def on_checkpoint(state):
+        if checkpoint is not None:
+            save_lm_checkpoint(checkpoint, {
+                "key": key, "theta": state["theta"], "mu": state["mu"], "epoch": state["epoch"],
+                "wall_s": state["wall_s"], "history": state["history"], "reason": state["reason"],
+                "best": stop.best, "best_epoch": stop.best_epoch, "fails": stop.fails,
+                "best_weights": stop.best_weights if stop.best_weights is not None else state["theta"],
+                "hist": hist})
+        if progress_every_s is not None and (state["reason"] or state["wall_s"] - last_line[0] >= progress_every_s):
+            last_line[0] = state["wall_s"]
+            print(lm_progress_line(label, state, stop, s, len(z_tr)), flush=True)
+
+    if start is not None and start.get("reason") in FINAL_REASONS:
+        res = LMResult(start["theta"], int(start["epoch"]), start["reason"], math.nan, float(start["wall_s"]),
+                       list(start["history"]))
+    else:
+        res = levenberg_marquardt(theta0, lambda t: normal_equations(t, z_tr, y_tr, n_hidden, chunk, workers),
+                                  lambda t: mlp_sse(t, z_tr, y_tr, n_hidden, workers=workers), y_tr.size, s,
+                                  on_epoch, start, on_checkpoint)
     hist["train_mse"] = [h["sse"] / y_tr.size for h in res.history]
     theta = stop.best_weights if stop.best_weights is not None else res.theta
-    return _finish(data, _layers(theta, n_in, n_hidden, n_out), res.epochs, stop.best_epoch, res.stop_reason,
-                   res.wall_s, hist)
+    out = _finish(data, _layers(theta, n_in, n_hidden, n_out), res.epochs, stop.best_epoch, res.stop_reason,
+                  res.wall_s, hist)
+    out["workers"] = workers
+    return out
+
+
+def lm_progress_line(label: str, state: dict, stop: ValidationStop, settings: LMSettings, n_train: int) -> str:
+    """One line on a Levenberg-Marquardt run: epoch, time per epoch, mu, validation error and the rule's
+    count, and bounds on the rest (the rule cannot fire in fewer than its remaining failures; the caps
+    end it at the latest)."""
+    epoch, wall = int(state["epoch"]), float(state["wall_s"])
+    per = wall / max(epoch, 1)
+    head = (f"    {label}: epoch {epoch}, {wall:.0f} s ({per:.2f} s/epoch, {n_train:,} rows), mu {state['mu']:.1e}, "
+            f"best validation mse {stop.best:.4g} at epoch {stop.best_epoch} ({stop.fails} of {stop.max_fail} "
+            f"epochs without improvement)")
+    if state["reason"]:
+        return f"{head}; stopped: {state['reason']}"
+    at_least = (stop.max_fail - stop.fails) * per
+    at_most = min((int(settings.max_epochs) - epoch) * per, max(settings.max_time_s - wall, 0.0))
+    return f"{head}; rest: at least {at_least:.0f} s, at most {at_most:.0f} s"
 
 
 def train_network_adam(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_fail: int = 6,
@@ -233,7 +369,7 @@ def train_network_adam(data: NetworkData, n_hidden: int = 50, seed: int = 0, max
         wall = time.perf_counter() - t0
         hist["wall_s"].append(wall)
         hist["val_mse"].append(mse)
-        hist["val_sq_N2"].append(_physical_sq(data.scaling, pred, data.F["val"]))
+        hist["val_sq_N2"].append(_physical_sq(data, "val", pred))
         hist["train_mse"].append(total / len(z_tr))
         r = stop.update(epoch, mse, weights())
         if progress_every_s is not None and (r or wall - last_line >= progress_every_s):
@@ -264,8 +400,7 @@ def _finish(data: NetworkData, layers, epochs, best_epoch, reason, wall, hist) -
         if len(z):
             pred, _ = mlp_forward(theta, z, n_hidden, y.shape[1])
             out[f"{part}_mse"] = float(((pred - y) ** 2).mean())
-            out[f"{part}_rel_rmse"] = math.sqrt(_physical_sq(data.scaling, pred, F) / max(float((F ** 2).sum()),
-                                                                                          1e-300))
+            out[f"{part}_rel_rmse"] = math.sqrt(_physical_sq(data, part, pred) / max(float((F ** 2).sum()), 1e-300))
         else:
             out[f"{part}_mse"] = out[f"{part}_rel_rmse"] = None
     return out
@@ -283,55 +418,79 @@ def subsample(n_rows: int, n_samples: int | None, seed: int) -> np.ndarray:
 
 def train_protocol_model(frame: pd.DataFrame, meta: dict, protocol: Mapping, boundaries=(), seed: int = 0,
                          n_samples: int | None = None, name: str = "surrogate", n_hidden: int = 50,
-                         log_network=None) -> tuple[SurrogateForceModel, dict]:
+                         log_network=None, scaling: Mapping | None = None, extra_rows: pd.DataFrame | None = None,
+                         checkpoint_dir: str | Path | None = None,
+                         network_protocol: Mapping | None = None) -> tuple[SurrogateForceModel, dict]:
     """Train a single (no boundaries) or split model under ``protocol`` on one subsample and division.
 
     ``protocol``: {"name": "paper" | "adam", "fractions": [...], "max_fail", "max_epochs", "max_time_s",
-    and for adam "lr", "batch_size"}.  ``log_network(r, result)`` is called after each network.
+    for paper "workers" (threads accumulating J^T J, None: every core), "progress_every_s" (None:
+    silent), and for adam "lr", "batch_size"}.  ``log_network(r, result)`` is called after each network.
+    ``scaling``: the networks' map (``network_data``; default the paper's min-max).  ``extra_rows``:
+    rows (the dataset's columns) added to the subsample before the division.  ``checkpoint_dir``:
+    with the paper protocol, each network checkpoints there after every epoch
+    (``train_network_lm``), so the same call resumes an interrupted run.  ``network_protocol``:
+    {network index: protocol keys} overriding ``protocol`` for that network (e.g. a time budget, or
+    ``name: adam``, for the eps > 0.7 network).
     Returns the force model and a report (per network: rows, epochs, best epoch, stop reason, errors,
     wall time, validation history).
     """
     kind = protocol.get("name", "paper")
     if kind not in PROTOCOLS:
         raise ValueError(f"unknown training protocol {kind!r}; choose one of {PROTOCOLS}")
+    args = (frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden, log_network, scaling, extra_rows,
+            checkpoint_dir, network_protocol)
     threads = protocol.get("threads")
     if threads:
-        # one BLAS thread per process: parallel work runs as processes, and OpenBLAS threads that
-        # spin-wait on a busy machine slow a 352 x 352 Cholesky down a hundredfold
+        # one BLAS thread per process: parallel work runs as processes (or as the J^T J workers'
+        # threads), and OpenBLAS threads that spin-wait on a busy machine slow a 352 x 352 Cholesky
+        # down a hundredfold
         from threadpoolctl import threadpool_limits
 
         with threadpool_limits(int(threads)):
-            return _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden,
-                                         log_network)
-    return _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden, log_network)
+            return _train_protocol_model(*args)
+    return _train_protocol_model(*args)
 
 
-def _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden, log_network):
-    kind = protocol.get("name", "paper")
+def _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, name, n_hidden, log_network,
+                          scaling=None, extra_rows=None, checkpoint_dir=None, network_protocol=None):
+    base_protocol = protocol
     bearing = bearing_from_dict(meta["bearing"])
     rows = subsample(len(frame), n_samples, seed)
     sub = frame.iloc[rows].reset_index(drop=True)
+    if extra_rows is not None and len(extra_rows):
+        sub = pd.concat([sub, extra_rows[list(sub.columns)]], ignore_index=True)
     div = divide_random(len(sub), protocol.get("fractions", (0.70, 0.15, 0.15)), seed)
     eps = sub["eps"].to_numpy()
     bounds = [float(b) for b in boundaries]
+    smap = dict(PAPER_MAP) | dict(scaling or {})
     nets, scalings, per_net = [], [], []
     for r, (lo, hi) in enumerate(regions(bounds)):
         parts = {p: idx[(eps[idx] >= lo) & (eps[idx] < hi)] for p, idx in
                  (("train", div.train), ("val", div.val), ("test", div.test))}
-        data = network_data(sub, parts, bearing)
+        data = network_data(sub, parts, bearing, smap)
+        over = (network_protocol or {}).get(r, (network_protocol or {}).get(str(r), {}))
+        protocol = dict(base_protocol) | dict(over or {})
+        kind = protocol.get("name", "paper")
+        if kind not in PROTOCOLS:
+            raise ValueError(f"unknown training protocol {kind!r} for network {r}; choose one of {PROTOCOLS}")
         common = dict(n_hidden=n_hidden, seed=seed * 100 + r, max_fail=int(protocol.get("max_fail", 6)))
         if kind == "paper":
             settings = LMSettings(max_epochs=int(protocol.get("max_epochs", 1000)),
                                   max_time_s=float(protocol.get("max_time_s") or math.inf),
                                   min_grad=float(protocol.get("min_grad", 1e-7)))
-            res = train_network_lm(data, settings=settings, chunk=int(protocol.get("chunk", 8192)), **common)
+            ckpt = None if checkpoint_dir is None else Path(checkpoint_dir) / f"network{r}.npz"
+            res = train_network_lm(data, settings=settings, chunk=int(protocol.get("chunk", 8192)),
+                                   workers=protocol.get("workers"), checkpoint=ckpt,
+                                   progress_every_s=protocol.get("progress_every_s"),
+                                   label=f"{name} network {r} (eps {lo:g}-{hi:g})", **common)
         else:
             res = train_network_adam(data, max_epochs=int(protocol.get("max_epochs", 1000)),
                                      lr=float(protocol.get("lr", 3e-3)),
                                      batch_size=int(protocol.get("batch_size", 512)),
                                      max_time_s=float(protocol.get("max_time_s") or math.inf),
                                      threads=protocol.get("threads"), **common)
-        res.update(eps_low=lo, eps_high=hi, time_to_target_s=None, val_rel_rmse=res["val_rel_rmse"])
+        res.update(eps_low=lo, eps_high=hi, time_to_target_s=None, val_rel_rmse=res["val_rel_rmse"], protocol=kind)
         if log_network is not None:
             log_network(r, res)
         nets.append(res.pop("layers"))
@@ -341,12 +500,13 @@ def _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, na
     domain = [[s["eps_low"], s["eps_high"], s["v_max"]] for s in spec["velocity_sections"]]
     model = SurrogateForceModel(bearing, nets, scalings, "tanh", bounds, 0.0, domain,
                                 eps_max=float(frame["eps"].max()), name=name,
-                                info={"protocol": dict(protocol), "split": {"boundaries": bounds},
-                                      "scaling": {"kind": "minmax"}, "seed": seed, "n_samples": len(sub),
+                                info={"protocol": dict(base_protocol), "split": {"boundaries": bounds},
+                                      "network_protocol": {str(k): dict(v) for k, v in (network_protocol or {}).items()},
+                                      "scaling": smap, "seed": seed, "n_samples": len(sub),
                                       "model": {"width": n_hidden, "depth": 1, "activation": "tanh"}})
     times = [p["train_time_s"] for p in per_net]
     report = {
-        "protocol": kind, "networks": per_net, "n_samples": int(len(sub)), "n_samples_dataset": int(len(frame)),
+        "protocol": base_protocol.get("name", "paper"), "networks": per_net, "n_samples": int(len(sub)), "n_samples_dataset": int(len(frame)),
         "dataset_hash": meta.get("config_hash"), "seed": seed,
         "train_time_s": float(sum(times)), "train_time_parallel_s": float(max(times)),
         "time_to_target_s": None, "target_val_rel_rmse": None,
