@@ -15,7 +15,9 @@
 #   make lint / test-slow / bench
 #   make time-tests                make setup + make test in a fresh clone of HEAD from a plain shell, timed:
 #                                  reports/test_timing.json (the README's commands table)
-#   make ross-peer                 ROSS (external peer, its own .venv-ross) vs ours: benchmarks/bench_ross_peer.py
+#   make ross-peer                 ROSS 3.1 (external peer, its own .venv-ross, Python 3.13) vs ours:
+#                                  benchmarks/bench_ross_peer.py, then the ROSS adapter's report (bench_ross_adapter.py)
+#   make ross-env / test-ross      build .venv-ross only / run the ROSS adapter's tests in it
 #   make train-time-ci             the training-time study at 3x the pipeline's subsample (12,000 per
 #                                  seed) until its 95 % interval is +-10 points (hours here:
 #                                  docs/paper_experiment.md): reports/train_time_ci.json
@@ -65,6 +67,7 @@ lint: setup
 
 test-slow: setup
 	$(PY) -m pytest -m slow
+	@if test -x $(ROSS_VENV)/bin/python; then $(MAKE) test-ross; else echo "test-slow: no $(ROSS_VENV) (make ross-env builds it): the ROSS adapter's tests were skipped"; fi
 
 bench: setup
 	$(PY) benchmarks/bench_solver.py
@@ -100,13 +103,16 @@ dvc-cache: setup
 clean-venv:
 	rm -rf $(VENV)
 
-# Optional external peer: ROSS (ross-rotordynamics 2.3.0, the newest that installs on Python 3.11;
-# plotly 6+ breaks its import) in its own environment, against our solver on Lund & Thomsen's bearing;
-# writes reports/benchmarks/ross_peer.json. .venv-ross is built from benchmarks/ross_peer_constraints.txt
-# (the versions it was measured with) and rebuilt when that file changes (its .installed stamp is a copy).
+# Optional external peer and host: ROSS 3.1 (ross-rotordynamics, Python >= 3.13) in its own environment,
+# .venv-ross, never a dependency of the workspace. It is built from benchmarks/ross_peer_constraints.txt (the
+# versions it was measured with, pytest included) and rebuilt when that file changes; fluidfilm goes into it
+# editable and without its dependencies (its physics imports no torch; ROSS brings numpy, scipy, numba).
+# The base interpreter: ROSS_BASE_PY if given, else pyenv's 3.13, else python3.13 on PATH.
 ROSS_VENV       ?= .venv-ross
-ROSS_BASE_PY    ?= python3.11
+ROSS_BASE_PY    ?= $(firstword $(wildcard $(HOME)/.pyenv/versions/3.13*/bin/python3.13) $(shell command -v python3.13 2>/dev/null))
 ROSS_PINS       := benchmarks/ross_peer_constraints.txt
+ROSS_STAMP      := $(ROSS_VENV)/.installed
+ROSS_FF_STAMP   := $(ROSS_VENV)/.fluidfilm
 # The pipeline's `train_time` stage runs the study on 4,000 samples per seed (conf/train_time.yaml) to a
 # +-10-point interval; this runs the same study (same data, protocol and seeds) at three times the subsample
 # until its interval reaches the same target: does the result hold at a larger size? Interrupted, it
@@ -142,10 +148,32 @@ paper-full-scale: setup
 	    figure=reports/figures/paper_full_scale.png \
 	    'include_reports=[reports/paper_scale.json,reports/paper_scale_curve.json]'
 
-.PHONY: ross-peer
-ross-peer: setup
-	@command -v $(ROSS_BASE_PY) >/dev/null || { echo "make ross-peer: $(ROSS_BASE_PY) not found (ROSS 2.3 needs Python 3.11; set ROSS_BASE_PY=/path/to/python3.11)" >&2; exit 1; }
-	cmp -s $(ROSS_PINS) $(ROSS_VENV)/.installed || { rm -rf $(ROSS_VENV) && $(ROSS_BASE_PY) -m venv $(ROSS_VENV) && \
-	  $(ROSS_VENV)/bin/pip install --quiet --disable-pip-version-check -r $(ROSS_PINS) && \
-	  cp $(ROSS_PINS) $(ROSS_VENV)/.installed; }
-	ROSS_PYTHON=$(ROSS_VENV)/bin/python $(PY) benchmarks/bench_ross_peer.py
+.PHONY: ross-env ross-peer ross-adapter test-ross
+$(ROSS_STAMP): $(ROSS_PINS)
+	@test -n "$(ROSS_BASE_PY)" && $(ROSS_BASE_PY) -c 'import sys; sys.exit(sys.version_info < (3, 13))' || { \
+	  echo "make ross-env: no Python >= 3.13 found (ROSS 3.1 needs it): install one (pyenv install 3.13) or set ROSS_BASE_PY=/path/to/python3.13; got '$(ROSS_BASE_PY)'" >&2; exit 1; }
+	rm -rf $(ROSS_VENV)
+	$(ROSS_BASE_PY) -m venv $(ROSS_VENV)
+	$(ROSS_VENV)/bin/pip install --quiet --disable-pip-version-check -r $(ROSS_PINS)
+	touch $(ROSS_STAMP)
+
+$(ROSS_FF_STAMP): $(ROSS_STAMP) pyproject.toml
+	$(ROSS_VENV)/bin/pip install --quiet --disable-pip-version-check --no-deps --ignore-requires-python -e .
+	touch $(ROSS_FF_STAMP)
+
+ross-env: $(ROSS_FF_STAMP)
+
+# the peer benchmark (reports/benchmarks/ross_peer.json), then the adapter's report (ross_adapter.json); the
+# README/docs tables are rendered from both by the workspace's own environment
+ross-peer: setup ross-env
+	$(ROSS_VENV)/bin/python benchmarks/bench_ross_peer.py
+	$(ROSS_VENV)/bin/python benchmarks/bench_ross_adapter.py
+	$(PY) -m fluidfilm.reporting.readme
+
+ross-adapter: setup ross-env
+	$(ROSS_VENV)/bin/python benchmarks/bench_ross_adapter.py
+	$(PY) -m fluidfilm.reporting.readme
+
+# the adapter's tests in the ROSS environment (in .venv they are skipped: no ROSS there)
+test-ross: ross-env
+	$(ROSS_VENV)/bin/python -m pytest tests/test_ross_adapter.py -m slow -p no:cacheprovider

@@ -10,7 +10,7 @@ import pytest
 
 from fluidfilm import JournalBearing, ReynoldsSolver, paper_bearing
 from fluidfilm.reynolds import kernels
-from fluidfilm.reynolds.feed import GroovedReynoldsSolver
+from fluidfilm.reynolds.feed import GroovedReynoldsSolver, grooved_field, grooved_force
 
 C = 120e-6
 
@@ -164,3 +164,64 @@ def test_centred_journal_at_rest_and_bad_method():
         ReynoldsSolver(paper_bearing(), 20, 12, cavitation="swift-stieber", method="sor")
     with pytest.raises(ValueError, match="'direct'"):
         GroovedReynoldsSolver(paper_bearing(), 20, 12, method="direct")
+
+
+# --------------------------------------------------------------------------- the sine-transform solve, the warm start
+def fields_both_ways(params, n_theta, x, v, fixed, project=True):
+    """The field of one state by the active-set iteration with its linear solves by the sine transform and
+    capacitance matrix (the default) and by the envelope Cholesky factorisation alone (a second method)."""
+    out = []
+    for transform in (True, False):
+        p = np.empty((n_theta, params.full_basis.shape[0] + 2))
+        kernels.linear_field(params, x[0], x[1], v[0], v[1], params.full_basis, params.p_supply, p)
+        if project:
+            np.maximum(p, 0.0, out=p)
+        p[fixed] = params.p_supply
+        it = kernels.active_set_field(params, x[0], x[1], v[0], v[1], p, fixed, project, 10_000, transform)
+        assert it > 0
+        out.append(p)
+    return out
+
+
+@pytest.mark.parametrize("n_theta, n_z", [(30, 30), (24, 15), (60, 31)])
+def test_transform_solve_equals_the_envelope_factorisation(n_theta, n_z):
+    """Even and odd interior row counts (folded and halved mid-plane): the same field to round-off."""
+    s = ReynoldsSolver(paper_bearing(), n_theta, n_z, cavitation="swift-stieber")
+    no_groove = np.zeros(n_theta, dtype=bool)
+    for x, v in states(8, n_z, eps_max=0.95):
+        fast, env = fields_both_ways(s.params, n_theta, x, v, no_groove)
+        assert np.abs(fast - env).max() <= 1e-11 * env.max(), (x, v)
+
+
+@pytest.mark.parametrize("cavitation", ["swift-stieber", "none"])
+def test_grooved_transform_solve_equals_the_envelope_factorisation(cavitation):
+    """Held groove columns (Lund & Thomsen's two 20-deg grooves), the complementarity problem and the plain
+    linear solve (runs between the grooves, no active node)."""
+    b = JournalBearing(length=0.05, diameter=0.1, clearance=C, speed_rpm=3000.0, viscosity=0.02)
+    g = GroovedReynoldsSolver(b, 72, 31, cavitation=cavitation, groove_angle=math.pi / 2, n_grooves=2,
+                              groove_width=math.radians(20.0))
+    for x, v in states(6, 3, eps_max=0.9):
+        fast, env = fields_both_ways(g.gparams.film, 72, g.to_groove_frame(x), g.to_groove_frame(v),
+                                     g.gparams.fixed, project=cavitation == "swift-stieber")
+        assert np.abs(fast - env).max() <= 1e-11 * np.abs(env).max(), (x, v)
+
+
+def test_grooved_warm_start_gives_the_cold_solution():
+    """``forces`` starts each solve from the last cavitation set: a sequence of nearby states (a difference
+    quotient's) and far jumps give each state's cold-started force to round-off, in fewer solves."""
+    b = JournalBearing(length=0.05, diameter=0.1, clearance=C, speed_rpm=3000.0, viscosity=0.02)
+    g = GroovedReynoldsSolver(b, 96, 21, groove_angle=math.pi / 2, n_grooves=2, groove_width=math.radians(20.0))
+    x0 = np.array([0.2 * C, 0.6 * C])
+    seq = [(x0, np.zeros(2)), (x0 + [1e-4 * C, 0.0], np.zeros(2)), (x0, [0.0, 1e-3]), (x0, [0.0, -1e-3])]
+    seq += [(x, v) for x, v in states(5, 9, eps_max=0.9)]
+    cold = np.array([grooved_force(g.gparams, x[0], x[1], v[0], v[1]) for x, v in seq])
+    warm = np.array([g.forces(x, v) for x, v in seq])
+    assert np.abs(warm - cold).max() <= 1e-10 * np.abs(cold).max()
+    X = np.array([np.asarray(x, float) for x, _ in seq])
+    V = np.array([np.asarray(v, float) for _, v in seq])
+    np.testing.assert_allclose(g.forces(X, V), cold, rtol=0, atol=1e-10 * np.abs(cold).max())
+    # the nearby states need fewer solves from the warm set than from the widened Gumbel film
+    p = np.empty((96, 21))
+    warm = np.zeros_like(g._warm)
+    assert grooved_field(g.gparams, *x0, 0.0, 0.0, p, warm, False) >= 2  # cold: writes x0's set into warm
+    assert grooved_field(g.gparams, *(x0 + [1e-4 * C, 0.0]), 0.0, 0.0, p, warm, True) == 1

@@ -136,3 +136,31 @@ def test_the_package_root_holds_a_handful_of_modules():
 def test_the_physics_check_sees_a_real_dependency():
     """It can fail: the rotor integrator does import the force-model contract in core."""
     assert "fluidfilm.core.force_model" in closure("fluidfilm.rotor.integrate")
+
+
+def _imports_ross(path) -> list[tuple[int, bool]]:
+    """(line, at module level) of every ``import ross`` / ``from ross... import`` in a file."""
+    tree = ast.parse(path.read_text())
+    top = {id(n) for n in tree.body}
+    out = []
+    for node in ast.walk(tree):
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+            [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else []
+        if any(n.split(".")[0] == "ross" for n in names):
+            out.append((node.lineno, id(node) in top))
+    return out
+
+
+def test_ross_is_imported_by_the_interop_adapter_alone_and_lazily():
+    """ROSS (an optional extra, Python >= 3.13) is reached through fluidfilm.interop.ross only, and that module
+    imports it inside its functions, so the package imports without ROSS; no other layer imports interop."""
+    interop = SRC / "fluidfilm" / "interop" / "ross.py"
+    offenders = [str(p.relative_to(SRC)) for p in sorted((SRC / "fluidfilm").rglob("*.py"))
+                 if p != interop and _imports_ross(p)]
+    assert not offenders, f"ROSS imported outside fluidfilm.interop.ross: {offenders}"
+    found = _imports_ross(interop)
+    assert found, "the adapter no longer imports ross: this check would pass vacuously"
+    assert not [line for line, top in found if top], f"module-level ROSS imports in interop/ross.py: {found}"
+    users = [m for layer in PHYSICS + LEARNING + ABOVE_LEARNING for m in _modules(layer)
+             if any(d.startswith("fluidfilm.interop") for d in closure(m))]
+    assert not users, f"modules that import fluidfilm.interop (it sits on top, for users): {users}"

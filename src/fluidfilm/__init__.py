@@ -15,8 +15,8 @@ from importlib import metadata as _metadata
 
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict, paper_bearing
 from fluidfilm.reynolds import CAVITATION_MODELS, ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
-from fluidfilm.rotor import (LinearBearing, Rotor, Trajectory, equilibrium, equilibrium_locus, load_along_gravity,
-                             simulate)
+from fluidfilm.rotor import (LinearBearing, Rotor, SpeedSchedule, Trajectory, equilibrium, equilibrium_locus,
+                             load_along_gravity, simulate)
 from fluidfilm.surrogate import SurrogateForceModel, load_surrogate
 
 try:  # one place for the version: pyproject.toml, read from the installed package's metadata
@@ -34,6 +34,7 @@ __all__ = [
     "GradedReynoldsModel",
     "CAVITATION_MODELS",
     "Rotor",
+    "SpeedSchedule",
     "simulate",
     "Trajectory",
     "LinearBearing",

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from fluidfilm.surrogate.ensemble import EnsembleForceModel, HybridForceModel
     from fluidfilm.core.force_model import (AdjustableForceModel, BatchForceModel, BatchSettable, ForceModel,
-                                            LinearPressureModel)
+                                            LinearPressureModel, SpeedScalableModel)
     from fluidfilm.reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
     from fluidfilm.reynolds.feed import GroovedReynoldsSolver
     from fluidfilm.reynolds.sparse_reference import SparseReferenceModel
@@ -33,6 +33,9 @@ if TYPE_CHECKING:
     def _batch_force_models(a: ReynoldsSolver, b: GradedReynoldsModel, d: SurrogateForceModel,
                             e: LinearBearing) -> list[BatchForceModel]:
         return [a, b, d, e]
+
+    def _speed_scalable_models(a: ReynoldsSolver, d: SurrogateForceModel, e: LinearBearing) -> list[SpeedScalableModel]:
+        return [a, d, e]
 
     def _linear_pressure_models(a: ReynoldsSolver, c: ConicalReynoldsSolver) -> list[LinearPressureModel]:
         return [a, c]

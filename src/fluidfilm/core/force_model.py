@@ -23,7 +23,8 @@ The members:
   from now on / say how many there were (``None`` when none, or when the model is valid everywhere).
 
 Optional: ``BatchForceModel`` (a kernel of many states at once, which ``simulate_batch`` calls once
-per RK4 stage for the whole batch) and ``BatchSettable`` (a per-trajectory control setting).
+per RK4 stage for the whole batch), ``BatchSettable`` (a per-trajectory control setting) and
+``SpeedScalableModel`` (the force at any shaft speed: run-ups).
 
 Adding a model: see docs/adding_a_model.md.
 """
@@ -41,6 +42,8 @@ from fluidfilm.core.bearing import ConicalBearing, JournalBearing
 ForceKernel = Callable[..., tuple[float, float]]
 #: ``fn(bparams, x (m, 2), v (m, 2), out (m, 2)) -> None``, compiled with numba: forces [N] into ``out``
 BatchForceKernel = Callable[..., None]
+#: ``fn(params, omega, x1, x2, v1, v2) -> (F1, F2)``, compiled with numba: the film force at shaft speed omega [rad/s]
+SpeedForceKernel = Callable[..., tuple[float, float]]
 Bearing = JournalBearing | ConicalBearing
 
 
@@ -213,6 +216,29 @@ class BatchForceModel(Protocol):
                            private: bool = False) -> tuple[BatchForceKernel, Any] | None: ...
 
     def merge_counts(self, bparams: Any) -> None: ...
+
+
+@runtime_checkable
+class SpeedScalableModel(Protocol):
+    """A force model that gives the film force at any shaft speed, not only its bearing's: what a run-up needs
+    (``rotor.simulate`` with a ``speed`` schedule).
+
+    ``speed_kernel()`` -> ``(fn, params)``: ``fn(params, omega, x1, x2, v1, v2)`` is the force [N] at shaft
+    speed omega [rad/s] (at the bearing's own speed, what ``force_kernel`` gives); None where this instance
+    cannot (a surrogate whose frame does not make the speed scaling exact).  For a plain film without supply
+    pressure the Reynolds equation is linear in (omega, V), so F(X, V; omega) = s F(X, V/s; omega_ref) with
+    s = omega/omega_ref, for every cavitation rule (the cavitated set is unchanged by a positive factor).
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import SpeedScalableModel
+    >>> solver = ReynoldsSolver(paper_bearing(), 16, 8)
+    >>> isinstance(solver, SpeedScalableModel), solver.speed_kernel() is not None
+    (True, True)
+    """
+
+    def speed_kernel(self) -> tuple[SpeedForceKernel, Any] | None: ...
 
 
 def check_precision(precision: str) -> str:

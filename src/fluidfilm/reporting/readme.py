@@ -54,7 +54,7 @@ _table = report.markdown_table
 # Stages that the paper's figures and numbers do not need: the workspace's own surrogate (three seeds),
 # its ensemble, error map and batched speed, the grading study, the ablation and the characteristics.
 BEYOND_PAPER_STAGES = ("dataset_orbit", "train_best", "train_best_seeds", "ensemble", "error_map", "batch_speed",
-                       "grading_study", "ablation", "characteristics")
+                       "grading_study", "ablation", "characteristics", "runup")
 
 
 def render_reproduce_timing(reports: Path) -> str:
@@ -175,6 +175,12 @@ def render_headline(reports: Path) -> str:
     ):
         if g(key) is not None:
             rows.append([label, paper, _num(g(key), spec, unit)])
+    peer = reports / "benchmarks" / "ross_peer.json"
+    if peer.exists():  # `make ross-peer`, outside the pipeline (ROSS lives in its own environment)
+        p = json.loads(peer.read_text())
+        if "ross_peer_speedup_lund_thomsen" in p:
+            rows.append(["grooved bearing (Lund & Thomsen), time per operating point, ROSS 3.1 / ours at equal "
+                         "accuracy (`make ross-peer`)", "-", _num(p["ross_peer_speedup_lund_thomsen"], ".1f", "x")])
     if g("surrogate_goals") is not None:
         rows.append(["goals of the fast, accurate surrogate met (docs/results.md)", "-",
                      f"{g('surrogate_goals_met')} of {g('surrogate_goals')}"])
@@ -396,6 +402,28 @@ def render_error_map(reports: Path) -> str:
     return (f"Relative force error |F_model - F| / max(|F|, {em['floor_N']:g} N):\n\n"
             + _table(["model", "held-out median", "held-out p99", "along the orbits, median", "along the orbits, p99"],
                      rows) + worst)
+
+
+def render_runup(reports: Path) -> str:
+    ru = _load(reports, "runup.json")
+    lin = ru["linear"]
+    sch = ru["schedule"]
+    rows = []
+    for name, m in ru["models"].items():
+        if "onset_rpm" not in m:
+            rows.append([name, m["status"], "", "", "", "", ""])
+            continue
+        rows.append([name, _num(m["onset_rpm"], ",.0f"), _num(100 * (m["onset_rpm"] / lin["threshold_rpm"] - 1), "+.2f", " %"),
+                     _num(m["whirl_ratio_at_onset"], ".3f"), _num(m["established_rpm"], ",.0f"), _num(m["gone_rpm"], ",.0f"),
+                     _num(m.get("rate_rpm_s"), ",.0f")])
+    return (f"Lund's linear threshold of the reference ({lin['grid'][0]}x{lin['grid'][1]}, {lin['cavitation']}): "
+            f"**{lin['threshold_rpm']:,.0f} rpm**, whirl ratio {lin['whirl_ratio']:.3f}, eps {lin['eps']:.3f}; rotor "
+            f"{ru['rotor']['mass_kg']:g} kg per bearing, imbalance {ru['rotor']['imbalance_kg_m']:g} kg m; ramp "
+            f"{sch['rate_rpm_s']:,.0f} rpm/s, RK4 step {sch['dt_s']:g} s. Onset: where the sub-synchronous amplitude "
+            f"starts to grow; established / gone: where it crosses {ru['analysis']['whirl_level_c']:g} c on the run-up "
+            f"/ run-down:\n\n"
+            + _table(["run", "onset [rpm]", "vs Lund", "whirl ratio at onset", "established, up [rpm]",
+                      "gone, down [rpm]", "ramp [rpm/s]"], rows))
 
 
 def render_surrogate_goals(reports: Path) -> str:
@@ -655,6 +683,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "grading_study": render_grading_study,
     "ablation": render_ablation,
     "error_map": render_error_map,
+    "runup": render_runup,
     "surrogate_goals": render_surrogate_goals,
     "control": render_control,
     "figures": render_figures,

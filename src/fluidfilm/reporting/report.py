@@ -50,6 +50,7 @@ class ReportInputs:
     ablation: dict | None = None      # reports/ablation/summary.json, where that stage ran
     error_map: dict | None = None     # reports/error_map.json, where that stage ran
     paper_scale: dict | None = None   # reports/paper_scale.json, where that stage ran
+    runup: dict | None = None         # reports/runup.json, where that stage ran
 
 
 def _load(path: Path) -> Any:
@@ -76,7 +77,8 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         controller_training_speed=_load(rd / "controller_training_speed.json"),
         characteristics=optional(charac), ensemble=optional(ens),
         grading_study=optional(rd / "grading_study" / "summary.json"), ablation=optional(rd / "ablation" / "summary.json"),
-        error_map=optional(rd / "error_map.json"), paper_scale=optional(rd / "paper_scale.json"))
+        error_map=optional(rd / "error_map.json"), paper_scale=optional(rd / "paper_scale.json"),
+        runup=optional(rd / "runup.json"))
 
 
 def _f(x, spec=".1f"):
@@ -175,6 +177,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
         metrics.update(error_map_metrics(inp.error_map))
     if inp.paper_scale is not None:  # the paper's networks at larger sizes and the recipe's ingredients
         metrics.update(paper_scale_metrics(inp.paper_scale))
+    if inp.runup is not None:  # the run-up: onset of whirl from the transient against Lund's threshold
+        metrics.update(inp.runup["metrics"])
     for study in ("grading_study", "ablation"):
         summary = getattr(inp, study)
         if summary is not None:

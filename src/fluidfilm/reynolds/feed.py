@@ -58,9 +58,11 @@ def from_groove_frame(cos_g, sin_g, b1, b2):
 
 
 @njit(cache=True)
-def grooved_field(gparams, x1, x2, v1, v2, p):
+def grooved_field(gparams, x1, x2, v1, v2, p, warm=None, warm_in=False):
     """Pressure field in the groove frame (boundaries, groove and cavitation applied); returns the number of
-    SOR sweeps or direct solves (``params.ss_method``), or -1 if they did not converge."""
+    SOR sweeps or direct solves (``params.ss_method``), or -1 if they did not converge.  ``warm``: the free
+    (uncavitated) node set of the active-set solver (``kernels.active_set_field``), shape (n_theta, rows + 2),
+    receives the solution's; with ``warm_in`` it is also the start (a nearby earlier state's)."""
     params = gparams.film
     cos_g = gparams.cos_groove
     sin_g = gparams.sin_groove
@@ -71,8 +73,14 @@ def grooved_field(gparams, x1, x2, v1, v2, p):
     n = params.n_theta
     nz = p.shape[1]
     p_s = params.p_supply
-    # start from the groove-free linear field (clipped where cavitation applies): close to the answer
-    kernels.linear_field(params, y1, y2, w1, w2, params.full_basis, p_s, p)
+    # start from the groove-free linear field (clipped where cavitation applies): close to the answer (not
+    # needed by a warm start: the free set is given, the interior values are solved for)
+    if warm_in and warm is not None and params.ss_method != SS_PSOR:
+        for i in range(n):
+            p[i, 0] = p_s
+            p[i, nz - 1] = 0.0
+    else:
+        kernels.linear_field(params, y1, y2, w1, w2, params.full_basis, p_s, p)
     for i in range(n):
         for j in range(1, nz - 1):
             if cav != kernels.CAV_NONE and p[i, j] < 0.0:
@@ -88,7 +96,7 @@ def grooved_field(gparams, x1, x2, v1, v2, p):
         it = kernels.sor_sweeps(params, y1, y2, w1, w2, p, fixed, ss, params.sor_omega, params.sor_tol,
                                 params.sor_max_iter)
     else:
-        it = kernels.active_set_field(params, y1, y2, w1, w2, p, fixed, ss, n * nz)
+        it = kernels.active_set_field(params, y1, y2, w1, w2, p, fixed, ss, n * nz, True, warm, warm_in)
     if cav == kernels.CAV_GUMBEL:
         for i in range(n):
             for j in range(nz):
@@ -109,6 +117,23 @@ def grooved_force(gparams, x1, x2, v1, v2):
         raise RuntimeError("the grooved bearing's solver did not converge (with method='psor': raise sor_max_iter)")
     g1, g2 = kernels.integrate_field(params, p)
     return from_groove_frame(gparams.cos_groove, gparams.sin_groove, g1, g2)
+
+
+@njit(cache=True)
+def grooved_forces_warm(gparams, x, v, out, warm, warm_in):
+    """``grooved_force`` for each row of x, v (groove frame in and out as there), each solve started from the
+    free set the one before it left in ``warm`` (the first from ``warm`` if ``warm_in``, else cold): the
+    states of an equilibrium search or a difference quotient lie close together, so most need one solve."""
+    params = gparams.film
+    n = params.n_theta
+    nz = params.full_basis.shape[0] + 2
+    p = np.empty((n, nz))
+    for k in range(x.shape[0]):
+        it = grooved_field(gparams, x[k, 0], x[k, 1], v[k, 0], v[k, 1], p, warm, warm_in or k > 0)
+        if it < 0:
+            raise RuntimeError("the grooved bearing's solver did not converge (with method='psor': raise sor_max_iter)")
+        g1, g2 = kernels.integrate_field(params, p)
+        out[k, 0], out[k, 1] = from_groove_frame(gparams.cos_groove, gparams.sin_groove, g1, g2)
 
 
 class GroovedReynoldsSolver(_GridSolver):
@@ -160,6 +185,7 @@ class GroovedReynoldsSolver(_GridSolver):
         self._c = bearing.clearance
         self._bearing = bearing
         self.mesh = self._base.mesh
+        self._warm: np.ndarray | None = None  # the last Swift-Stieber free set (``forces``' warm start)
 
     # --- read-only description (bearing, n_theta, n_z, theta, z: _GridSolver, on the groove-free solver's mesh) ---
     def _separable(self) -> bool:
@@ -174,10 +200,21 @@ class GroovedReynoldsSolver(_GridSolver):
                 f"groove_angle={math.degrees(self.groove_angle):.4g} deg)")
 
     def forces(self, X, V) -> np.ndarray:
+        """Film force [N] at positions X [m] and velocities V [m/s], shape (..., 2).  With Swift-Stieber
+        cavitation and the active-set method each call starts from the cavitation set of the call before
+        (the solution is the same, unique one; a nearby state needs fewer solves)."""
         x, v, shape = as_state_pairs(X, V, self._c)
         out = np.empty_like(x)
-        for k in range(x.shape[0]):
-            out[k] = grooved_force(self.gparams, x[k, 0], x[k, 1], v[k, 0], v[k, 1])
+        if self.cavitation == "swift-stieber" and self.method != "psor" and x.shape[0]:
+            warm_in = self._warm is not None
+            if self._warm is None:
+                m = self.n_z - 2
+                rows = (m + 1) // 2 if self._base.params.p_supply == 0.0 else m
+                self._warm = np.zeros((self.n_theta, rows + 2), dtype=np.bool_)
+            grooved_forces_warm(self.gparams, x, v, out, self._warm, warm_in)
+        else:
+            for k in range(x.shape[0]):
+                out[k] = grooved_force(self.gparams, x[k, 0], x[k, 1], v[k, 0], v[k, 1])
         return out.reshape(shape + (2,))
 
     def to_groove_frame(self, a) -> np.ndarray:

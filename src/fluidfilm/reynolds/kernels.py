@@ -54,6 +54,9 @@ Kernels:
                              primal-dual active-set iteration of direct sparse
                              Cholesky solves (``envelope_cholesky``,
                              ``envelope_solve``): the default
+- ``capacitance_field``      the active-set iteration's linear solve by the axial
+                             sine transform on runs of node columns and a
+                             capacitance matrix on the active nodes inside them
 - ``swift_stieber_field``    either of them, by ``params.ss_method``
 - ``film_force_ss``          force with Swift-Stieber cavitation
 - ``general_linear_field``   the general path: film thickness h(theta, z)
@@ -347,13 +350,16 @@ def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
     nk = params.lam.shape[0]
     q0, qs, qc = position_modes(params, x1 * params.inv_c, x2 * params.inv_c)
     nz = out.shape[1]
+    phat = np.empty(nk)
     for i in range(n):
         out[i, 0] = p_supply
         out[i, nz - 1] = 0.0
+        for k in range(nk):
+            phat[k] = q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]
         for j in range(1, nz - 1):
             acc = 0.0
             for k in range(nk):
-                acc += (q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]) * full_basis[j - 1, k]
+                acc += phat[k] * full_basis[j - 1, k]
             out[i, j] = acc
 
 
@@ -745,7 +751,7 @@ def capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric)
 
 
 @njit(cache=True, error_model="numpy")
-def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transform=True):
+def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transform=True, warm=None, warm_in=False):
     """The discrete Reynolds equation solved directly, as a linear complementarity problem if ``project``.
 
     Same discrete problem as ``sor_sweeps`` (the node columns ``fixed`` held at their values in ``p``, the
@@ -769,6 +775,13 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
     solved (the mirror folded into the top row; with an odd number of interior rows the centre row is
     halved to keep the matrix symmetric).
 
+    With ``transform`` (the default) a solve goes instead by the axial sine transform where that is cheaper
+    (``capacitance_field``: wholly cavitated or held node columns cut the ring into runs, each one symmetric
+    tridiagonal system per axial mode, the active nodes inside a run held at zero by a small capacitance
+    system): same free set, same discrete equations, the same solution to round-off.  ``warm``: a bool
+    array (n_theta, rows solved + 2) that receives the final free set; with ``warm_in`` its content is the
+    first free set (an earlier nearby state's) instead of the widened film of ``p``.
+
     ``p``: full (n_theta, n_z) field, updated in place.  Returns the number of linear solves, or -1 if
     ``max_iter`` solves did not settle the active set.
     """
@@ -791,7 +804,18 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
     # nodes it takes in wrongly go back in one step (every free node with p < 0 becomes active at once), while
     # cavitated nodes are released only a layer per step (one must see its neighbour's pressure first), so
     # starting wide costs fewer solves: on 30..288 angles about 3-5 .. 8-16 instead of 7 .. 33-53
-    for _ in range(int(round(AS_WIDEN * n)) if project else 0):
+    warm_start = False
+    if warm is not None:
+        if warm.shape[0] != n or warm.shape[1] != mh + 2:
+            raise ValueError("the warm-start free set must have shape (n_theta, rows solved + 2)")
+        if project and warm_in:
+            # the free set of an earlier, nearby state (a caller's continuation): usually right or nearly so
+            warm_start = True
+            for i in range(n):
+                if not fixed[i]:
+                    for j in range(1, mh + 1):
+                        free[i, j] = warm[i, j]
+    for _ in range(int(round(AS_WIDEN * n)) if project and not warm_start else 0):
         f2 = free.copy()
         for i in range(n):
             if fixed[i]:
@@ -946,6 +970,8 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
                         free[i, j] = True
                         changed = True
         if not changed:
+            if warm is not None:
+                warm[:, :] = free
             # round-off negatives (above -thr) are the zeros of cavitated nodes
             for i in range(n):
                 for j in range(1, nz - 1):

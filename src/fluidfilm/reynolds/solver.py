@@ -12,6 +12,7 @@ import math
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from fluidfilm.core.bearing import JournalBearing
 from fluidfilm.core.force_model import ReferenceModel, check_precision
@@ -21,6 +22,34 @@ from fluidfilm.reynolds.mesh import FilmMesh
 from fluidfilm.reynolds.params import SS_METHODS, Cavitation, FilmParams
 
 CAVITATION_MODELS = ("gumbel", "swift-stieber", "none")
+
+
+@njit(cache=True, inline="always")
+def with_k_omega(p, k_omega):
+    """``p`` (``FilmParams``) with the speed parameter K_omega = 6 mu omega R^2/c^2 replaced (numba has no
+    ``_replace``: every field in order, the test suite checks the copy field by field)."""
+    return FilmParams(p.n_theta, p.cavitation, p.sin_node, p.cos_node, p.sin_face, p.cos_face, p.inv_c,
+                      p.inv_dtheta2, p.inv_dtheta, p.lam, p.sig, p.tau, p.inv_dzeta2, p.radius, k_omega, p.k_v,
+                      p.supply_term, p.a_sin, p.a_cos, p.basis, p.w_rec, p.boundary, p.w_z, p.sor_omega, p.sor_tol,
+                      p.sor_max_iter, p.full_basis, p.p_supply, p.ss_method)
+
+
+@njit(cache=True)
+def film_force_at_speed(sparams, omega, x1, x2, v1, v2):
+    """``kernels.film_force`` at shaft speed ``omega`` [rad/s]: the film's own speed parameter K_omega set for it.
+
+    ``sparams``: (``FilmParams``, the speed omega_ref [rad/s] its K_omega was built for).  A speed kernel
+    (``core.force_model.SpeedScalableModel``); at omega = omega_ref the force is ``film_force``'s to the bit.
+    """
+    p, w_ref = sparams
+    return kernels.film_force(with_k_omega(p, p.k_omega * (omega / w_ref)), x1, x2, v1, v2)
+
+
+@njit(cache=True)
+def film_force_ss_at_speed(sparams, omega, x1, x2, v1, v2):
+    """``kernels.film_force_ss`` (Swift-Stieber) at shaft speed ``omega``, as ``film_force_at_speed``."""
+    p, w_ref = sparams
+    return kernels.film_force_ss(with_k_omega(p, p.k_omega * (omega / w_ref)), x1, x2, v1, v2)
 
 
 def build_params(bearing: JournalBearing, mesh: FilmMesh, cavitation: str | Cavitation,
@@ -164,7 +193,8 @@ class ReynoldsSolver(_GridSolver):
         Iteration limit of the projected SOR.
     method : {"active-set", "psor"}, default "active-set"
         Solver of the Swift-Stieber problem: a primal-dual active-set iteration of direct solves
-        (``kernels.active_set_field``: exact up to round-off, typically 3-8 solves) or the projected
+        (``kernels.active_set_field``: exact up to round-off, typically 3-8 solves, most by the axial sine
+        transform with a capacitance matrix on the cavitated nodes) or the projected
         SOR (``kernels.psor_swift_stieber``, converged to ``sor_tol``; kept for comparison).  Not used
         by the other cavitation models (one direct solve).
 
@@ -221,6 +251,12 @@ class ReynoldsSolver(_GridSolver):
     def force_kernel(self):
         """(compiled function, params): ``fn(params, x1, x2, v1, v2) -> (F1, F2)`` for compiled callers."""
         return self._kernel, self.params
+
+    def speed_kernel(self):
+        """``(fn, (params, omega_ref))``: the force at any shaft speed omega through the film's speed parameter
+        K_omega = 6 mu omega R^2/c^2 (``core.force_model.SpeedScalableModel``, run-ups)."""
+        fn = film_force_ss_at_speed if self.cavitation == "swift-stieber" else film_force_at_speed
+        return fn, (self.params, float(self._bearing.omega))
 
     def batch_force_kernel(self, precision: str = "float64", private: bool = False):
         """``(kernels.forces_serial, params)`` (``core.force_model.BatchForceModel``): each row exactly

@@ -1,6 +1,7 @@
 """Point-mass rotor in a fluid film bearing (the paper's eq. 4), its integrator and orbit metrics.
 
-- ``model``        ``Rotor``: what one bearing carries (mass, imbalance, external load)
+- ``model``        ``Rotor``: what one bearing carries (mass, imbalance, external load);
+                   ``SpeedSchedule``: the shaft speed against time (run-ups)
 - ``integrate``    ``simulate``: one compiled RK4 loop for every force model
 - ``linear``       ``LinearBearing``: an isotropic spring-damper force model (analytic checks)
 - ``equilibrium``  static equilibrium position (``characteristics.static.equilibrium``) and the locus
@@ -10,7 +11,7 @@ from fluidfilm.rotor.equilibrium import equilibrium, equilibrium_locus, load_alo
 from fluidfilm.rotor.integrate import Trajectory, simulate
 from fluidfilm.rotor.linear import LinearBearing
 from fluidfilm.rotor.metrics import compare_orbits, orbit_stats
-from fluidfilm.rotor.model import Rotor
+from fluidfilm.rotor.model import Rotor, SpeedSchedule
 
-__all__ = ["Rotor", "simulate", "Trajectory", "LinearBearing", "equilibrium", "equilibrium_locus", "load_along_gravity",
+__all__ = ["Rotor", "SpeedSchedule", "simulate", "Trajectory", "LinearBearing", "equilibrium", "equilibrium_locus", "load_along_gravity",
            "orbit_stats", "compare_orbits"]

@@ -39,8 +39,8 @@ import numpy as np
 from numba import njit
 from numba.core.registry import CPUDispatcher as Dispatcher
 
-from fluidfilm.core.force_model import ForceModel
-from fluidfilm.rotor.model import Rotor, ramped
+from fluidfilm.core.force_model import ForceModel, SpeedScalableModel
+from fluidfilm.rotor.model import RPM, Rotor, SpeedSchedule, ramped
 
 _ramped = njit(inline="always")(ramped)
 
@@ -234,6 +234,50 @@ def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_
     return n_rec, status, t, n_evals
 
 
+@njit
+def schedule_at(times, omegas, cum, w_ref, t):
+    """(omega, d omega/dt, integral from 0 to t of (omega - w_ref)) of the piecewise-linear speed table at t.
+
+    ``cum[k]``: the integral up to ``times[k]`` (``_schedule_arrays``).  The rotation angle is
+    w_ref t + the integral: for a schedule that stays at w_ref the integral is 0.0 exactly, so the angle
+    is w_ref t to the bit, as in the constant-speed loop.
+    """
+    n = times.shape[0]
+    if t <= times[0]:
+        w = omegas[0]
+        return w, 0.0, cum[0] + (w - w_ref) * (t - times[0])
+    if t >= times[n - 1]:
+        w = omegas[n - 1]
+        return w, 0.0, cum[n - 1] + (w - w_ref) * (t - times[n - 1])
+    k = np.searchsorted(times, t, side="right") - 1
+    a = (omegas[k + 1] - omegas[k]) / (times[k + 1] - times[k])
+    d = t - times[k]
+    return omegas[k] + a * d, a, cum[k] + (omegas[k] - w_ref) * d + 0.5 * a * d * d
+
+
+# not cached: the speed kernels' types (a surrogate's kernel inside its parameters) must not reach numba's cache
+@njit
+def _acceleration_speed(kernel, params, x1, x2, v1, v2, t, consts):
+    """``_acceleration`` at the scheduled speed: ``kernel(params, omega, x1, x2, v1, v2)`` is the film force at
+    shaft speed omega (``core.force_model.SpeedScalableModel``); the imbalance turns through phi(t) = integral
+    of omega, with omega(t)^2 and the angular acceleration's tangential term (module doc)."""
+    inv_m, unb, w_ref, sgn, g1, g2, c2, unb_final, ramp_time, times, omegas, cum = consts
+    if x1 * x1 + x2 * x2 >= c2:
+        return 0.0, 0.0, False
+    w, alpha, corr = schedule_at(times, omegas, cum, w_ref, t)
+    f1, f2 = kernel(params, w, x1, x2, v1, v2)
+    if ramp_time > 0.0:
+        unb = _ramped(unb, unb_final, t, ramp_time)
+    # unb = m_u d w_ref^2: the imbalance force m_u d (omega^2 e_r + alpha e_t) in units of it
+    s = w / w_ref
+    s2 = s * s
+    an = alpha / (w_ref * w_ref)
+    ph = w_ref * t + corr
+    cph = math.cos(ph)
+    sph = math.sin(ph)
+    return (f1 + unb * (s2 * cph + an * sph) + g1) * inv_m, (f2 + sgn * unb * (s2 * sph - an * cph) + g2) * inv_m, True
+
+
 # Models from outside the library (a user's script, a notebook) get an uncached twin of the loop:
 # numba's on-disk cache of ``_rk4_run`` records the argument types, and a kernel or parameter type
 # defined in a module that a later process cannot import would make that cache unreadable.
@@ -249,6 +293,8 @@ def _uncached(dispatcher, **replace):
 # the step inlined into a loop takes the globals of its own module: its twin calls the uncached acceleration
 _rk4_step_uncached = _uncached(_rk4_step, _acceleration=_uncached(_acceleration))
 _rk4_run_uncached = _uncached(_rk4_run, _rk4_step=_rk4_step_uncached)
+# the same loop and step at a scheduled speed: only the acceleration differs (uncached, as above)
+_rk4_run_speed = _uncached(_rk4_run, _rk4_step=_uncached(_rk4_step, _acceleration=_acceleration_speed))
 
 
 def _holds_functions(params) -> bool:
@@ -321,9 +367,42 @@ def check_run_args(t_end, dt, t0, eps_stop, eps_substep, record_every, max_subst
     return int(round((t_end - t0) / dt))
 
 
+def _schedule_arrays(speed: SpeedSchedule, w_ref: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(times, omegas, cum) of ``schedule_at``: cum[k] = integral from 0 to times[k] of (omega - w_ref)."""
+    times, w = speed.times.copy(), speed.omega.copy()
+    cum = np.zeros_like(w)  # first from times[0], then shifted to start at t = 0
+    for k in range(1, w.size):
+        cum[k] = cum[k - 1] + 0.5 * ((w[k - 1] - w_ref) + (w[k] - w_ref)) * (times[k] - times[k - 1])
+    at_zero = schedule_at(times, w, cum, w_ref, 0.0)[2]
+    return times, w, cum - at_zero
+
+
+def _speed_kernel(model: ForceModel, speed: SpeedSchedule | None):
+    """``(fn, params)`` of the model's force at any speed for a schedule, None to run at the bearing's speed
+    (no schedule, or a constant one at that speed for a model without speed-scaled forces); refuses a
+    schedule that leaves the bearing's speed for a model that cannot follow it, naming the speeds."""
+    if speed is None:
+        return None
+    if not isinstance(speed, SpeedSchedule):
+        raise ValueError(f"speed must be a SpeedSchedule (SpeedSchedule.ramp, .table or .constant), got "
+                         f"{type(speed).__name__}")
+    kernel = model.speed_kernel() if isinstance(model, SpeedScalableModel) else None
+    if kernel is not None:
+        return kernel
+    own = float(model.bearing.omega)
+    if bool((speed.omega == own).all()):
+        return None
+    lo, hi = float(speed.omega.min()) / RPM, float(speed.omega.max()) / RPM
+    asked = f"{lo:.6g} rpm" if lo == hi else f"{lo:.6g}-{hi:.6g} rpm"
+    raise ValueError(f"{model.name} gives forces at its bearing's speed only, {own / RPM:.6g} rpm, and the speed "
+                     f"schedule asks {asked}: its force does not scale exactly with speed. Speed schedules take "
+                     "the Reynolds solver, LinearBearing and surrogates in the 'whirl' frame "
+                     "(fluidfilm.core.SpeedScalableModel)")
+
+
 def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
              eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
-             max_substeps: int = 256, t0: float = 0.0) -> Trajectory:
+             max_substeps: int = 256, t0: float = 0.0, speed: SpeedSchedule | None = None) -> Trajectory:
     """Integrate the rotor in ``model`` (a ``fluidfilm.core.force_model.ForceModel``: its compiled ``force_kernel``).
 
     Fixed-step RK4 of m dV/dt = F_film(X, V) + imbalance + m g (along +X2) + F_ext (module doc);
@@ -353,6 +432,12 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         Largest number of substeps per step.
     t0 : float, default 0.0
         Start time [s] (the imbalance phase and ramp run on absolute time).
+    speed : SpeedSchedule or None, default None
+        The shaft speed against time (a run-up or run-down, ``rotor.model.SpeedSchedule``); None: the
+        bearing's own speed throughout.  The film force at each RK4 stage is the model's at the speed of
+        that instant (``core.force_model.SpeedScalableModel``: the Reynolds solver through its own speed
+        parameter, a surrogate in the 'whirl' frame by its exact speed scaling); a model that gives forces
+        at its bearing's speed only is refused for any other speed.
 
     Returns
     -------
@@ -365,7 +450,9 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     ValueError
         Naming the argument: a rotor that is not a ``Rotor``, a model that is not a force model,
         times or settings that are not finite positive numbers of the right kind, an initial state
-        of the wrong shape, non-finite, or not below ``eps_stop``.
+        of the wrong shape, non-finite, or not below ``eps_stop``; a ``speed`` schedule that is not a
+        ``SpeedSchedule``, or that leaves the bearing's speed for a model without speed-scaled forces
+        (naming the model and the speeds).
 
     Examples
     --------
@@ -408,11 +495,19 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     consts = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega, float(rotor.imbalance_direction),
               rotor.external_force[0], rotor.external_force[1] + rotor.mass * rotor.gravity, c * c,
               u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0)
+    meta: dict = {"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every}
+    speed_kernel = _speed_kernel(model, speed)
     model.reset_domain_counter()
     t_start = time.perf_counter()
-    n_rec, status, t_stop, n_evals = run_loop(_rk4_run, _rk4_run_uncached, kernel, params, consts, x0, v0, float(t0),
-                                              float(dt), n_steps, record_every, float(eps_stop), float(eps_substep),
-                                              int(max_substeps), out_t, out_x, out_v)
+    args = (x0, v0, float(t0), float(dt), n_steps, record_every, float(eps_stop), float(eps_substep),
+            int(max_substeps), out_t, out_x, out_v)
+    if speed_kernel is None:
+        n_rec, status, t_stop, n_evals = run_loop(_rk4_run, _rk4_run_uncached, kernel, params, consts, *args)
+    else:
+        assert speed is not None
+        consts_speed = consts + _schedule_arrays(speed, omega)
+        n_rec, status, t_stop, n_evals = _rk4_run_speed(*speed_kernel, consts_speed, *args)
+        meta["speed"] = {"times": speed.times.tolist(), "omega": speed.omega.tolist()}
     wall = time.perf_counter() - t_start
     if status == OK:
         text, t_stop = "ok", None
@@ -428,4 +523,4 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
                       RuntimeWarning, stacklevel=2)
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
                       t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=wall,
-                      meta={"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every}, n_outside_domain=n_outside)
+                      meta=meta, n_outside_domain=n_outside)

@@ -28,6 +28,12 @@ def linear_force(params, x1, x2, v1, v2):
 
 
 @njit(cache=True)
+def linear_force_at_speed(params, omega, x1, x2, v1, v2):
+    """Speed kernel (``core.force_model.SpeedScalableModel``): a spring-damper does not depend on the speed."""
+    return linear_force(params, x1, x2, v1, v2)
+
+
+@njit(cache=True)
 def linear_forces(params, x, v, out):
     """``linear_force`` of every row of x, v (m, 2) into out (m, 2) (the batched kernel)."""
     kernel_rows(linear_force, params, x, v, out)
@@ -70,6 +76,10 @@ class LinearBearing(ReferenceModel):
     @property
     def force_kernel(self):
         return linear_force, LinearParams(float(self.stiffness), float(self.damping))
+
+    def speed_kernel(self):
+        """``(linear_force_at_speed, params)``: the same -K X - C V at every shaft speed (run-ups)."""
+        return linear_force_at_speed, self.force_kernel[1]
 
     def batch_force_kernel(self, precision: str = "float64", private: bool = False):
         """``(linear_forces, params)`` (``core.force_model.BatchForceModel``), float64 whatever ``precision``."""

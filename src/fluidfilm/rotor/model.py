@@ -1,8 +1,10 @@
-"""``Rotor``: the point mass of the paper's eq. 4 as one bearing sees it."""
+"""``Rotor``: the point mass of the paper's eq. 4 as one bearing sees it; ``SpeedSchedule``: its shaft speed in time."""
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+import numpy as np
 
 
 def ramped(start: float, final: float, t: float, ramp_time: float) -> float:
@@ -128,3 +130,124 @@ class Rotor:
     def static_load(self) -> tuple[float, float]:
         """Constant load on the bearing: weight plus external force [N]."""
         return (self.external_force[0], self.external_force[1] + self.mass * self.gravity)
+
+
+RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
+
+
+@dataclass(frozen=True, eq=False)
+class SpeedSchedule:
+    """The shaft speed against time, omega(t): piecewise linear through a table, held before and after it.
+
+    Made with ``SpeedSchedule.ramp`` (a linear run-up or run-down) or ``SpeedSchedule.table`` (any
+    sequence of ramps and holds); ``simulate(..., speed=schedule)`` drives the rotor with it. The
+    rotation angle is phi(t) = integral of omega from 0 to t (``angle``), not omega(t) t: the
+    imbalance turns with the shaft.
+
+    Parameters
+    ----------
+    times : array_like, shape (n,)
+        Times [s] of the table, strictly increasing and finite (n >= 1).
+    omega : array_like, shape (n,)
+        Shaft speeds [rad/s] at those times, finite and > 0.
+
+    Raises
+    ------
+    ValueError
+        Naming the value: times that are not finite or not strictly increasing, a speed that is not
+        finite or not positive, arrays of different or zero length, a ramp without a duration.
+
+    Examples
+    --------
+    >>> from fluidfilm.rotor import SpeedSchedule
+    >>> up = SpeedSchedule.ramp(start_rpm=3000.0, end_rpm=6000.0, duration=2.0, t_start=1.0)
+    >>> [round(v) for v in up.speed_rpm([0.0, 2.0, 5.0])]        # held, half-way, held
+    [3000, 4500, 6000]
+    >>> round(float(up.angle(1.0)), 4), round(float(up.angle(3.0)) / (2 * 3.141592653589793), 6)   # revolutions
+    (314.1593, 200.0)
+    >>> SpeedSchedule.table(times=[0.0, 1.0], speeds_rpm=[3000.0, -10.0])
+    Traceback (most recent call last):
+    ...
+    ValueError: speeds must be finite and > 0, got -10 rpm at t=1.0 s
+    """
+
+    times: np.ndarray
+    omega: np.ndarray
+
+    def __post_init__(self) -> None:
+        t = np.array(self.times, dtype=float).reshape(-1)
+        w = np.array(self.omega, dtype=float).reshape(-1)
+        if t.size == 0 or t.size != w.size:
+            raise ValueError(f"a speed schedule needs as many times as speeds (at least one), got {t.size} times "
+                             f"and {w.size} speeds")
+        if not np.isfinite(t).all():
+            raise ValueError(f"schedule times must be finite, got {float(t[~np.isfinite(t)][0])!r} s")
+        if t.size > 1 and not (np.diff(t) > 0.0).all():
+            k = int(np.argmin(np.diff(t) > 0.0))
+            raise ValueError(f"schedule times must increase strictly, got {float(t[k])!r} s then {float(t[k + 1])!r} s")
+        bad = ~(np.isfinite(w) & (w > 0.0))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ValueError(f"speeds must be finite and > 0, got {w[k] / RPM:.6g} rpm at t={float(t[k])!r} s")
+        t.flags.writeable = False
+        w.flags.writeable = False
+        object.__setattr__(self, "times", t)
+        object.__setattr__(self, "omega", w)
+
+    @classmethod
+    def ramp(cls, start_rpm: float, end_rpm: float, duration: float, t_start: float = 0.0) -> "SpeedSchedule":
+        """A linear change of speed from ``start_rpm`` to ``end_rpm`` over ``duration`` [s] from ``t_start`` [s]
+        (held at ``start_rpm`` before it and at ``end_rpm`` after it)."""
+        d = float(duration)
+        if not (math.isfinite(d) and d > 0.0):
+            raise ValueError(f"a ramp needs a finite duration > 0 s, got {duration!r}")
+        return cls.table([t_start, float(t_start) + d], [start_rpm, end_rpm])
+
+    @classmethod
+    def table(cls, times, speeds_rpm) -> "SpeedSchedule":
+        """Speeds ``speeds_rpm`` [rpm] at ``times`` [s], linear in between."""
+        return cls(np.asarray(times, dtype=float), np.asarray(speeds_rpm, dtype=float) * RPM)
+
+    @classmethod
+    def constant(cls, speed_rpm: float) -> "SpeedSchedule":
+        """One speed [rpm] at all times."""
+        return cls.table([0.0], [speed_rpm])
+
+    @property
+    def is_constant(self) -> bool:
+        """Whether the speed never changes."""
+        return bool((self.omega == self.omega[0]).all())
+
+    def omega_at(self, t):
+        """omega(t) [rad/s] (scalar or array)."""
+        return np.interp(t, self.times, self.omega)
+
+    def speed_rpm(self, t):
+        """omega(t) in rpm."""
+        return self.omega_at(t) / RPM
+
+    def acceleration(self, t):
+        """d omega/dt [rad/s^2] (that of the segment holding t; 0 outside the table)."""
+        t = np.asarray(t, dtype=float)
+        if self.times.size == 1:
+            return np.zeros_like(t)
+        slope = np.diff(self.omega) / np.diff(self.times)
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, slope.size - 1)
+        inside = (t >= self.times[0]) & (t < self.times[-1])
+        return np.where(inside, slope[k], 0.0)
+
+    def angle(self, t):
+        """The rotation angle phi(t) = integral of omega from 0 to t [rad] (exact for the piecewise-linear speed)."""
+        t = np.asarray(t, dtype=float)
+        nodes = np.concatenate([[0.0], self.times])
+        order = np.argsort(nodes, kind="stable")
+        nodes = nodes[order]
+        w = self.omega_at(nodes)
+        cum = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(nodes))])
+        at0 = cum[int(np.searchsorted(nodes, 0.0))]
+        k = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, nodes.size - 1)
+        tk = nodes[k]
+        wk = self.omega_at(tk)
+        wt = self.omega_at(t)
+        # below the first node the speed is held: the same trapezoid, backwards
+        return cum[k] - at0 + 0.5 * (wk + wt) * (t - tk)

@@ -63,6 +63,15 @@ CAPTIONS: dict[str, str] = {
         "the rotor whirls (left; dashed: the paper's rotor as its speed varies; triangles: nonlinear "
         "trajectories just below and above the threshold) and the whirl frequency ratio at onset (right). "
         "Values of a surrogate beyond the axes are marked at the edge with their value."),
+    "figures/runup_cascade.png": (
+        "Run-up and run-down of the paper's rotor through its oil-whirl threshold (reference model): the full "
+        "spectrum of the journal's orbit in windows of 16 revolutions, each drawn at the height of its shaft speed "
+        "(a cascade or waterfall; line height: log amplitude); forward whirl at positive orders, the imbalance "
+        "response at -1x, the whirl near 0.5x; dashed: Lund's linear threshold."),
+    "figures/runup_amplitude.png": (
+        "Sub-synchronous amplitude (top, log scale) and whirl frequency ratio (bottom) against shaft speed on the "
+        "run-up (solid) and run-down (dashed), per force model; dotted: the onset from each transient, dashed: "
+        "Lund's linear threshold, star: Lund's whirl ratio there. The gap between the curves is the hysteresis."),
 }
 
 

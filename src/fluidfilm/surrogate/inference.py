@@ -263,6 +263,23 @@ def _surrogate_batch(params, x, v, out):
         out[p, 1] = f2
 
 
+# not cached: its parameters hold a compiled kernel (numba's cache must not see such types)
+@njit
+def speed_scaled_force(sparams, omega, x1, x2, v1, v2):
+    """A speed kernel from the exact speed scaling: F(X, V; omega) = s F(X, V/s; omega_ref), s = omega/omega_ref.
+
+    ``sparams``: (the one-state kernel, its parameters, omega_ref [rad/s]).  For a network whose inputs are
+    dimensionless (X/c, V/(c omega)) and whose force scale is mu omega R L (R/c)^2, this is exactly the
+    network with omega and the force scale of its scaling row set to the new speed (the 'whirl' frame:
+    u = (eps - 2 v_t, 2 v_r) in units of c omega, |u| and the force scale, both linear in 1/omega and omega);
+    at omega = omega_ref it is the kernel's own force to the bit.
+    """
+    kernel, params, w_ref = sparams
+    s = omega / w_ref
+    f1, f2 = kernel(params, x1, x2, v1 / s, v2 / s)
+    return s * f1, s * f2
+
+
 def pack_network(layers: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
     """[(W (out, in), b (out,)), ...] -> flat weights (each W stored transposed) and a
     (n_layers, 4) table of [weight offset, bias offset, n_in, n_out]."""
@@ -446,6 +463,15 @@ class SurrogateForceModel:
         """The compiled one-state kernel of this model's shape (``surrogate.kernels.fast_force_kernel``),
         equal to the generic ``surrogate_force`` on ``self.params`` to round-off; compiled on first use."""
         return fast_force_kernel(self)
+
+    def speed_kernel(self):
+        """``(speed_scaled_force, (kernel, params, omega_ref))`` for a network in the 'whirl' frame on a
+        cylindrical bearing, whose force scales exactly with the shaft speed (``speed_scaled_force``); None
+        for every other frame (its network was trained at one speed: it refuses a speed schedule)."""
+        if not isinstance(self._bearing, JournalBearing) or any(sc.frame != "whirl" for sc in self.scalings):
+            return None
+        fn, params = self.force_kernel
+        return speed_scaled_force, (fn, params, float(self._bearing.omega))
 
     def batch_force_kernel(self, precision: str = "float64", private: bool = False):
         """``(fn, params)`` (``core.force_model.BatchForceModel``): many states per call, the networks in

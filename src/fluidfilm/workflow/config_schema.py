@@ -233,6 +233,7 @@ class RewardSchema:
 @dataclass
 class DQNSchema:
     total_timesteps: int = MISSING
+    n_envs: int = MISSING
     learning_rate: float = MISSING
     buffer_size: int = MISSING
     learning_starts: int = MISSING
@@ -244,6 +245,7 @@ class DQNSchema:
     exploration_fraction: float = MISSING
     exploration_final_eps: float = MISSING
     net_arch: list[int] = MISSING
+    torch_threads: int = MISSING
 
 
 @dataclass
@@ -310,6 +312,34 @@ class CharacteristicsSchema:
     timing_repeats: int = MISSING
 
 
+# --- run-up study ------------------------------------------------------------------------------------
+@dataclass
+class RunupSchema:
+    grid: list[int] = MISSING
+    cavitation: str = MISSING
+    speed_bracket: list[float] = MISSING
+    mass: float = MISSING
+    gravity: float = MISSING
+    imbalance: float = MISSING
+    perturbation: float = MISSING
+    start: float = MISSING
+    top: float = MISSING
+    end: float = MISSING
+    rate_rpm_s: float = MISSING
+    hold_s: float = MISSING
+    dt: float = MISSING
+    record_every: int = MISSING
+    samples_per_rev: int = MISSING
+    window_revs: int = MISSING
+    hop_revs: int = MISSING
+    band: list[float] = MISSING
+    max_order: float = MISSING
+    whirl_level: float = MISSING
+    onset_fit_nepers: float = MISSING
+    rate_check_factor: Optional[float] = MISSING
+    imbalance_check: Optional[float] = MISSING
+
+
 #: group -> schema, or -> (key, {value of key: schema}) where the options differ in shape
 GROUPS: dict[str, Any] = {
     "bearing": ("kind", {"journal": JournalBearingSchema, "conical": ConicalBearingSchema}),
@@ -329,6 +359,7 @@ GROUPS: dict[str, Any] = {
     "tracking": TrackingSchema,
     "controller": ControllerSchema,
     "characteristics": CharacteristicsSchema,
+    "runup": RunupSchema,
 }
 #: the value of the selecting key when an option leaves it out
 _SELECTOR_FALLBACK = {"bearing": "journal"}
