@@ -335,8 +335,7 @@ def test_a_second_arm_with_another_protocol_for_one_network_resumes_the_others_f
     for r in (0, 1):
         a, b = rep_lm["networks"][r], rep_adam["networks"][r]
         assert (a["epochs"], a["stop_reason"], a["val_mse"]) == (b["epochs"], b["stop_reason"], b["val_mse"])
-        # the time it took, not the time of the second call (which only read the checkpoint)
-        assert b["train_time_s"] == pytest.approx(a["train_time_s"], abs=0.5)
+        assert b["train_time_s"] == a["train_time_s"]  # the time it took, not the second call's (a checkpoint read)
         np.testing.assert_array_equal(lm.networks[r][0][0], adam.networks[r][0][0])
     assert rep_adam["networks"][2]["protocol"] == "adam" and rep_adam["networks"][2]["epochs"] <= 3
     with pytest.raises(ValueError, match="'sgd'"):
