@@ -121,7 +121,7 @@ class BatchedMPC:
             assert rows is not None
             out = simulate_batch(self.model, rotor, t_end, self.dt, env.x, env.v, settings=rows[feasible], **kw)
             ok = out.ok
-            xs = out.x
+            xs = out.x[ok]
         else:
             sleeve = self.model.sleeve
             runs = []
@@ -130,14 +130,10 @@ class BatchedMPC:
                 runs.append(simulate(self.model, rotor, t_end, self.dt, x0=env.x, v0=env.v, **kw))
             self.model.set_sleeve(sleeve)
             ok = np.array([tr.ok for tr in runs])
-            xs = np.array([tr.x for tr in runs]) if ok.all() else None
+            xs = np.array([tr.x for tr in runs if tr.ok])
         costs[feasible[~ok]] = env.weights.contact_penalty
         done = feasible[ok]
         if done.size:
-            if xs is None:
-                xs = np.array([tr.x for tr, good in zip(runs, ok) if good])
-            else:
-                xs = xs[ok]
             n = int(np.min(np.sum(np.isfinite(xs[:, :, 0]), axis=1)))  # every finished run records as many
             moves = np.abs(positions[done] - positions[env.action]) / env.travel
             costs[done] = _interval_costs(env, xs[:, :n], clearances[done], moves)
