@@ -264,7 +264,7 @@ def main() -> None:
              f"{1e6 * sc['reference_call_s']:.0f} us per step ({100 * sc['reference_share']:.0f} % of the step)"],
             ["callback, surrogate-shaped network, two bearings",
              f"{1e6 * sc['surrogate_replay_call_s']:.0f} us per step ({100 * sc['surrogate_share']:.0f} % of the step)"],
-            ["callback, linearised film (the adapter's own overhead)",
+            ["callback, linearised film (numpy forces(), no compiled kernel)",
              f"{1e6 * sc['linearised_replay_call_s']:.0f} us per step ({100 * sc['linearised_share']:.0f} % of the step)"]]
     notes = (f"ROSS {ross.__version__} (Python {sys.version.split()[0]}), fluidfilm.interop.ross; Jeffcott rotor "
              f"({float(rotor.m):.1f} kg) on two ReynoldsSolver {GRID[0]}x{GRID[1]} films (L 25 mm, D 50 mm, c 50 um, "

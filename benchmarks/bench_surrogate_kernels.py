@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import time
 import warnings
 from pathlib import Path
 
@@ -126,7 +127,8 @@ def models(bearing) -> tuple[dict, list]:
 
 def _ns_per_force(run, n, passes, repeats):
     run(1)  # compile
-    return 1e9 * median_seconds(lambda: run(passes), repeats, warmup=False) / (n * passes)
+    # the CPU time of this thread: on a machine shared with other processes the wall time mostly measures them
+    return 1e9 * median_seconds(lambda: run(passes), repeats, warmup=False, clock=time.thread_time) / (n * passes)
 
 
 def batch_trajectories(model, reference, label: str, quick: bool) -> None:
@@ -151,7 +153,9 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
                 if threads > 1 and kw.get("stage_batched") is False:
                     continue  # the lockstep loop runs in one thread
                 repeats = 1 if m is reference else 3
-                r = trajectories_per_second(m, n, T_END, repeats=repeats, threads=threads, **kw)
+                # one thread: the CPU time of this thread (the batch runs in it); all cores: wall time
+                r = trajectories_per_second(m, n, T_END, repeats=repeats, threads=threads,
+                                            clock=time.thread_time if threads == 1 else None, **kw)
                 rate = r["trajectories_per_s"]
                 if m is reference:
                     ref_rate[threads] = rate
@@ -162,7 +166,8 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
     scaling = {name: float(rows[i + len(arms)][2]) / float(rows[i][2]) for i, (name, _, _) in enumerate(arms[:3])
                } if all_cores > 1 else {}
     note = ("Ratios at equal threads, both models through the same stage-batched simulate_batch "
-            "(threads: contiguous chunks of the batch, one thread each). "
+            "(threads: contiguous chunks of the batch, one thread each); one thread timed by the thread's CPU "
+            "time, all cores by wall time. "
             + (f"Scaling {all_cores} threads / 1: " + ", ".join(f"{k} {v:.2f}x" for k, v in scaling.items()) + ". "
                if scaling else "")
             + f"Load average before / after: {load[0]:.2f} / {os.getloadavg()[0]:.2f} on {all_cores} cores; on a "
@@ -238,7 +243,8 @@ def main() -> None:
                                                 for dt, v in fl.items())
             + ") plus its tanh units at the measured rational tanh ("
             + ", ".join(f"{dt} {v['ns_per_tanh']:.2f} ns" for dt, v in fl.items())
-            + "), one region's network per force (the one-state rows: float64). Every arm in a compiled loop. "
+            + "), one region's network per force (the one-state rows: float64). Every arm in a compiled loop, timed "
+            "by this thread's CPU time (the wall time on a shared machine mostly measures the other processes). "
             f"Load average (1 min) before / after: {load0[0]:.1f} / {load1[0]:.1f} on {os.cpu_count()} cores: "
             "the machine was shared with other work, so absolute times are high bounds; the ratios are "
             "measured side by side.")

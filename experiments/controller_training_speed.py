@@ -2,12 +2,13 @@
 
     python experiments/controller_training_speed.py
 Trains the same DQN (same seed, same hyperparameters, conf/controller) for the same budget of
-environment steps (``training_speed.budget_steps``) on the environment driven by the reference
-model and by the surrogate, and reports the wall time per environment step of each and their ratio
-(``controller_training_speedup``).  A full training on the reference (``dqn.total_timesteps``
-steps) would take longer than the whole rest of the pipeline, so its time is extrapolated from the
-measured time per step (the cost per step does not depend on the step count: one control interval
-of the rotor plus one gradient step); the report says so.  Writes reports/controller_training_speed.json.
+environment steps (``training_speed.budget_steps``) on the same vector environment (``n_envs``
+environments, one batched integration per step) driven by the reference model and by the surrogate,
+and reports the wall time per environment step of each and their ratio (``controller_training_speedup``);
+compilation, settling and torch's warm-up are not timed, and both trained policies are evaluated on the
+reference model.  A full training on the reference (``dqn.total_timesteps`` steps) would take longer
+than the whole rest of the pipeline, so its time is extrapolated from the measured time per step; the
+report says so.  Writes reports/controller_training_speed.json.
 The study is fluidfilm.studies.controller_training_speed; config conf/controller_training_speed.yaml.
 """
 from fluidfilm.studies import controller_training_speed

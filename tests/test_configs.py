@@ -21,7 +21,7 @@ GROUPS = {
     "trainer": ("train_surrogate", "trainer"), "experiment": ("train_surrogate", None), "rotor": ("trajectories", "rotor"),
     "integrator": ("trajectories", "integrator"), "case": ("trajectories", "cases.a"),
     "metrics": ("compare", "metrics"), "controller": ("train_controller", "controller"), "protocol": ("train_surrogate", "protocol"),
-    "characteristics": ("characteristics", "characteristics"),
+    "characteristics": ("characteristics", "characteristics"), "runup": ("runup", "runup"),
 }
 
 

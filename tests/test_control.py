@@ -240,8 +240,136 @@ def test_batched_mpc_predicts_every_candidate_as_simulate_does(active_surrogate,
     c_batch = batched.predicted_costs(env)
     assert active_surrogate.sleeve == sleeve  # the plant's sleeve is left where it was
     np.testing.assert_array_equal(c_batch, looped.predicted_costs(env))
+    # the vectorised cost is the environment's own, candidate by candidate
+    sc = env.scenario
+    for a, s in enumerate(env.sleeve_positions):
+        active_surrogate.set_sleeve(s)
+        tr = simulate(active_surrogate, env.rotor_with(env.present_imbalance()), env.t + sc.control_interval, 5e-5,
+                      x0=env.x, v0=env.v, eps_stop=sc.eps_stop, record_every=2, eps_substep=0.6, t0=env.t)
+        move = abs(s - env.sleeve_positions[env.action]) / env.travel
+        assert c_batch[a] == pytest.approx(env.interval_cost(tr.x, active_surrogate.clearance, move)[0], rel=1e-12)
+    active_surrogate.set_sleeve(sleeve)
     fine = BatchedMPC(active_surrogate, 1.0, dt=env.scenario.dt, eps_substep=0.8, record_every=10)
     c_fine = fine.predicted_costs(env)
     np.testing.assert_allclose(c_batch, c_fine, rtol=2e-3)
     assert np.argmin(c_batch) == np.argmin(c_fine)
     env.model.set_sleeve(env.sleeve_positions[env.action])
+
+
+def test_batched_mpc_picks_the_one_by_one_action_on_given_states(active_surrogate, rotor_cfg, controller_cfg):
+    """The configured MPC (one ``simulate_batch`` for all candidates) and the same MPC one candidate at a time
+    (``simulate`` each) take the same action at states along episodes of different sleeve schedules."""
+    from fluidfilm.control.mpc import BatchedMPC
+
+    env = env_from_cfg(active_surrogate, rotor_cfg, controller_cfg)
+    batched = BatchedMPC(active_surrogate, **controller_cfg["mpc"])
+    looped = BatchedMPC(active_surrogate, **controller_cfg["mpc"])
+    looped.batched = False
+    n_states = 0
+    for schedule in ([2, 2, 2, 2], [0, 1, 4, 3], [4, 4, 0, 0]):
+        env.reset()
+        for a in schedule:
+            c_batch, c_loop = batched.predicted_costs(env), looped.predicted_costs(env)
+            np.testing.assert_allclose(c_batch, c_loop, rtol=1e-12)
+            assert batched(None, env) == looped(None, env) == int(np.argmin(c_loop))
+            n_states += 1
+            if env.step(a)[2]:
+                break
+    assert n_states >= 8
+    env.model.set_sleeve(0.0)
+
+
+def _vec_pair(model, rotor_cfg, controller_cfg, n_envs, **scenario):
+    """The batched vector env and SB3's DummyVecEnv over single environments, on the same model and configs."""
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from fluidfilm.control.build import vec_env_from_cfg
+
+    cfg = dict(controller_cfg, scenario=dict(controller_cfg["scenario"], **scenario))
+    venv = vec_env_from_cfg(model, rotor_cfg, cfg, n_envs)
+    dummy = DummyVecEnv([lambda: env_from_cfg(model, rotor_cfg, cfg) for _ in range(n_envs)])
+    return venv, dummy
+
+
+def _assert_same_transitions(venv, dummy, actions_per_step, rtol=1e-9):
+    """Both vector envs from reset through the action rows: observations, rewards, dones, truncation flags,
+    terminal observations equal to round-off; returns the dones seen and which of them were contacts."""
+    np.testing.assert_allclose(venv.reset(), dummy.reset(), rtol=rtol, atol=1e-7)
+    seen, contacts = [], []
+    for actions in actions_per_step:
+        o1, r1, d1, i1 = venv.step(np.asarray(actions))
+        o2, r2, d2, i2 = dummy.step(np.asarray(actions))
+        np.testing.assert_allclose(o1, o2, rtol=rtol, atol=1e-7)
+        np.testing.assert_allclose(r1, r2, rtol=rtol, atol=1e-7)
+        np.testing.assert_array_equal(d1, d2)
+        for a, b, done in zip(i1, i2, d1):
+            assert a["TimeLimit.truncated"] == b["TimeLimit.truncated"] == (done and not a["terminated"])
+            assert a["terminated"] == b["terminated"]
+            np.testing.assert_allclose(a["amplitude"], b["amplitude"], rtol=rtol, atol=1e-15)
+            assert ("terminal_observation" in a) == ("terminal_observation" in b)
+            if "terminal_observation" in a:
+                np.testing.assert_allclose(a["terminal_observation"], b["terminal_observation"], rtol=rtol, atol=1e-7)
+        seen.append(d1.copy())
+        contacts.append([a["terminated"] for a in i1])
+        venv.distinct_times = max(getattr(venv, "distinct_times", 1), len({e.t for e in venv.envs}))
+    return np.array(seen), np.array(contacts)
+
+
+def test_vector_env_transitions_equal_the_single_envs(active_surrogate, rotor_cfg, controller_cfg):
+    """ActiveBearingVecEnv (one batched integration per step, each environment at its own sleeve) against
+    SB3's DummyVecEnv stepping single environments: the same transitions through contacts under a large
+    imbalance and their autoresets (those environments then run at their own times, behind the others: the
+    shifted-ramp batch), and through the time limit of the quick scenario."""
+    venv, dummy = _vec_pair(active_surrogate, rotor_cfg, controller_cfg, 4, imbalance_end=4e-2, ramp_time=0.1,
+                            t_end=0.2)
+    rng = np.random.default_rng(3)
+    rows = [[0, 4, 2, rng.integers(5)] for _ in range(3)] + [list(rng.integers(0, 5, 4)) for _ in range(10)]
+    dones, contacts = _assert_same_transitions(venv, dummy, rows)
+    assert venv.n_batches == len(rows)  # one batch per step for a surrogate, whatever the sleeves and times
+    assert contacts.sum() >= 2 and not (contacts & ~dones).any()  # contacts ended episodes
+    assert venv.distinct_times > 1  # the environments ran at different times after the autoresets
+    # the quick scenario (5 decisions): every environment reaches the time limit and restarts at t = 0
+    venv, dummy = _vec_pair(active_surrogate, rotor_cfg, controller_cfg, 4)
+    n = venv.envs[0].scenario.n_decisions
+    dones, contacts = _assert_same_transitions(venv, dummy, [[1, 2, 3, 2]] * (n + 1))
+    assert not contacts.any()
+    assert dones[n - 1].all() and not dones[:n - 1].any() and not dones[n].any()
+    assert all(e.t == e.scenario.control_interval for e in venv.envs)
+    active_surrogate.set_sleeve(0.0)
+
+
+def test_vector_env_on_a_model_without_per_trajectory_settings(conical, rotor_cfg, controller_cfg):
+    """The reference solver re-solves when the sleeve moves: one batch per sleeve position in use, the same
+    transitions as single environments; an environment reset by hand runs behind the others."""
+    from fluidfilm import ConicalReynoldsSolver
+
+    solver = ConicalReynoldsSolver(conical, 16, 8)
+    venv, dummy = _vec_pair(solver, rotor_cfg, controller_cfg, 3)
+    rows = [[1, 1, 3], [0, 2, 2], [4, 4, 4]]
+    _assert_same_transitions(venv, dummy, rows)
+    assert venv.n_batches == 2 + 2 + 1  # the sleeve positions in use per step
+    o1 = venv.env_method("reset", indices=[1])[0][0]
+    o2 = dummy.env_method("reset", indices=[1])[0][0]
+    np.testing.assert_array_equal(o1, o2)
+    assert venv.envs[1].t == 0.0 < venv.envs[0].t
+    for actions in ([2, 2, 2], [1, 3, 0]):
+        r1, r2 = venv.step(np.array(actions)), dummy.step(np.array(actions))
+        for a, b in zip(r1[:3], r2[:3]):
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-7)
+    with pytest.raises(ValueError, match="n_envs"):
+        from fluidfilm.control import ActiveBearingVecEnv
+
+        ActiveBearingVecEnv(solver, Rotor(mass=2.5), [0.0, 1e-4], n_envs=0)
+    solver.set_sleeve(0.0)
+
+
+def test_dqn_trains_on_the_vector_env(active_surrogate, rotor_cfg, controller_cfg):
+    """SB3's DQN with n_envs > 1 on the batched vector env: it counts environment steps, sees episodes end."""
+    from fluidfilm.control.build import vec_env_from_cfg
+
+    venv = vec_env_from_cfg(active_surrogate, rotor_cfg, controller_cfg, 4)
+    cfg = dict(controller_cfg["dqn"], gradient_steps=-1)
+    agent, returns = train_dqn(venv, cfg, seed=0)
+    assert agent.num_timesteps >= cfg["total_timesteps"] and agent.num_timesteps % 4 == 0
+    assert len(returns) >= 4 and all(np.isfinite(r) for _, r in returns)
+    assert venv.n_batches == agent.num_timesteps // 4

@@ -296,3 +296,47 @@ def test_min_max_map_after_a_constant_force_factor_is_the_papers_map():
         y = sc.targets(X, V, F)
         np.testing.assert_allclose([y.min(axis=0), y.max(axis=0)], [[-1, -1], [1, 1]], atol=1e-12)
         np.testing.assert_allclose(sc.forces(X, V, y), F, rtol=1e-9, atol=1e-9)
+
+
+def _synthetic_frame(n=1500, seed=0):
+    """Rows in the dataset's columns over eps 0-0.9 with a smooth force (not a film: the protocol's plumbing)."""
+    import pandas as pd
+
+    from fluidfilm import paper_bearing
+
+    b = paper_bearing()
+    rng = np.random.default_rng(seed)
+    eps = rng.uniform(0.0, 0.9, n)
+    a = rng.uniform(0, 2 * np.pi, n)
+    X1, X2 = eps * b.clearance * np.sin(a), eps * b.clearance * np.cos(a)
+    V1, V2 = rng.uniform(-0.2, 0.2, (2, n))
+    F1 = 100 * np.sin(3 * eps) * np.cos(a) + 50 * V1 / (1 - eps ** 2)
+    F2 = -100 * eps ** 2 * np.sin(a) + 50 * V2 / (1 - eps ** 2)
+    frame = pd.DataFrame({"X1": X1, "X2": X2, "V1": V1, "V2": V2, "F1": F1, "F2": F2, "eps": eps})
+    meta = {"bearing": b.to_dict(), "spec": {"velocity_sections": [{"eps_low": 0.0, "eps_high": 1.0, "v_max": 0.2}]}}
+    return frame, meta
+
+
+def test_a_second_arm_with_another_protocol_for_one_network_resumes_the_others_finished(tmp_path, capsys):
+    """The full-scale plan: LM for every network (the last one to a time budget), then the same split with the
+    last network by Adam; the LM networks below come back from their checkpoints, not retrained."""
+    from fluidfilm.surrogate.protocol import train_protocol_model
+
+    frame, meta = _synthetic_frame()
+    proto = {"name": "paper", "max_epochs": 40, "workers": 2, "threads": 1}
+    lm, rep_lm = train_protocol_model(frame, meta, proto, [0.5, 0.7], n_hidden=8, checkpoint_dir=tmp_path,
+                                      network_protocol={2: {"max_time_s": 1e-9}})
+    assert rep_lm["stop_reasons"][2] == "max_time" and not rep_lm["converged"]
+    capsys.readouterr()
+    adam, rep_adam = train_protocol_model(frame, meta, proto, [0.5, 0.7], n_hidden=8, checkpoint_dir=tmp_path,
+                                          network_protocol={"2": {"name": "adam", "max_epochs": 3, "batch_size": 64}})
+    out = capsys.readouterr().out
+    assert out.count("resuming at epoch") == 2  # networks 0 and 1
+    for r in (0, 1):
+        a, b = rep_lm["networks"][r], rep_adam["networks"][r]
+        assert (a["epochs"], a["stop_reason"], a["val_mse"]) == (b["epochs"], b["stop_reason"], b["val_mse"])
+        assert b["train_time_s"] == a["train_time_s"]  # the time it took, not the second call's (a checkpoint read)
+        np.testing.assert_array_equal(lm.networks[r][0][0], adam.networks[r][0][0])
+    assert rep_adam["networks"][2]["protocol"] == "adam" and rep_adam["networks"][2]["epochs"] <= 3
+    with pytest.raises(ValueError, match="'sgd'"):
+        train_protocol_model(frame, meta, proto, [0.5, 0.7], n_hidden=8, network_protocol={0: {"name": "sgd"}})

@@ -36,10 +36,10 @@ def _random_surrogate(bearing, frame: str, seed: int = 0, omega=None, force_scal
     """An untrained 3-8-2 (journal frames) network with a physics scaling fitted on reference forces; the
     scaling's speed and force scale replaced where given (the same network at another speed)."""
     rng = np.random.default_rng(seed)
-    c = bearing.clearance
+    ref = paper_bearing()  # the scaling is fitted at the paper's speed whatever the model's bearing
+    c = ref.clearance
     x = rng.uniform(-0.6, 0.6, (300, 2)) * c
-    v = rng.uniform(-1.0, 1.0, (300, 2)) * c * bearing.omega * 0.3
-    ref = paper_bearing()
+    v = rng.uniform(-1.0, 1.0, (300, 2)) * c * ref.omega * 0.3
     f = ReynoldsSolver(ref, 16, 8).forces(x, v)
     scaling = Scaling.fit("physics", x, v, f, c, ref.omega, ref.force_scale, frame=frame)
     if omega is not None:

@@ -351,28 +351,56 @@ class ActiveBearingEnv(gym.Env):
         return self._observe(0.0, eps), {"t": 0.0}
 
     def step(self, action):
+        c_r, move, closed = self.begin_step(action)
+        tr = None
+        if not closed:
+            sc = self.scenario
+            tr = simulate(self.model, self._ramp, self.t + sc.control_interval, sc.dt, x0=self.x, v0=self.v,
+                          eps_stop=sc.eps_stop, record_every=sc.record_every, t0=self.t)
+        return self.finish_step(tr, c_r, move)
+
+    # ------------------------------------------------------------------ the two halves of a step
+    def begin_step(self, action) -> tuple[float, float, bool]:
+        """Check and take ``action`` (the model's sleeve moves there): returns (clearance c_r [m], sleeve move
+        as a fraction of the travel, True if the sleeve closed onto the journal, so nothing is integrated).
+        ``step`` is ``begin_step``, the integration over one interval (``interval_rotor``) and ``finish_step``;
+        ``ActiveBearingVecEnv`` integrates many environments' intervals in one batch between the two."""
         if not self.action_space.contains(int(action)):
             raise ValueError(f"action {action!r} is not in {self.action_space}")
-        sc, w = self.scenario, self.weights
         a_old = self.action
         self.action = int(action)
         s_new = self.sleeve_positions[self.action]
         self.model.set_sleeve(s_new)
         c_r = self.model.clearance
         move = abs(s_new - self.sleeve_positions[a_old]) / self.travel
-        terminated = False
-        if np.hypot(*self.x) >= sc.eps_stop * c_r:
-            # the sleeve closed onto the journal
-            tr = None
-            terminated = True
-        else:
-            tr = simulate(self.model, self._ramp, self.t + sc.control_interval, sc.dt, x0=self.x, v0=self.v,
-                          eps_stop=sc.eps_stop, record_every=sc.record_every, t0=self.t)
-            terminated = not tr.ok  # contact or divergence
+        closed = bool(np.hypot(*self.x) >= self.scenario.eps_stop * c_r)
+        return c_r, move, closed
+
+    def interval_rotor(self, shift: bool = False) -> Rotor:
+        """The rotor over the coming interval: the ramp (``shift=False``), or (``shift=True``) the same ramp
+        on a clock that reads 0 now, ``u(t + tau)`` as a function of ``tau`` (for a batch of environments at
+        different times integrated from one start time; exact where the interval is whole revolutions, so
+        that the imbalance phase omega t is the same)."""
+        if not shift:
+            return self._ramp
+        sc = self.scenario
+        u_now = self.present_imbalance()
+        left = sc.ramp_time - self.t
+        if left <= 0.0 or u_now == sc.imbalance_end:
+            return self.rotor_with(sc.imbalance_end)
+        return self.rotor_with(u_now, sc.imbalance_end, left)
+
+    def finish_step(self, tr, c_r: float, move: float):
+        """The rest of ``step`` after the interval's trajectory ``tr`` (anything with ``x``, ``v`` of its
+        recorded states and ``ok``; None where the sleeve closed onto the journal): the new state, cost,
+        observation and the gymnasium step tuple."""
+        sc, w = self.scenario, self.weights
         if tr is not None:
+            terminated = not tr.ok  # contact or divergence
             xs = tr.x
             self.x, self.v = tr.x[-1].copy(), tr.v[-1].copy()
         else:
+            terminated = True  # the sleeve closed onto the journal
             xs = self.x[None, :]
         cost, amp, power = self.interval_cost(xs, c_r, move)
         eps_all = np.hypot(xs[:, 0], xs[:, 1]) / c_r
@@ -381,6 +409,7 @@ class ActiveBearingEnv(gym.Env):
         self.k += 1
         self.t = self.k * sc.control_interval
         truncated = (not terminated) and self.k >= sc.n_decisions
+        s_new = self.sleeve_positions[self.action]
         rec = {"t": self.t, "sleeve": s_new, "clearance": c_r, "amplitude": amp, "eps_max": float(eps_all.max()),
                "friction_power": power, "move": move, "cost": cost, "terminated": terminated}
         self.history.append(rec)

@@ -38,12 +38,45 @@ from fluidfilm.rotor.batch import simulate_batch
 from fluidfilm.control.env import ActiveBearingEnv
 
 
+def _interval_costs(env: ActiveBearingEnv, xs: np.ndarray, clearances: np.ndarray, moves: np.ndarray) -> np.ndarray:
+    """``env.interval_cost`` of m stretches of orbit at once: ``xs`` (m, n, 2), their clearances and moves (m,).
+    The same formula (orbit amplitude, Petroff's friction power at the mean eccentricity, sleeve motion)."""
+    w, b = env.weights, env.bearing
+    mean = xs.mean(axis=1)
+    amp = np.sqrt(((xs - mean[:, None, :]) ** 2).sum(axis=2)).max(axis=1)
+    eps = np.minimum(np.hypot(mean[:, 0], mean[:, 1]) / clearances, 0.99)
+    power = 2 * np.pi * b.viscosity * b.omega**2 * b.radius**3 * b.length / (
+        clearances * np.sqrt(np.maximum(1.0 - eps * eps, 1e-6)))
+    return amp / (w.amplitude_ref * env.c0) + w.friction * power / env.p_ref + w.move * moves
+
+
 class BatchedMPC:
-    """Shooting MPC over constant sleeve holds; candidates predicted as one batch at a coarser step."""
+    """Shooting MPC over constant sleeve holds; candidates predicted as one batch at a coarser step.
+
+    Parameters
+    ----------
+    model : AdjustableForceModel
+        The controller's own force model (the surrogate; with per-trajectory settings, ``BatchSettable``,
+        all candidates are one ``simulate_batch`` call, else one ``simulate`` per candidate).
+    horizon_intervals : float, default 1.0
+        Prediction horizon in control intervals (> 0).
+    dt : float, default 4e-4
+        Prediction step [s].
+    eps_substep : float, default 0.7
+        Eccentricity ratio above which a prediction step takes substeps (``simulate_batch``).
+    record_every : int, default 1
+        Prediction steps between the states that enter the cost.
+
+    Raises
+    ------
+    ValueError
+        For a model without a sleeve input, a horizon or step that is not positive, or ``record_every``
+        below 1.
+    """
 
     name = "mpc"
 
-    def __init__(self, model, horizon_intervals: float = 1.0, dt: float = 4e-4, eps_substep: float = 0.4,
+    def __init__(self, model, horizon_intervals: float = 1.0, dt: float = 4e-4, eps_substep: float = 0.7,
                  record_every: int = 1):
         model = as_adjustable(model)  # the MPC needs an active bearing model
         if not float(horizon_intervals) > 0:
@@ -59,37 +92,51 @@ class BatchedMPC:
         self.record_every = int(record_every)
         # surrogates take the sleeve per trajectory; the reference rebuilds its kernel per sleeve position
         self.batched = isinstance(model, BatchSettable)
+        self._per_position: tuple | None = None  # (positions, clearances, setting rows), built on first use
+
+    def _tables(self, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """Clearance and (batched) setting row of each sleeve position, computed once per set of positions."""
+        cached = self._per_position
+        if cached is None or not np.array_equal(cached[0], positions):
+            clearances = np.array([self.model.bearing.clearance_at(s) for s in positions])
+            rows = np.array([self.model.setting_for(s) for s in positions]) if self.batched else None
+            cached = self._per_position = (positions.copy(), clearances, rows)
+        return cached[1], cached[2]
 
     def predicted_costs(self, env: ActiveBearingEnv) -> np.ndarray:
+        """Predicted cost of holding each sleeve position over the horizon (inf: the sleeve would close onto
+        the journal; ``contact_penalty``: the prediction ends in contact)."""
         sc = env.scenario
-        rotor = env.rotor_with(env.present_imbalance())
-        t_h = self.horizon * sc.control_interval
         positions = env.sleeve_positions
+        clearances, rows = self._tables(positions)
         costs = np.full(len(positions), np.inf)
-        clearances = np.array([self.model.bearing.clearance_at(s) for s in positions])
         r0 = float(np.hypot(*env.x))
         feasible = np.flatnonzero(r0 < sc.eps_stop * clearances)  # a sleeve closing onto the journal is out
         if feasible.size == 0:
             return costs
+        rotor = env.rotor_with(env.present_imbalance())
+        t_end = env.t + self.horizon * sc.control_interval
         kw = dict(eps_stop=sc.eps_stop, record_every=self.record_every, eps_substep=self.eps_substep, t0=env.t)
         if self.batched:
-            sleeve = self.model.sleeve
-            out = simulate_batch(self.model, rotor, env.t + t_h, self.dt, env.x, env.v,
-                                 settings=[self.model.setting_for(positions[a]) for a in feasible], **kw)
-            self.model.set_sleeve(sleeve)
-            runs = [(out.ok[i], out.x[i, :out.n_recorded[i]]) for i in range(len(feasible))]
+            assert rows is not None
+            out = simulate_batch(self.model, rotor, t_end, self.dt, env.x, env.v, settings=rows[feasible], **kw)
+            ok = out.ok
+            xs = out.x[ok]
         else:
+            sleeve = self.model.sleeve
             runs = []
             for a in feasible:
                 self.model.set_sleeve(positions[a])
-                tr = simulate(self.model, rotor, env.t + t_h, self.dt, x0=env.x, v0=env.v, **kw)
-                runs.append((tr.ok, tr.x))
-        for a, (ok, xs) in zip(feasible, runs):
-            if not ok:
-                costs[a] = env.weights.contact_penalty
-                continue
-            move = abs(positions[a] - positions[env.action]) / env.travel
-            costs[a] = env.interval_cost(xs, clearances[a], move)[0]
+                runs.append(simulate(self.model, rotor, t_end, self.dt, x0=env.x, v0=env.v, **kw))
+            self.model.set_sleeve(sleeve)
+            ok = np.array([tr.ok for tr in runs])
+            xs = np.array([tr.x for tr in runs if tr.ok])
+        costs[feasible[~ok]] = env.weights.contact_penalty
+        done = feasible[ok]
+        if done.size:
+            n = int(np.min(np.sum(np.isfinite(xs[:, :, 0]), axis=1)))  # every finished run records as many
+            moves = np.abs(positions[done] - positions[env.action]) / env.travel
+            costs[done] = _interval_costs(env, xs[:, :n], clearances[done], moves)
         return costs
 
     def __call__(self, obs, env) -> int:

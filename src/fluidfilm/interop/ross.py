@@ -304,18 +304,24 @@ class FilmBearings:
             The forces, length ``ndof``.
         """
         t0 = time.perf_counter()
-        q, v = np.asarray(disp_resp, dtype=float), np.asarray(velc_resp, dtype=float)
-        if self.predict and time_step and accl_resp is not None:
-            # ROSS's simple Newmark calls at the start of the step and keeps the force for its end: carry the
-            # state there (second order), so the explicit part is as accurate as the implicit step
-            a = np.asarray(accl_resp, dtype=float)
+        # plain Python floats: a handful of components is cheaper in Python than in numpy (the call's own
+        # overhead is what a fast model would otherwise pay per step)
+        q, v = np.asarray(disp_resp, dtype=float).tolist(), np.asarray(velc_resp, dtype=float).tolist()
+        predict = bool(self.predict and time_step and accl_resp is not None)
+        if predict:
+            acc = np.asarray(accl_resp, dtype=float).tolist()
             dt = float(time_step)
-            q, v = q + dt * v + 0.5 * dt * dt * a, v + dt * a
+            h = 0.5 * dt * dt
         out = np.zeros(self.ndof)
         for n, (i, j), (ox1, ox2), (f01, f02), k, c, kernel, model in self._plan:
-            # fluidfilm's frame (x = X1, y = -X2), relative to the origin; plain floats: two components are
-            # cheaper in Python than in numpy
-            d1, d2, v1, v2 = float(q[i]), -float(q[j]), float(v[i]), -float(v[j])
+            # fluidfilm's frame (x = X1, y = -X2), relative to the origin
+            qi, qj, vi, vj = q[i], q[j], v[i], v[j]
+            if predict:
+                # ROSS's simple Newmark calls at the start of the step and keeps the force for its end: carry
+                # the state there (second order), so the explicit part is as accurate as the implicit step
+                qi, qj = qi + dt * vi + h * acc[i], qj + dt * vj + h * acc[j]
+                vi, vj = vi + dt * acc[i], vj + dt * acc[j]
+            d1, d2, v1, v2 = qi, -qj, vi, -vj
             x1, x2 = ox1 + d1, ox2 + d2
             if kernel is not None:
                 if x1 * x1 + x2 * x2 >= self._c2[n]:

@@ -60,7 +60,7 @@ def monte_carlo_batch(clearance: float, n: int, mass: float = 2.5, seed: int = 0
 
 def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batched: bool = True,
                             repeats: int = 1, seed: int = 0, threads: int | None = 1, precision: str = "float32",
-                            stage_batched: bool | None = None) -> dict:
+                            stage_batched: bool | None = None, clock=None) -> dict:
     """Median trajectories per second of ``model`` over ``repeats`` runs of n Monte Carlo trajectories.
 
     Parameters
@@ -83,6 +83,9 @@ def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batch
         ``simulate_batch``'s (batched runs only): threads across the batch (default 1; None: all cores),
         the surrogate networks' arithmetic (default: ``simulate_batch``'s, float32), and the loop (None:
         ``simulate_batch``'s choice by batch size).
+    clock : callable, optional
+        ``median_seconds``'s clock (default: wall time); ``time.thread_time`` for the CPU time of a run in
+        the calling thread (one thread) on a shared machine.
 
     Returns
     -------
@@ -120,7 +123,7 @@ def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batch
             runs = [simulate(model, r, t_end, dt, a, b, record_every=10) for r, a, b in zip(rotors, x0, v0)]
             n_ok[0], n_evals[0] = sum(tr.ok for tr in runs), sum(tr.n_force_evals for tr in runs)
 
-    wall = median_seconds(run, repeats, warmup=False)
+    wall = median_seconds(run, repeats, warmup=False, **({} if clock is None else {"clock": clock}))
     out: dict[str, Any] = {"n": n, "batched": batched, "t_end_s": t_end, "wall_s": wall, "trajectories_per_s": n / wall,
            "n_ok": n_ok[0], "n_force_evals": n_evals[0]}
     if batched:

@@ -154,25 +154,53 @@ _rk4_batch_uncached = _uncached(_rk4_batch, _rk4_step=_rk4_step_uncached)
 
 
 @njit(cache=True, nogil=True)
-def _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok, xs, vs, fs, rows):
-    """One RK4 stage of the m entries ``act[:m]`` (trajectories ``run[act[i]]``) at the stage states q and
-    times tq: the film forces in ONE call ``fn(bp, xs, vs, fs)`` of the states inside the clearance, then
+def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok, xs, vs, fs, rows):
+    """One RK4 stage of the m entries ``act[:m]`` (``ident``: entries 0..m-1) at the stage states q and times
+    tq: the film forces in ONE call ``fn(bp, xs, vs, fs)`` of the states inside the clearance, then
     ``_acceleration``'s arithmetic per entry (the same expressions, so the same bits for the same forces).
-    cos/sin(omega t) are computed once per distinct phase: every entry without substeps shares its time."""
+    ``C[k, j]``: entry j's constants (``simulate_batch``'s ``consts`` per column).  cos/sin(omega t) are
+    computed once per distinct phase: every entry without substeps shares its time."""
     r = 0
+    inside = 0
     for i in range(m):
-        p = run[act[i]]
-        x1, x2 = qx1[i], qx2[i]
-        if x1 * x1 + x2 * x2 >= consts[p, 6]:
-            ok[i] = False  # outside the clearance: no force, acceleration 0, the step fails (as _acceleration)
-            rows[i] = -1
-            continue
-        ok[i] = True
-        xs[r, 0], xs[r, 1], vs[r, 0], vs[r, 1] = x1, x2, qv1[i], qv2[i]
-        rows[i] = r
-        r += 1
+        j = i if ident else act[i]
+        inside += 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
+    if inside == m:
+        # every state inside the clearance (the rule): gathered without a branch
+        for i in range(m):
+            xs[i, 0], xs[i, 1], vs[i, 0], vs[i, 1] = qx1[i], qx2[i], qv1[i], qv2[i]
+            ok[i] = True
+            rows[i] = i
+        r = m
+    else:
+        for i in range(m):
+            j = i if ident else act[i]
+            x1, x2 = qx1[i], qx2[i]
+            if x1 * x1 + x2 * x2 >= C[6, j]:
+                ok[i] = False  # outside the clearance: no force, acceleration 0, the step fails (as _acceleration)
+                rows[i] = -1
+                continue
+            ok[i] = True
+            xs[r, 0], xs[r, 1], vs[r, 0], vs[r, 1] = x1, x2, qv1[i], qv2[i]
+            rows[i] = r
+            r += 1
     if r > 0:
         fn(bp, xs[:r], vs[:r], fs[:r])
+    if ident and inside == m:
+        # the common stage: every entry inside, one phase for all, no ramp (checked): without branches
+        t = tq[0]
+        ph = C[2, 0] * t
+        same = 0
+        for i in range(m):
+            same += 1 if (C[2, i] * tq[i] == ph) & (C[8, i] <= 0.0) else 0
+        if same == m:
+            cph = math.cos(ph)
+            sph = math.sin(ph)
+            for i in range(m):
+                unb = C[1, i]
+                ax[i] = (fs[i, 0] + unb * cph + C[4, i]) * C[0, i]
+                ay[i] = (fs[i, 1] + C[3, i] * unb * sph + C[5, i]) * C[0, i]
+            return
     last_ph = math.nan
     cph = 0.0
     sph = 0.0
@@ -181,13 +209,12 @@ def _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, ax, ay, 
             ax[i] = 0.0
             ay[i] = 0.0
             continue
-        p = run[act[i]]
+        j = i if ident else act[i]
         f1, f2 = fs[rows[i], 0], fs[rows[i], 1]
-        inv_m, unb, omega, sgn, g1, g2 = consts[p, 0], consts[p, 1], consts[p, 2], consts[p, 3], consts[p, 4], \
-            consts[p, 5]
+        inv_m, unb, omega, sgn, g1, g2 = C[0, j], C[1, j], C[2, j], C[3, j], C[4, j], C[5, j]
         t = tq[i]
-        if consts[p, 8] > 0.0:
-            unb = _ramped(unb, consts[p, 7], t, consts[p, 8])
+        if C[8, j] > 0.0:
+            unb = _ramped(unb, C[7, j], t, C[8, j])
         ph = omega * t
         if ph != last_ph:
             cph = math.cos(ph)
@@ -198,16 +225,65 @@ def _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, ax, ay, 
 
 
 @njit(cache=True, inline="always")
-def _late_stage(f, p1, p2, q1, q2, run, act, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq):
+def _late_stage(f, p1, p2, q1, q2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq):
     """Stage states 3 (f = 0.5: P = a, Q = b) and 4 (f = 1: P = b, Q = c) of RK4: position X + f h (V + h/2 P),
     velocity V + f h Q, time T + f h; ``_rk4_step``'s expressions (f h = h exactly for f = 1)."""
     for i in range(m):
-        p = run[act[i]]
-        h = dt / K[act[i]]
-        u1 = V1[p] + 0.5 * h * p1[i]
-        u2 = V2[p] + 0.5 * h * p2[i]
-        qx1[i], qx2[i] = X1[p] + f * h * u1, X2[p] + f * h * u2
-        qv1[i], qv2[i], tq[i] = V1[p] + f * h * q1[i], V2[p] + f * h * q2[i], T[p] + f * h
+        j = i if ident else act[i]
+        h = dt / K[j]
+        u1 = V1[j] + 0.5 * h * p1[i]
+        u2 = V2[j] + 0.5 * h * p2[i]
+        qx1[i], qx2[i] = X1[j] + f * h * u1, X2[j] + f * h * u2
+        qv1[i], qv2[i], tq[i] = V1[j] + f * h * q1[i], V2[j] + f * h * q2[i], T[j] + f * h
+
+
+@njit(cache=True, nogil=True)
+def _substep(fn, bp, C, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE, qx1, qx2, qv1, qv2, tq, a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs, rows):
+    """Substep ``sub`` of the entries ``act[:m]`` (``ident``: every entry, none substepping): four stages and
+    the update, ``_rk4_step``'s arithmetic per entry."""
+    # stage 1: the state itself
+    for i in range(m):
+        j = i if ident else act[i]
+        qx1[i], qx2[i], qv1[i], qv2[i], tq[i] = X1[j], X2[j], V1[j], V2[j], T[j]
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, a1, a2, ok1, xs, vs, fs, rows)
+    for i in range(m):
+        j = i if ident else act[i]
+        h = dt / K[j]
+        qx1[i], qx2[i] = X1[j] + 0.5 * h * V1[j], X2[j] + 0.5 * h * V2[j]
+        qv1[i], qv2[i], tq[i] = V1[j] + 0.5 * h * a1[i], V2[j] + 0.5 * h * a2[i], T[j] + 0.5 * h
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, b1, b2, ok2, xs, vs, fs, rows)
+    _late_stage(0.5, a1, a2, b1, b2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, c1, c2, ok3, xs, vs, fs, rows)
+    _late_stage(1.0, b1, b2, c1, c2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, d1, d2, ok4, xs, vs, fs, rows)
+    for i in range(m):
+        j = i if ident else act[i]
+        k = K[j]
+        h = dt / k
+        x1, x2, v1, v2 = X1[j], X2[j], V1[j], V2[j]
+        NE[j] += 4
+        kx1 = v1 + 0.5 * h * a1[i]
+        kx2 = v2 + 0.5 * h * a2[i]
+        lx1 = v1 + 0.5 * h * b1[i]
+        lx2 = v2 + 0.5 * h * b2[i]
+        mx1 = v1 + h * c1[i]
+        mx2 = v2 + h * c2[i]
+        nx1 = x1 + h / 6.0 * (v1 + 2.0 * kx1 + 2.0 * lx1 + mx1)
+        nx2 = x2 + h / 6.0 * (v2 + 2.0 * kx2 + 2.0 * lx2 + mx2)
+        nv1 = v1 + h / 6.0 * (a1[i] + 2.0 * b1[i] + 2.0 * c1[i] + d1[i])
+        nv2 = v2 + h / 6.0 * (a2[i] + 2.0 * b2[i] + 2.0 * c2[i] + d2[i])
+        # as selects (the loop vectorises): a failed stage ends the step as a contact, a non-finite state as a
+        # divergence, both leaving the state as it was; else the new state, a contact at eps_stop
+        good = ok1[i] & ok2[i] & ok3[i] & ok4[i]
+        fin = (abs(nx1) < math.inf) & (abs(nx2) < math.inf) & (abs(nv1) < math.inf) & (abs(nv2) < math.inf)
+        upd = good & fin
+        ST[j] = CONTACT_STAGE if not good else (NONFINITE if not fin else
+                                                (CONTACT if nx1 * nx1 + nx2 * nx2 >= C[9, j] else ST[j]))
+        X1[j] = nx1 if upd else x1
+        X2[j] = nx2 if upd else x2
+        V1[j] = nv1 if upd else v1
+        V2[j] = nv2 if upd else v2
+        T[j] = t0 + (step + (sub + 1.0) / k) * dt if upd else T[j]
 
 
 @njit(cache=True, nogil=True)
@@ -217,9 +293,11 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
 
     Per trajectory, the arithmetic of ``_rk4_batch`` (``integrate._rk4_step`` without the retry): the same
     substep counts, stage states, stopping rules and recorded rows.  The state is held per component
-    (X1, X2, V1, V2, T); the running trajectories are a compacted index list ``run``, and per substep the
-    entries still stepping (a trajectory with k substeps takes part in the first k; one that stopped in
-    this step drops out) a second list ``act``.  Every stage gathers its entries' states inside the
+    (X1, X2, V1, V2, T) and per ENTRY of the running list ``run`` (entry j is trajectory ``run[j]``; the
+    arrays are compacted, in order, when a trajectory stops), the constants per column ``C[k, j]``.  A step
+    in which no entry substeps runs every loop over the entries 0..m-1 (contiguous); otherwise per substep
+    the entries still stepping (a trajectory with k substeps takes part in the first k; one that stopped in
+    this step drops out) are a second list ``act``.  Every stage gathers its entries' states inside the
     clearance and calls ``fn`` once on them."""
     n = x0.shape[0]
     X1 = np.empty(n)
@@ -228,12 +306,17 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
     V2 = np.empty(n)
     T = np.empty(n)
     run = np.empty(n, dtype=np.int64)
+    C = np.empty((10, n))  # consts per column, and the stopping radius^2 (eps_stop^2 c^2)
     for p in range(n):
         X1[p], X2[p], V1[p], V2[p], T[p] = x0[p, 0], x0[p, 1], v0[p, 0], v0[p, 1], t0
         _start_row(p, x0, v0, t0, out_x, out_v, n_rec, status, t_stop, n_evals)
         run[p] = p
-    K = np.empty(n, dtype=np.int64)   # per entry of run: substeps of this step
-    ST = np.empty(n, dtype=np.int64)  # per entry of run: status of this step
+        for k in range(9):
+            C[k, p] = consts[p, k]
+        C[9, p] = eps_stop * eps_stop * consts[p, 6]
+    K = np.empty(n, dtype=np.int64)   # per entry: substeps of this step
+    NE = np.zeros(n, dtype=np.int64)  # per entry: force evaluations of this step
+    ST = np.empty(n, dtype=np.int64)  # per entry: status of this step
     act = np.empty(n, dtype=np.int64)
     qx1, qx2, qv1, qv2, tq = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     a1, a2, b1, b2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
@@ -251,86 +334,60 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
     for step in range(n_steps):
         if n_run == 0:
             break
-        kmax = 1
+        far = 0
         for j in range(n_run):
-            p = run[j]
-            e2 = (X1[p] * X1[p] + X2[p] * X2[p]) / consts[p, 6]
-            k = 1
-            if e2 > es2:
-                k = int(math.ceil(((1.0 - es2) / (1.0 - e2)) ** 1.5))
-                if k > max_substeps:
-                    k = max_substeps
-            K[j] = k
+            far += 1 if (X1[j] * X1[j] + X2[j] * X2[j]) / C[6, j] > es2 else 0
+            K[j] = 1
             ST[j] = OK
-            if k > kmax:
-                kmax = k
-        for sub in range(kmax):
-            m = 0
+            NE[j] = 0
+        kmax = 1
+        if far > 0:
             for j in range(n_run):
-                if K[j] > sub and ST[j] == OK:
-                    act[m] = j
-                    m += 1
-            if m == 0:
-                break
-            # stage 1: the state itself
-            for i in range(m):
-                p = run[act[i]]
-                qx1[i], qx2[i], qv1[i], qv2[i], tq[i] = X1[p], X2[p], V1[p], V2[p], T[p]
-            _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, a1, a2, ok1, xs, vs, fs, rows)
-            for i in range(m):
-                p = run[act[i]]
-                h = dt / K[act[i]]
-                qx1[i], qx2[i] = X1[p] + 0.5 * h * V1[p], X2[p] + 0.5 * h * V2[p]
-                qv1[i], qv2[i], tq[i] = V1[p] + 0.5 * h * a1[i], V2[p] + 0.5 * h * a2[i], T[p] + 0.5 * h
-            _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, b1, b2, ok2, xs, vs, fs, rows)
-            _late_stage(0.5, a1, a2, b1, b2, run, act, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
-            _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, c1, c2, ok3, xs, vs, fs, rows)
-            _late_stage(1.0, b1, b2, c1, c2, run, act, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
-            _accelerations(fn, bp, consts, run, act, m, qx1, qx2, qv1, qv2, tq, d1, d2, ok4, xs, vs, fs, rows)
-            for i in range(m):
-                j = act[i]
-                p = run[j]
-                k = K[j]
-                h = dt / k
-                x1, x2, v1, v2 = X1[p], X2[p], V1[p], V2[p]
-                n_evals[p] += 4
-                if not (ok1[i] and ok2[i] and ok3[i] and ok4[i]):
-                    ST[j] = CONTACT_STAGE
-                    continue
-                kx1 = v1 + 0.5 * h * a1[i]
-                kx2 = v2 + 0.5 * h * a2[i]
-                lx1 = v1 + 0.5 * h * b1[i]
-                lx2 = v2 + 0.5 * h * b2[i]
-                mx1 = v1 + h * c1[i]
-                mx2 = v2 + h * c2[i]
-                nx1 = x1 + h / 6.0 * (v1 + 2.0 * kx1 + 2.0 * lx1 + mx1)
-                nx2 = x2 + h / 6.0 * (v2 + 2.0 * kx2 + 2.0 * lx2 + mx2)
-                nv1 = v1 + h / 6.0 * (a1[i] + 2.0 * b1[i] + 2.0 * c1[i] + d1[i])
-                nv2 = v2 + h / 6.0 * (a2[i] + 2.0 * b2[i] + 2.0 * c2[i] + d2[i])
-                if not (math.isfinite(nx1) and math.isfinite(nx2) and math.isfinite(nv1) and math.isfinite(nv2)):
-                    ST[j] = NONFINITE
-                    continue
-                X1[p], X2[p], V1[p], V2[p] = nx1, nx2, nv1, nv2
-                T[p] = t0 + (step + (sub + 1.0) / k) * dt
-                if nx1 * nx1 + nx2 * nx2 >= eps_stop * eps_stop * consts[p, 6]:
-                    ST[j] = CONTACT
-        # record, and compact the running list (in order)
+                e2 = (X1[j] * X1[j] + X2[j] * X2[j]) / C[6, j]
+                if e2 > es2:
+                    k = int(math.ceil(((1.0 - es2) / (1.0 - e2)) ** 1.5))
+                    if k > max_substeps:
+                        k = max_substeps
+                    K[j] = k
+                    if k > kmax:
+                        kmax = k
+        if kmax == 1:
+            _substep(fn, bp, C, act, True, n_run, 0, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE, qx1,
+                     qx2, qv1, qv2, tq, a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs, rows)
+        else:
+            for sub in range(kmax):
+                m = 0
+                for j in range(n_run):
+                    if K[j] > sub and ST[j] == OK:
+                        act[m] = j
+                        m += 1
+                if m == 0:
+                    break
+                _substep(fn, bp, C, act, False, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE,
+                         qx1, qx2, qv1, qv2, tq, a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs,
+                         rows)
+        # record, and compact the running entries (in order)
         keep = 0
         for j in range(n_run):
             p = run[j]
-            t_stop[p] = T[p]  # the trajectory's current time (its stopping time once it stops)
+            n_evals[p] += NE[j]
+            t_stop[p] = T[j]  # the trajectory's current time (its stopping time once it stops)
             st = ST[j]
             if st != 0:
                 status[p] = st
             if st != 0 or (step + 1) % record_every == 0:
-                _record_row(p, out_x, out_v, n_rec, X1[p], X2[p], V1[p], V2[p])
+                _record_row(p, out_x, out_v, n_rec, X1[j], X2[j], V1[j], V2[j])
             if st == 0:
-                run[keep] = p
+                if keep != j:
+                    run[keep] = p
+                    X1[keep], X2[keep], V1[keep], V2[keep], T[keep] = X1[j], X2[j], V1[j], V2[j], T[j]
+                    for k in range(10):
+                        C[k, keep] = C[k, j]
                 keep += 1
         n_run = keep
 
 
-_rk4_stages_uncached = _uncached(_rk4_stages, _accelerations=_uncached(_accelerations))
+_rk4_stages_uncached = _uncached(_rk4_stages, _substep=_uncached(_substep, _accelerations=_uncached(_accelerations)))
 
 
 #: the smallest batch ``simulate_batch`` runs stage-batched by default: the best-shaped surrogate's batched

@@ -168,7 +168,7 @@ class SpeedSchedule:
     >>> SpeedSchedule.table(times=[0.0, 1.0], speeds_rpm=[3000.0, -10.0])
     Traceback (most recent call last):
     ...
-    ValueError: speeds must be finite and > 0, got -10.0 rpm at t=1.0 s
+    ValueError: speeds must be finite and > 0, got -10 rpm at t=1.0 s
     """
 
     times: np.ndarray

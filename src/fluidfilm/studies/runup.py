@@ -243,7 +243,7 @@ def cascade_table(cascade: Cascade, max_order: float) -> pd.DataFrame:
 
 # ----------------------------------------------------------------------------- figures
 def plot_cascade(cascade: Cascade, threshold_rpm: float, max_order: float = 1.5, title: str = "",
-                 floor: float = 1e-4):
+                 floor: float = 3e-4):
     """The waterfall engineers read: each window's full spectrum drawn at the height of its speed, run-up
     (left) and run-down (right); forward whirl at positive orders, the imbalance response at -1x (eq. 4's
     imbalance turns against the journal).  Line height: log amplitude above ``floor`` [c] (as analysers show
@@ -259,10 +259,10 @@ def plot_cascade(cascade: Cascade, threshold_rpm: float, max_order: float = 1.5,
         rows = np.flatnonzero(cascade.direction == direction)
         if rows.size == 0:
             continue
-        step = max(1, rows.size // 60)
+        step = max(1, rows.size // 40)
         rows = rows[::step]
         span = np.ptp(cascade.speed_rpm[rows]) or 1.0
-        height = 8.0 * span / max(len(rows), 1)  # the largest line rises eight rows
+        height = 5.0 * span / max(len(rows), 1)  # the largest line rises five rows
         order = rows if direction == "up" else rows[::-1]
         for r in order[::-1]:  # far lines first, near ones drawn over them
             base = cascade.speed_rpm[r]
@@ -335,7 +335,7 @@ def _models(cfg, bearing, reference) -> dict:
 
         make = getattr(fluidfilm, "universal_bearing", None)
         models["universal"] = (make(bearing, cavitation=cfg.universal.cavitation) if make is not None
-                               else "not run: fluidfilm.universal_bearing is not in this version of the library")
+                               else "not run: this version of the library has no universal_bearing")
     return models
 
 

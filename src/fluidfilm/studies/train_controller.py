@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 
 from fluidfilm import io, load_surrogate
-from fluidfilm.control.build import env_from_cfg
+from fluidfilm.control.build import vec_env_from_cfg
 from fluidfilm.control.dqn import save_agent, train_dqn
 from fluidfilm.workflow import tracking
 from fluidfilm.workflow.entry import plain
@@ -21,17 +21,18 @@ def tracking_run(cfg):
 def run(cfg) -> tracking.Logged:
     c = plain(cfg)
     surrogate = load_surrogate(cfg.surrogate_dir)
-    env = env_from_cfg(surrogate, c["rotor"], c["controller"])
+    # controller.dqn.n_envs environments stepped by one batched integration per step (ActiveBearingVecEnv)
+    env = vec_env_from_cfg(surrogate, c["rotor"], c["controller"])
     t0 = time.perf_counter()
     # the learning curve (episode returns, SB3's losses) goes to the run the entry wrapper opened
     agent, returns = train_dqn(env, c["controller"]["dqn"], seed=cfg.controller.seed,
                                **tracking.learning_curve_hooks())
     wall = time.perf_counter() - t0
     save_agent(agent, cfg.agent_path)
-    n = c["controller"]["dqn"]["total_timesteps"]
-    report = {"total_timesteps": n, "train_time_s": wall, "surrogate": cfg.surrogate_dir,
+    n = int(agent.num_timesteps)  # total_timesteps rounded up to whole vector steps
+    report = {"total_timesteps": n, "n_envs": env.num_envs, "train_time_s": wall, "surrogate": cfg.surrogate_dir,
               "episodes": len(returns), "episode_returns": [[int(t), float(r)] for t, r in returns],
               "env_steps_per_s": n / wall}
     io.write_json(cfg.training_report, report)
-    print(f"DQN: {n} steps ({len(returns)} episodes) on the surrogate in {wall:.0f} s -> {cfg.agent_path}")
+    print(f"DQN: {n} steps ({len(returns)} episodes, {env.num_envs} environments) on the surrogate in {wall:.0f} s -> {cfg.agent_path}")
     return tracking.Logged(value=report)

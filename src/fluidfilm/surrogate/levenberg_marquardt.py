@@ -354,8 +354,9 @@ def levenberg_marquardt(theta0: np.ndarray, normal_eq: Callable, sse_fn: Callabl
     epoch = first - 1
 
     def state(r):
-        return {"theta": theta, "mu": mu, "epoch": epoch, "wall_s": time.perf_counter() - t0, "history": history,
-                "reason": r}
+        # a resumed run that takes no further epoch (a cap already reached) adds no time
+        wall = time.perf_counter() - t0 if start is None or epoch >= first else float(start.get("wall_s", 0.0))
+        return {"theta": theta, "mu": mu, "epoch": epoch, "wall_s": wall, "history": history, "reason": r}
 
     for epoch in range(first, int(s.max_epochs) + 1):
         if time.perf_counter() - t0 > s.max_time_s:
@@ -394,6 +395,7 @@ def levenberg_marquardt(theta0: np.ndarray, normal_eq: Callable, sse_fn: Callabl
             break
         if on_checkpoint is not None:
             on_checkpoint(state(None))
+    final = state(reason)  # one wall time for the result and the checkpoint (a resumed finished run reports it)
     if on_checkpoint is not None:
-        on_checkpoint(state(reason))
-    return LMResult(theta, epoch, reason, sse, time.perf_counter() - t0, history)
+        on_checkpoint(final)
+    return LMResult(theta, epoch, reason, sse, final["wall_s"], history)

@@ -233,6 +233,7 @@ class RewardSchema:
 @dataclass
 class DQNSchema:
     total_timesteps: int = MISSING
+    n_envs: int = MISSING
     learning_rate: float = MISSING
     buffer_size: int = MISSING
     learning_starts: int = MISSING
@@ -244,6 +245,7 @@ class DQNSchema:
     exploration_fraction: float = MISSING
     exploration_final_eps: float = MISSING
     net_arch: list[int] = MISSING
+    torch_threads: int = MISSING
 
 
 @dataclass
