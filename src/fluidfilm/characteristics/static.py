@@ -22,6 +22,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq, least_squares
 
+from fluidfilm.core.force_model import ForceModel
 from fluidfilm.reynolds.feed import GroovedReynoldsSolver
 from fluidfilm.reynolds.solver import ReynoldsSolver
 from fluidfilm.characteristics import shortbearing
@@ -273,7 +274,7 @@ def equilibrium(model, load, guess: tuple[float, float] | None = None, eps_max: 
         A start (eccentricity ratio, position angle [rad] from +X2 towards +X1),
         e.g. the previous point of a continuation.
     eps_max : float
-        Upper bound of the eccentricity ratio searched.
+        Upper bound of the eccentricity ratio searched (and at most the model's ``validity.eps_max``).
     tol : float
         ``xtol``, ``ftol`` and ``gtol`` of ``scipy.optimize.least_squares``.
     residual_tol : float
@@ -312,13 +313,16 @@ def equilibrium(model, load, guess: tuple[float, float] | None = None, eps_max: 
         raise ValueError(f"no equilibrium under the load {tuple(W.tolist())} N: the bearing's speed_rpm="
                          f"{b.speed_rpm!r}, and a film that does not turn (a pure squeeze film) carries no static load")
     c = b.clearance
+    # searched inside the model's validity domain too (a surrogate refuses or extrapolates beyond its data)
+    if isinstance(model, ForceModel):
+        eps_max = min(eps_max, float(model.validity.eps_max))
     psi_load = math.atan2(W[0], W[1])
     zero = np.zeros(2)
     # short-bearing start: Ocvirk's eps at this load (it under-predicts the finite bearing's capacity,
     # so its eps is an upper bound; the line of centres leads the load by phi in the direction of rotation)
     s = b.sommerfeld(w)
     try:
-        e0 = min(shortbearing.eccentricity_at_sommerfeld(b, s), 0.97)
+        e0 = min(shortbearing.eccentricity_at_sommerfeld(b, s), 0.97, 0.98 * eps_max)
     except ValueError:
         e0 = 0.5
     phi0 = shortbearing.attitude_angle_rad(max(e0, 1e-6))
@@ -326,7 +330,8 @@ def equilibrium(model, load, guess: tuple[float, float] | None = None, eps_max: 
     def residual(q):
         return (np.asarray(model.forces(_polar(q[0], q[1], c), zero)) + W) / w
 
-    starts = [(e0, psi_load + phi0), (0.7 * e0, psi_load + phi0), (0.5, psi_load + 0.8), (0.85, psi_load + 0.5)]
+    starts = [(e0, psi_load + phi0), (0.7 * e0, psi_load + phi0), (0.5, psi_load + 0.8),
+              (min(0.85, 0.9 * eps_max), psi_load + 0.5)]
     if guess is not None:
         starts.insert(0, (float(guess[0]), float(guess[1])))
     best = None

@@ -71,6 +71,11 @@ CAPTIONS: dict[str, str] = {
         "the rotor whirls (left; dashed: the paper's rotor as its speed varies; triangles: nonlinear "
         "trajectories just below and above the threshold) and the whirl frequency ratio at onset (right). "
         "Values of a surrogate beyond the axes are marked at the edge with their value."),
+    "figures/paper_scale.png": (
+        "The paper's networks (1x50 tanh, min-max map, Levenberg-Marquardt, validation stop) against the number "
+        "of samples they are trained on: the equilibrium offset under the rotor's weight (left) and the median "
+        "orbit RMS error over cases a-g (right), in % of the clearance, single and split; the recipe's variants "
+        "at one size beside them."),
     "figures/runup_cascade.png": (
         "Run-up and run-down of the paper's rotor through its oil-whirl threshold (reference model): the full "
         "spectrum of the journal's orbit in windows of 16 revolutions, each drawn at the height of its shaft speed "

@@ -209,7 +209,7 @@ class UniversalBearingModel(SurrogateForceModel):
         x, _, _ = as_state_pairs(X, V, self.clearance)
         if x.size:
             eps = float(np.hypot(x[:, 0], x[:, 1]).max()) / self.clearance
-            if eps > self.eps_max:
+            if eps > self.eps_max * (1.0 + 1e-9):
                 raise ValueError(f"eccentricity ratio {eps:.6g} lies beyond the universal model's data "
                                  f"(eps <= {self.eps_max:g})")
         return super().forces(X, V)
