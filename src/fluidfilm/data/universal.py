@@ -25,6 +25,8 @@ Columns of each row: ``ld`` (L/D), ``eps``, ``alpha`` [rad], ``G_r``, ``G_t`` (d
 """
 from __future__ import annotations
 
+from typing import Any
+
 import json
 import math
 import time
@@ -264,7 +266,8 @@ class UniversalSpec:
         extra = sorted(set(cfg) - known)
         if extra:
             raise ValueError(f"unknown universal dataset keys {extra}; known: {sorted(known)}")
-        return cls(**{k: (tuple(cfg[k]) if k == "cavitation" else cfg[k]) for k in cfg})
+        kwargs: dict[str, Any] = {k: (tuple(cfg[k]) if k == "cavitation" else cfg[k]) for k in cfg}
+        return cls(**kwargs)
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -360,7 +363,7 @@ def generate_universal(spec: UniversalSpec, out_dir, *, scheduler: str = "local"
     state = _prepare_dir(out, digest)
     t0 = time.perf_counter()
     grids = _grids(spec, out, progress)
-    jobs = []
+    jobs: list[Any] = []
     for cav in spec.cavitation:
         for ld in spec.ld_values():
             for eps_check, eps in _bands(spec):

@@ -14,6 +14,8 @@ saw (``experiments/universal.py``; ``part`` = dataset | train | evaluate).
 """
 from __future__ import annotations
 
+from typing import Any
+
 import math
 import os
 import shutil
@@ -67,7 +69,7 @@ def _train(cfg) -> Logged:
     from fluidfilm.workflow import tracking
 
     out = Path(cfg.models_dir)
-    metrics = {}
+    metrics: dict[str, Any] = {}
     parent = tracking.active_run()
     for rule in cfg.train.rules:
         frame, meta = load_universal(cfg.dataset_dir, rule)

@@ -23,6 +23,8 @@ round-off).
 """
 from __future__ import annotations
 
+from typing import Any
+
 import dataclasses
 import hashlib
 import json
@@ -135,7 +137,7 @@ def load_weights(cavitation: str) -> dict:
     with np.load(path, allow_pickle=False) as z:
         n = int(z["n_layers"])
         layers = [(np.array(z[f"W{k}"]), np.array(z[f"b{k}"])) for k in range(n)]
-        out = {k: np.array(z[k]) for k in ("in_mean", "in_std", "out_mean", "out_std")}
+        out: dict[str, Any] = {k: np.array(z[k]) for k in ("in_mean", "in_std", "out_mean", "out_std")}
         out.update({k: float(z[k]) for k in ("power", "eps_max", "ld_min", "ld_max")})
         out["info"] = json.loads(str(z["info"]))
         out["activation"] = str(z["activation"])
@@ -201,7 +203,9 @@ class UniversalBearingModel(SurrogateForceModel):
         -------
         UniversalBearingModel
         """
-        return UniversalBearingModel(dataclasses.replace(self.bearing, speed_rpm=float(speed_rpm)), self.cavitation)
+        bearing = self.bearing
+        assert isinstance(bearing, JournalBearing)  # the constructor refuses any other
+        return UniversalBearingModel(dataclasses.replace(bearing, speed_rpm=float(speed_rpm)), self.cavitation)
 
     def forces(self, X, V) -> np.ndarray:
         """Film force [N] at positions X [m] and velocities V [m/s], (..., 2); a ValueError naming the
@@ -215,7 +219,9 @@ class UniversalBearingModel(SurrogateForceModel):
         return super().forces(X, V)
 
     def __repr__(self) -> str:
-        return f"UniversalBearingModel({self.cavitation!r}, L/D={self.bearing.slenderness:.4g})"
+        bearing = self.bearing
+        assert isinstance(bearing, JournalBearing)
+        return f"UniversalBearingModel({self.cavitation!r}, L/D={bearing.slenderness:.4g})"
 
 
 def universal_bearing(bearing: JournalBearing, cavitation: str = "gumbel") -> UniversalBearingModel:

@@ -9,6 +9,8 @@ Lightning fits in float64 (the network is tiny; float64 lets L-BFGS converge bel
 """
 from __future__ import annotations
 
+from typing import Any
+
 import hashlib
 import json
 import time
@@ -217,15 +219,15 @@ def write_weights(fit: dict, cavitation: str, eps_max: float, ld_range: tuple[fl
     """
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
-    arrays = {"n_layers": np.array(len(fit["layers"])), "activation": np.array("tanh"),
+    arrays: dict[str, Any] = {"n_layers": np.array(len(fit["layers"])), "activation": np.array("tanh"),
               "power": np.array(fit["power"]), "eps_max": np.array(float(eps_max)),
               "ld_min": np.array(float(ld_range[0])), "ld_max": np.array(float(ld_range[1])),
               "info": np.array(json.dumps(info, sort_keys=True))}
     for k in ("in_mean", "in_std", "out_mean", "out_std"):
         arrays[k] = np.asarray(fit[k], dtype=np.float64)
-    for k, (W, b) in enumerate(fit["layers"]):
-        arrays[f"W{k}"] = np.asarray(W, dtype=np.float64)
-        arrays[f"b{k}"] = np.asarray(b, dtype=np.float64)
+    for i, (W, b) in enumerate(fit["layers"]):
+        arrays[f"W{i}"] = np.asarray(W, dtype=np.float64)
+        arrays[f"b{i}"] = np.asarray(b, dtype=np.float64)
     path = d / f"{cavitation}.npz"
     with io.atomic_path(path, suffix=".npz") as tmp:
         np.savez_compressed(tmp, **arrays)
