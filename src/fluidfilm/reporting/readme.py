@@ -356,7 +356,7 @@ def render_figures(reports: Path) -> str:
     for path, caption in CAPTIONS.items():
         stage, committed = next(((st, c) for out, (st, c) in outs.items()
                                  if path == out or path.startswith(out.rstrip("/") + "/")), ("?", False))
-        if committed:
+        if committed and (reports / path).exists():  # a committed output whose stage has not run yet has no image
             parts.append(f"![{path}](../reports/{path})\n\n*{caption}* (stage `{stage}`)")
         else:
             parts.append(f"`reports/{path}` (stage `{stage}`; made by `make reproduce`, not committed): *{caption}*")
