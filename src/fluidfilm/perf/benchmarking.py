@@ -21,7 +21,7 @@ OUT_DIR = Path("reports/benchmarks")
 
 
 def median_seconds(fn: Callable[[], object], repeats: int = 7, calls: int = 1, warmup: bool = True,
-                   clock: Callable[[], float] = time.perf_counter) -> float:
+                   clock: Callable[[], float] | None = None) -> float:
     """Median time [s] of one call of ``fn()``: ``repeats`` samples of ``calls`` back-to-back calls each.
 
     The one timer of the workspace's speed figures. One untimed call first when ``warmup`` (numba
@@ -38,8 +38,8 @@ def median_seconds(fn: Callable[[], object], repeats: int = 7, calls: int = 1, w
         Back-to-back calls per sample (>= 1), for calls too short to time one by one.
     warmup : bool, default True
         Call ``fn`` once, untimed, before the samples.
-    clock : callable, default ``time.perf_counter``
-        The clock: wall time by default; ``time.thread_time`` counts only the CPU time of the calling
+    clock : callable or None, default None
+        The clock: None is ``time.perf_counter``, wall time (looked up at the call); ``time.thread_time`` counts only the CPU time of the calling
         thread (work run in that thread, on a machine shared with other processes).
 
     Returns
@@ -65,6 +65,7 @@ def median_seconds(fn: Callable[[], object], repeats: int = 7, calls: int = 1, w
     """
     if int(repeats) < 1 or int(calls) < 1:
         raise ValueError(f"repeats and calls must be positive integers, got repeats={repeats!r}, calls={calls!r}")
+    clock = time.perf_counter if clock is None else clock
     if warmup:
         fn()
     samples = []

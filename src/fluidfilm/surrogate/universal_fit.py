@@ -180,6 +180,9 @@ def train_universal(frame: pd.DataFrame, *, power: float = 2.0, width: int = 64,
     if lbfgs_steps > 0:
         fine = UniversalNet(width, depth, out_mean.tolist(), out_std.tolist(), "lbfgs", 1.0, lbfgs_steps, floor)
         fine.load_state_dict(net.state_dict())
+        # the Adam phase logged the shared hyperparameters to this run; MLflow refuses a changed value
+        # (optimizer, lr) in one run, and the L-BFGS settings are in the run's config already
+        fine._log_hyperparams = False
         full = _loader(zs[~val], y[~val], int((~val).sum()), False)
         L.Trainer(max_epochs=lbfgs_steps, check_val_every_n_epoch=max(1, lbfgs_steps // 4), **kw).fit(
             fine, full, val_dl)
