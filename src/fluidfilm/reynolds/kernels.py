@@ -343,24 +343,32 @@ def forces_product(params, x, v, out):
             out[p, q, 1] = f2
 
 
-@njit(cache=True)
-def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
-    """Pressure before cavitation on the whole (n_theta, n_z) grid, boundaries included."""
+@njit(cache=True, fastmath=_FAST)
+def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out, rows=-1):
+    """Pressure before cavitation on the whole (n_theta, n_z) grid, boundaries included.
+
+    ``rows`` >= 0: only the interior rows 1..rows are reconstructed, the rest of the interior set to 0 (the
+    Swift-Stieber solvers' start needs the lower half of a symmetric field only: they solve the rest).  The
+    sums over modes are reassociated (vectorised); the field is the same to round-off."""
     n = params.n_theta
     nk = params.lam.shape[0]
     q0, qs, qc = position_modes(params, x1 * params.inv_c, x2 * params.inv_c)
     nz = out.shape[1]
+    last = nz - 2 if rows < 0 else min(rows, nz - 2)
     phat = np.empty(nk)
     for i in range(n):
         out[i, 0] = p_supply
         out[i, nz - 1] = 0.0
         for k in range(nk):
             phat[k] = q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]
-        for j in range(1, nz - 1):
+        for j in range(1, last + 1):
             acc = 0.0
+            bj = full_basis[j - 1]
             for k in range(nk):
-                acc += phat[k] * full_basis[j - 1, k]
+                acc += phat[k] * bj[k]
             out[i, j] = acc
+        for j in range(last + 1, nz - 1):
+            out[i, j] = 0.0
 
 
 @njit(cache=True, inline="always")
@@ -751,6 +759,93 @@ def capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric)
 
 
 @njit(cache=True, error_model="numpy")
+def mode_one_film(params, aw, ae, an, rhs, fixed):
+    """The film's columns as the first axial mode alone predicts them: the first guess of the active-set
+    iteration (``active_set_field``) for a field symmetric about mid-length.
+
+    Projected onto the lowest sine mode (positive at every axial node) the discrete Reynolds equation is
+    one tridiagonal system in theta, T x = b (T = ``mode_tridiag_factor``'s operator of mode 1, b its
+    right-hand side); its complementarity problem x >= 0, T x - b >= 0, x (T x - b) = 0 is solved by the
+    same primal-dual active-set iteration in 1-D (a Thomas solve per run of free columns, held columns at
+    0), from the columns where b > 0 (the converging film).  The columns with x > 0 are returned (bool,
+    (n_theta,)): on the plain bearing the 2-D film to within a partly cavitated column at each end, so the
+    2-D iteration starts next to its answer.  A guess only: the 2-D iteration settles from any start."""
+    n = params.n_theta
+    lam0 = params.lam[0] / params.inv_dzeta2
+    sig0 = params.sig[0]
+    d = np.empty(n)
+    b = np.empty(n)
+    bmax = 0.0
+    for i in range(n):
+        d[i] = aw[i] + ae[i] - an[i] * lam0
+        b[i] = -rhs[i] * sig0
+        if abs(b[i]) > bmax:
+            bmax = abs(b[i])
+    free = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        free[i] = b[i] > 0.0 and not fixed[i]
+    x = np.zeros(n)
+    cp = np.empty(n)
+    cols = np.empty(n, dtype=np.int64)
+    for _ in range(2 * n):
+        b0 = -1
+        for i in range(n):
+            if not free[i]:
+                b0 = i
+        if b0 < 0:
+            break  # the whole ring (no held column): keep the last set, a guess anyway
+        # Thomas on each run of free columns, its neighbours at 0
+        t = 0
+        while t < n:
+            i = (b0 + 1 + t) % n
+            if not free[i]:
+                x[i] = 0.0
+                t += 1
+                continue
+            nc = 0
+            while t < n and free[(b0 + 1 + t) % n]:
+                cols[nc] = (b0 + 1 + t) % n
+                nc += 1
+                t += 1
+            for r in range(nc):
+                i = cols[r]
+                if r == 0:
+                    piv = d[i]
+                    x[i] = b[i] / piv
+                else:
+                    w = aw[i]
+                    piv = d[i] - w * cp[r - 1]
+                    x[i] = (b[i] + w * x[cols[r - 1]]) / piv
+                cp[r] = ae[i] / piv
+            for r in range(nc - 2, -1, -1):
+                x[cols[r]] += cp[r] * x[cols[r + 1]]
+        xmax = 0.0
+        for i in range(n):
+            if x[i] > xmax:
+                xmax = x[i]
+        thr = AS_TOL * xmax
+        changed = False
+        for i in range(n):
+            if fixed[i]:
+                continue
+            if free[i]:
+                if x[i] < -thr:
+                    free[i] = False
+                    changed = True
+            else:
+                im = i - 1 if i > 0 else n - 1
+                ip = i + 1 if i < n - 1 else 0
+                if aw[i] * x[im] + ae[i] * x[ip] + b[i] > thr * d[i] + AS_TOL * bmax:
+                    free[i] = True
+                    changed = True
+        if not changed:
+            break
+    for i in range(n):
+        free[i] = free[i] and x[i] > 0.0
+    return free
+
+
+@njit(cache=True, error_model="numpy")
 def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transform=True, warm=None, warm_in=False):
     """The discrete Reynolds equation solved directly, as a linear complementarity problem if ``project``.
 
@@ -815,7 +910,15 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
                 if not fixed[i]:
                     for j in range(1, mh + 1):
                         free[i, j] = warm[i, j]
-    for _ in range(int(round(AS_WIDEN * n)) if project and not warm_start else 0):
+    predicted = project and not warm_start and symmetric
+    if predicted:
+        # the film of the first axial mode's 1-D problem, every row (``mode_one_film``); p is not read
+        film = mode_one_film(params, aw, ae, an, rhs, fixed)
+        for i in range(n):
+            if not fixed[i]:
+                for j in range(1, mh + 1):
+                    free[i, j] = film[i]
+    for _ in range(int(round(AS_WIDEN * n)) if project and not warm_start and not predicted else 0):
         f2 = free.copy()
         for i in range(n):
             if fixed[i]:
@@ -1022,11 +1125,17 @@ def film_force_ss(params, x1, x2, v1, v2):
     full_basis = params.full_basis
     nz = full_basis.shape[0] + 2
     p = np.empty((n, nz))
-    linear_field(params, x1, x2, v1, v2, full_basis, params.p_supply, p)
-    for i in range(n):
-        for j in range(nz):
-            if p[i, j] < 0.0:
-                p[i, j] = 0.0
+    if params.p_supply == 0.0 and params.ss_method != SS_PSOR:
+        # the active-set iteration's first guess of a symmetric field is ``mode_one_film``'s: only the end
+        # rows of p are read
+        p[:, :] = 0.0
+    else:
+        # the solvers start from the clipped linear field
+        linear_field(params, x1, x2, v1, v2, full_basis, params.p_supply, p)
+        for i in range(n):
+            for j in range(nz):
+                if p[i, j] < 0.0:
+                    p[i, j] = 0.0
     swift_stieber_field(params, x1, x2, v1, v2, p)
     return integrate_field(params, p)
 
