@@ -557,6 +557,66 @@ def mode_tridiag_solve(cols, nc, ae, dinv, x, r_first):
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
+def mode_tridiag_green(params, cols, nc, aw, ae, an, dinv, pc, npc):
+    """The entries (T_k^{-1})[pc[q], pc[q2]] of every mode's inverse between the rows ``pc[:npc]``
+    (ascending), as (npc, npc, n_modes), with the factors of ``mode_tridiag_factor`` and no solve per row.
+
+    The inverse of a symmetric tridiagonal matrix is semi-separable: its diagonal is 1 / (D_r + E_r - a_r)
+    (D the forward pivots, E the backward ones, a the diagonal), and above it column b is
+    x_r = x_{r+1} e_r / D_r (the homogeneous rows of the forward sweep; e_r the coupling of r and r + 1),
+    so the entries between the rows follow from products of these ratios between consecutive rows
+    (all below 1: the matrix is diagonally dominant).  O((nc + npc^2) n_modes)."""
+    lam = params.lam
+    nk = lam.shape[0]
+    scale = 1.0 / params.inv_dzeta2
+    # backward pivots E_r, only as far down as the first row asked for
+    r_lo = pc[0]
+    e_piv = np.empty((nc, nk))
+    for r in range(nc - 1, r_lo - 1, -1):
+        i = cols[r]
+        base = aw[i] + ae[i]
+        ani = an[i] * scale
+        if r == nc - 1:
+            for k in range(nk):
+                e_piv[r, k] = base - ani * lam[k]
+        else:
+            e = ae[i]
+            e2 = e * e
+            for k in range(nk):
+                e_piv[r, k] = base - ani * lam[k] - e2 / e_piv[r + 1, k]
+    gp = np.empty((npc, npc, nk))
+    seg = np.empty(nk)
+    for q in range(npc):
+        rq = pc[q]
+        i = cols[rq]
+        base = aw[i] + ae[i]
+        ani = an[i] * scale
+        for k in range(nk):
+            gp[q, q, k] = 1.0 / (1.0 / dinv[rq, k] + e_piv[rq, k] - (base - ani * lam[k]))
+    for q in range(npc - 1):
+        # seg = prod over rows pc[q] .. pc[q + 1] - 1 of e_r / D_r
+        for k in range(nk):
+            seg[k] = 1.0
+        for r in range(pc[q], pc[q + 1]):
+            e = ae[cols[r]]
+            for k in range(nk):
+                seg[k] *= e * dinv[r, k]
+        # gp[a, q + 1] = gp[a, q] * seg * diag[q + 1] / diag[q] for a < q + 1: build from the ratios instead
+        for a in range(q + 1):
+            for k in range(nk):
+                # the ratio product from pc[a] to pc[q + 1], kept in the lower triangle until written
+                prev = 1.0 if a == q else gp[q, a, k]
+                gp[q + 1, a, k] = prev * seg[k]
+    for b in range(1, npc):
+        for a in range(b):
+            for k in range(nk):
+                v = gp[b, a, k] * gp[b, b, k]
+                gp[a, b, k] = v
+                gp[b, a, k] = v
+    return gp
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
 def transform_column(params, values, m, out, coef):
     """out[k] += coef * (2 / (m + 1)) * sum_j basis[j, k] values[j + 1]: the sine coefficients of one node
     column's interior values (rows 1..m of a field column), scaled."""
@@ -639,15 +699,7 @@ def capacitance_run(params, cols, nc, aw, ae, an, rhs, free, fixed, p, m, mh, sy
                     sq[a] = npc - 1
                     a += 1
         # the run's Green's function between the partly cavitated columns, per mode
-        gp = np.empty((npc, npc, nk))
-        col = np.empty((nc, nk))
-        for q in range(npc):
-            col[:, :] = 0.0
-            col[pc[q], :] = 1.0
-            mode_tridiag_solve(cols, nc, ae, dinv, col, pc[q])
-            for q2 in range(npc):
-                for k in range(nk):
-                    gp[q, q2, k] = col[pc[q2], k]
+        gp = mode_tridiag_green(params, cols, nc, aw, ae, an, dinv, pc, npc)
         # capacitance matrix (symmetric positive definite) and its right-hand side
         g = np.empty((s, s))
         y = np.empty(s)
@@ -692,15 +744,12 @@ def capacitance_run(params, cols, nc, aw, ae, an, rhs, free, fixed, p, m, mh, sy
                 b_src[sr[a], k] += f * ba[k]
         mode_tridiag_solve(cols, nc, ae, dinv, b_src, 0)
         bh = b_src
-    # back to the nodes
+    # back to the nodes: one matrix product (BLAS) for the whole run, then the active nodes at 0
+    vals = np.dot(bh, basis[:mh].T)
     for r in range(nc):
         i = cols[r]
         for j in range(1, mh + 1):
-            val = 0.0
-            if free[i, j]:
-                bj = basis[j - 1]
-                for k in range(nk):
-                    val += bj[k] * bh[r, k]
+            val = vals[r, j - 1] if free[i, j] else 0.0
             p[i, j] = val
             if symmetric:
                 p[i, m + 1 - j] = val
