@@ -700,32 +700,45 @@ def capacitance_run(params, cols, nc, aw, ae, an, rhs, free, fixed, p, m, mh, sy
                     a += 1
         # the run's Green's function between the partly cavitated columns, per mode
         gp = mode_tridiag_green(params, cols, nc, aw, ae, an, dinv, pc, npc)
-        # capacitance matrix (symmetric positive definite) and its right-hand side
+        # capacitance matrix (symmetric positive definite) and its right-hand side, block by block of
+        # partly cavitated columns (the active nodes of a column are consecutive in the list)
+        a_lo = np.zeros(npc + 1, dtype=np.int64)
+        for a in range(s):
+            a_lo[sq[a] + 1] = a + 1
         g = np.empty((s, s))
         y = np.empty(s)
-        for a in range(s):
-            ba = basis[sj[a]]
-            for b in range(a + 1):
-                bb = basis[sj[b]]
-                gab = gp[sq[a], sq[b]]
+        t = np.empty(nk)
+        for q in range(npc):
+            for a in range(a_lo[q], a_lo[q + 1]):
+                ba = basis[sj[a]]
+                for q2 in range(q + 1):
+                    w = gp[q, q2]
+                    for k in range(nk):
+                        t[k] = ba[k] * w[k]
+                    for b in range(a_lo[q2], min(a_lo[q2 + 1], a + 1)):
+                        bb = basis[sj[b]]
+                        acc = 0.0
+                        for k in range(nk):
+                            acc += t[k] * bb[k]
+                        g[a, b] = acc
+                        g[b, a] = acc
                 acc = 0.0
                 for k in range(nk):
-                    acc += ba[k] * bb[k] * gab[k]
-                g[a, b] = acc
-            acc = 0.0
-            for k in range(nk):
-                acc += ba[k] * bh[sr[a], k]
-            y[a] = -acc / two_m1
-        # dense Cholesky, lower triangle in place, then the two triangular solves
-        for a in range(s):
-            for b in range(a + 1):
-                acc = g[a, b]
-                for k in range(b):
-                    acc -= g[a, k] * g[b, k]
-                if b == a:
-                    g[a, a] = np.sqrt(acc)
-                else:
-                    g[a, b] = acc / g[b, b]
+                    acc += ba[k] * bh[sr[a], k]
+                y[a] = -acc / two_m1
+        # Cholesky factor (lower): LAPACK for the larger systems, else in place; then two triangular solves
+        if s > 24:
+            g = np.linalg.cholesky(g)
+        else:
+            for a in range(s):
+                for b in range(a + 1):
+                    acc = g[a, b]
+                    for k in range(b):
+                        acc -= g[a, k] * g[b, k]
+                    if b == a:
+                        g[a, a] = np.sqrt(acc)
+                    else:
+                        g[a, b] = acc / g[b, b]
         for a in range(s):
             acc = y[a]
             for k in range(a):
@@ -785,7 +798,9 @@ def capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric)
         env_cost += 0.5 * c * mh * mh
     if b0 < 0:
         return False
-    cap_cost = (s_tot * s_tot * (nk + s_tot / 3.0) + n_part * n_run * nk * 3.0 + n_run * nk * (mh + 8.0))
+    # capacitance matrix and its Cholesky factor, the Green's function between partly cavitated columns,
+    # the tridiagonal factor and solves and the field (a BLAS product)
+    cap_cost = (s_tot * s_tot * (0.5 * nk + s_tot / 6.0) + n_part * n_part * nk + n_run * nk * (0.5 * mh + 12.0))
     if cap_cost > env_cost:
         return False
     cols = np.empty(n, dtype=np.int64)
