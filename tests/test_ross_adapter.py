@@ -171,15 +171,32 @@ def test_bad_input_is_refused_with_the_value(setup):
         fr.run_time_response(film, 100.0, np.arange(10) * 1e-4)
 
 
+def _network_shaped(bearing):
+    """An untrained 4-16-2 tanh network with fitted scalings (its kernel writes scratch arrays held in its
+    parameters): a second kind of compiled kernel, not an accurate film."""
+    from fluidfilm import ReynoldsSolver, SurrogateForceModel
+    from fluidfilm.perf.speed import sample_states
+    from fluidfilm.surrogate import Scaling
+
+    x, v = sample_states(bearing.clearance, n=200, v_max=0.01)
+    sc = Scaling.fit("standard", x, v, ReynoldsSolver(bearing, 16, 8).forces(x, v), bearing.clearance,
+                     bearing.omega, bearing.force_scale)
+    rng = np.random.default_rng(0)
+    layers = [(rng.normal(size=(o, i)) / np.sqrt(i), np.zeros(o)) for i, o in ((4, 16), (16, 2))]
+    return SurrogateForceModel(bearing, [layers], [sc], "tanh")
+
+
 def test_compiled_callback_equals_the_python_loop(setup):
     """The compiled callback (every node on a compiled kernel: the default) returns the Python loop's forces
-    to round-off, with and without the prediction to the step's end, linear part implicit or not; a journal
-    at the sleeve is refused by both with the same message."""
+    to round-off, with and without the prediction to the step's end, linear part implicit or not, with the
+    reference solver at one node and a network at the other; a journal at the sleeve is refused by both
+    with the same message."""
     rotor, loads = setup
     s = _solver(6000.0)
+    net = _network_shaped(s.bearing)
     rng = np.random.default_rng(5)
     for linear_part in ("implicit", "none"):
-        film = fr.FilmBearings(rotor, {0: s, 4: s}, loads, linear_part=linear_part)
+        film = fr.FilmBearings(rotor, {0: s, 4: net}, None, linear_part=linear_part)
         assert all(p[6] is not None for p in film._plan)  # every node on a compiled kernel
         c = s.bearing.clearance
         for _ in range(5):

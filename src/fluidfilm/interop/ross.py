@@ -51,14 +51,13 @@ _T = np.array([1.0, -1.0])
 LINEAR_PARTS = ("implicit", "none")
 
 
-def _node_step(i, j, origin, f_origin, k, c, c2, kernel):
+def _node_step(i, j, origin, f_origin, k, c, c2, fn):
     """One film node's part of the callback, compiled with its constants and its model's compiled force
-    kernel and parameters frozen in (so a call passes only arrays and scalars: no per-call typing of the
-    kernel's parameter tuple).  Same arithmetic as ``FilmBearings.__call__``'s Python loop; returns False
-    (and writes nothing) where the journal would touch the sleeve."""
+    kernel ``fn`` frozen in (the kernel's parameters come as an argument: some kernels write scratch arrays
+    held in them).  Same arithmetic as ``FilmBearings.__call__``'s Python loop; returns False (and writes
+    nothing) where the journal would touch the sleeve."""
     from numba import njit
 
-    fn, params = kernel
     ox1, ox2 = (float(x) for x in origin)
     f01, f02 = (float(x) for x in f_origin)
     implicit = k is not None
@@ -66,7 +65,7 @@ def _node_step(i, j, origin, f_origin, k, c, c2, kernel):
     c00, c01, c10, c11 = (float(x) for x in np.ravel(c)) if implicit else (0.0, 0.0, 0.0, 0.0)
 
     @njit
-    def step(q, v, acc, dt, predict, out):
+    def step(q, v, acc, dt, predict, out, params):
         qi, qj, vi, vj = q[i], q[j], v[i], v[j]
         if predict:
             h = 0.5 * dt * dt
@@ -91,20 +90,21 @@ def _node_step(i, j, origin, f_origin, k, c, c2, kernel):
 
 def _chain(prev, step, index):
     """The compiled callback of the nodes so far (``prev``, or None) followed by node ``index``'s ``step``:
-    returns 0, or 1 + the index of the first node whose journal touches its sleeve."""
+    returns 0, or 1 + the index of the first node whose journal touches its sleeve.  The kernels' parameters
+    come nested: node 0's alone, then (the earlier nodes', this node's)."""
     from numba import njit
 
     if prev is None:
         @njit
-        def run(q, v, acc, dt, predict, out):
-            return 0 if step(q, v, acc, dt, predict, out) else index + 1
+        def run(q, v, acc, dt, predict, out, params):
+            return 0 if step(q, v, acc, dt, predict, out, params) else index + 1
     else:
         @njit
-        def run(q, v, acc, dt, predict, out):
-            status = prev(q, v, acc, dt, predict, out)
+        def run(q, v, acc, dt, predict, out, params):
+            status = prev(q, v, acc, dt, predict, out, params[0])
             if status:
                 return status
-            return 0 if step(q, v, acc, dt, predict, out) else index + 1
+            return 0 if step(q, v, acc, dt, predict, out, params[1]) else index + 1
     return run
 
 
@@ -320,8 +320,14 @@ class FilmBearings:
             plan.append((n, (int(self.dofs[n][0]), int(self.dofs[n][1])),
                          tuple(float(x) for x in self.origin[n]), tuple(float(x) for x in self.f_origin[n]),
                          self.K[n].tolist() if imp else None, self.C[n].tolist() if imp else None, kernel, m))
-        self._plan = plan
-        self._run = None  # the compiled callback of this plan (built on the first call that uses it)
+        # the compiled callback of this plan (built on the first call that uses it), kept while the plan stays
+        # the same (``run_time_response`` refreshes before every run)
+        key = tuple((n, d, o, f, k, c, None if kernel is None else (id(kernel[0]), id(kernel[1])), id(m))
+                    for n, d, o, f, k, c, kernel, m in plan)
+        if key != getattr(self, "_plan_key", None):
+            self._run = None
+            self._run_params = None  # the kernels' parameters it is called with
+        self._plan, self._plan_key = plan, key
 
     def reset_timing(self) -> None:
         """Set the call counter and the time spent in the callback to zero."""
@@ -404,16 +410,26 @@ class FilmBearings:
 
     def _call_compiled(self, t0, disp_resp, velc_resp, accl_resp, time_step, predict):
         """``__call__`` by the compiled callback (every node on a compiled kernel): one compiled call per step."""
-        if self._run is None:
-            run = None
-            for index, (n, (i, j), origin, f_origin, k, c, kernel, _) in enumerate(self._plan):
-                run = _chain(run, _node_step(i, j, origin, f_origin, k, c, self._c2[n], kernel), index)
-            self._run = run
         q = np.ascontiguousarray(disp_resp, dtype=float)
         v = np.ascontiguousarray(velc_resp, dtype=float)
         acc = np.ascontiguousarray(accl_resp, dtype=float) if predict else q
         out = np.zeros(self.ndof)
-        status = self._run(q, v, acc, float(time_step) if predict else 0.0, predict, out)
+        args = (q, v, acc, float(time_step) if predict else 0.0, predict, out, self._run_params)
+        if self._run is None:
+            run, params = None, None
+            for index, (n, (i, j), origin, f_origin, k, c, kernel, _) in enumerate(self._plan):
+                run = _chain(run, _node_step(i, j, origin, f_origin, k, c, self._c2[n], kernel[0]), index)
+                params = kernel[1] if params is None else (params, kernel[1])
+            self._run_params = params
+            args = args[:-1] + (params,)
+            status = run(*args)  # compiles (not counted in ``seconds``)
+            # later calls go to the compiled entry point itself: numba's dispatcher would type the parameter
+            # tuples on every call (microseconds: the Python overhead this path removes)
+            self._run = run.overloads[run.signatures[0]].entry_point
+            t0 = time.perf_counter()
+            status = self._run(*args)
+        else:
+            status = self._run(*args)
         if status:  # the same state and message as the Python loop's
             n, (i, j), (ox1, ox2) = self._plan[status - 1][:3]
             qi, qj = float(q[i]), float(q[j])
