@@ -98,7 +98,6 @@ _EB = np.array([4.89352518554385e-03, 2.26843463243900e-03, 1.18534705686654e-04
 _A1, _A3, _A5, _A7, _A9, _A11, _A13 = (np.float32(a) for a in _EA)
 _B0, _B2, _B4, _B6 = (np.float32(b) for b in _EB)
 _CLAMP32 = np.float32(7.90531110763549805)
-_TINY32 = np.float32(0.0004)
 
 
 @njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
@@ -112,12 +111,13 @@ def tanh32(x):
     p = x2 * p + _A5
     p = x2 * p + _A3
     p = x2 * p + _A1
-    p = x * p
     q = x2 * _B6 + _B4
     q = x2 * q + _B2
     q = x2 * q + _B0
-    # tanh x = x to float32 precision below 4e-4 (Eigen's cut; the rational form underflows for tiny x)
-    return x if abs(x) < _TINY32 else p / q
+    # x (p / q), not Eigen's (x p) / q with its cut "x below 4e-4": x p underflows for subnormal x, while
+    # p / q -> A1 / B0 = 1 - 1.3e-7 keeps x to float32 precision without a compare and select per unit
+    # (three vector operations of the ~20 per unit: ~10 % of the float32 network's time on this machine)
+    return x * (p / q)
 
 
 # ---------------------------------------------------------------------------------------------- folding
@@ -845,13 +845,18 @@ def _batch_net_source(layers, act_fn, ind, n_terms, bias0):
 _ACT_BATCH = {"tanh": "tanh_n", "relu": "relu_n", "silu": "silu_n", "sigmoid": "sigmoid_n"}
 
 
-def batch_kernel_source(key) -> str:
+def batch_kernel_source(key, dtype: str = "float64") -> str:
     """Python source of the batched kernel of a model shape, compiled by ``batch_kernel``.
 
     Parameters
     ----------
     key : tuple
         ``batch_shape_key(model)`` (not None).
+    dtype : {"float64", "float32"}, default "float64"
+        The networks' arithmetic. With float32 the per-state frame (unit vectors, drive, gain) is computed
+        in float32 as well; the eccentricity, which routes the state to its region(s) and counts it
+        against the training domain, and 1 - eps^2 stay float64, so routing and counting equal the
+        float64 kernel's exactly.
 
     Returns
     -------
@@ -876,8 +881,8 @@ def batch_kernel_source(key) -> str:
     L = ["def batch_kernel(bp, x, v, out):",
          f"{ind1}w = bp.weights", f"{ind1}q = bp.consts", f"{ind1}inv_c2 = bp.setting[0]", f"{ind1}n = x.shape[0]",
          f"{ind1}Z = np.empty(({n_in}, n), dtype=w.dtype)",
-         f"{ind1}G = np.empty(n)", f"{ind1}E1 = np.empty(n)", f"{ind1}E2 = np.empty(n)", f"{ind1}DD = np.empty(n)",
-         f"{ind1}KV = np.empty(n)", f"{ind1}EPS = np.empty(n)", f"{ind1}VA = np.empty(n)",
+         *[f"{ind1}{a} = np.empty(n, dtype=np.{'float32' if dtype == 'float32' else 'float64'})"
+           for a in ("G", "E1", "E2", "DD", "KV")], f"{ind1}EPS = np.empty(n)", f"{ind1}VA = np.empty(n)",
          f"{ind1}RA = np.empty(n, dtype=np.int64)", f"{ind1}RB = np.empty(n, dtype=np.int64)", f"{ind1}WB = np.empty(n)",
          f"{ind1}c = q[0]", f"{ind1}omega = q[1]"]
     if sleeve:
@@ -889,31 +894,44 @@ def batch_kernel_source(key) -> str:
     for s in range(n_dom):
         L += [f"{ind1}dl{s} = q[{4 + nb + 3 * s}]", f"{ind1}dh{s} = q[{5 + nb + 3 * s}]", f"{ind1}dv{s} = q[{6 + nb + 3 * s}]"]
     # 1a. per state, in order, without branches (vectorises): inputs, frame, gains
-    L += [f"{ind1}inv_c = 1.0 / c", f"{ind1}inv_cw = 1.0 / cw", f"{ind1}sc2 = math.sqrt(inv_c2)"]
+    # float32 networks: the frame in float32 too (twice the vector lanes for its square roots and divisions;
+    # measured 3-6 ns of ~60 per force), the eccentricity and 1 - eps^2 in float64 (exact routing and counting)
+    f32 = dtype == "float32"
+    ft = "f" if f32 else ""
+    one, two, zero_ = (("one", "two", "zf") if f32 else ("1.0", "2.0", "0.0"))
+    if f32:
+        L += [f"{ind1}f = np.float32", f"{ind1}one = f(1.0)", f"{ind1}two = f(2.0)", f"{ind1}zf = f(0.0)"]
+        L += [f"{ind1}inv_c = f(1.0 / c)", f"{ind1}inv_cw = f(1.0 / cw)", f"{ind1}gsf = f(gs)"]
+    else:
+        L += [f"{ind1}inv_c = 1.0 / c", f"{ind1}inv_cw = 1.0 / cw"]
+    L += [f"{ind1}sc2 = math.sqrt(inv_c2)"]
     L += [f"{ind1}for p in range(n):",
           f"{ind2}x1 = x[p, 0]", f"{ind2}x2 = x[p, 1]", f"{ind2}v1 = v[p, 0]", f"{ind2}v2 = v[p, 1]",
           f"{ind2}r2 = x1 * x1 + x2 * x2", f"{ind2}e2 = r2 * inv_c2", f"{ind2}rr = math.sqrt(r2)", f"{ind2}EPS[p] = rr * sc2",
-          f"{ind2}VA[p] = max(abs(v1), abs(v2))", f"{ind2}drive = 1.0"]
+          f"{ind2}VA[p] = max(abs(v1), abs(v2))", f"{ind2}drive = {one}"]
+    if f32:
+        L += [f"{ind2}{a}f = f({a})" for a in ("x1", "x2", "v1", "v2", "rr")]
     # (one reciprocal per division of the one-state kernel's expressions: equal to round-off)
     if polar:
-        L += [f"{ind2}at0 = 1.0 if rr == 0.0 else 0.0", f"{ind2}inv = 1.0 / (rr + at0)",
-              f"{ind2}er1 = x1 * inv", f"{ind2}er2 = x2 * inv + at0",
-              f"{ind2}z0 = rr * inv_c", f"{ind2}z1 = (v1 * er1 + v2 * er2) * inv_cw", f"{ind2}z2 = (v1 * er2 - v2 * er1) * inv_cw"]
+        L += [f"{ind2}at0 = {one} if rr{ft} == {zero_} else {zero_}", f"{ind2}inv = {one} / (rr{ft} + at0)",
+              f"{ind2}er1 = x1{ft} * inv", f"{ind2}er2 = x2{ft} * inv + at0",
+              f"{ind2}z0 = rr{ft} * inv_c", f"{ind2}z1 = (v1{ft} * er1 + v2{ft} * er2) * inv_cw",
+              f"{ind2}z2 = (v1{ft} * er2 - v2{ft} * er1) * inv_cw"]
         if frame == 2:
-            L += [f"{ind2}ua = z0 - 2.0 * z2", f"{ind2}ub = 2.0 * z1", f"{ind2}drive = math.sqrt(ua * ua + ub * ub)",
-                  f"{ind2}zero = 1.0 if drive == 0.0 else 0.0", f"{ind2}inv = 1.0 / (drive + zero)",
+            L += [f"{ind2}ua = z0 - {two} * z2", f"{ind2}ub = {two} * z1", f"{ind2}drive = math.sqrt(ua * ua + ub * ub)",
+                  f"{ind2}zero = {one} if drive == {zero_} else {zero_}", f"{ind2}inv = {one} / (drive + zero)",
                   f"{ind2}z1 = ua * inv + zero", f"{ind2}z2 = ub * inv"]
         L += [f"{ind2}Z[0, p] = z0", f"{ind2}Z[1, p] = z1", f"{ind2}Z[2, p] = z2", f"{ind2}E1[p] = er1", f"{ind2}E2[p] = er2"]
     elif physics:
-        L += [f"{ind2}Z[0, p] = x1 * inv_c", f"{ind2}Z[1, p] = x2 * inv_c", f"{ind2}Z[2, p] = v1 * inv_cw",
-              f"{ind2}Z[3, p] = v2 * inv_cw"]
+        L += [f"{ind2}Z[0, p] = x1{ft} * inv_c", f"{ind2}Z[1, p] = x2{ft} * inv_c", f"{ind2}Z[2, p] = v1{ft} * inv_cw",
+              f"{ind2}Z[3, p] = v2{ft} * inv_cw"]
     else:
         L += [f"{ind2}Z[0, p] = x1", f"{ind2}Z[1, p] = x2", f"{ind2}Z[2, p] = v1", f"{ind2}Z[3, p] = v2"]
     if physics:
-        L += [f"{ind2}d = 1.0 - e2"] + ([] if uniform_gain else [f"{ind2}DD[p] = d"])
-        L.append(f"{ind2}G[p] = gs * drive / (d * math.sqrt(d))" if uniform_gain else f"{ind2}G[p] = gs * drive")
+        L += [f"{ind2}d = {'f(1.0 - e2)' if f32 else '1.0 - e2'}"] + ([] if uniform_gain else [f"{ind2}DD[p] = d"])
+        L.append(f"{ind2}G[p] = gs{ft} * drive / (d * math.sqrt(d))" if uniform_gain else f"{ind2}G[p] = gs{ft} * drive")
         if any_kind2:
-            L.append(f"{ind2}KV[p] = 1.0 + math.sqrt(v1 * v1 + v2 * v2) * inv_cw")
+            L.append(f"{ind2}KV[p] = {one} + math.sqrt(v1{ft} * v1{ft} + v2{ft} * v2{ft}) * inv_cw")
         if uniform_gain and any_kind2:
             L.append(f"{ind2}G[p] *= KV[p]")
     # 1b. the domain count and the region(s) of every state, as selects (vectorises)
@@ -1028,7 +1046,7 @@ def batch_kernel(key, dtype: str = "float64"):
     """
     fn = _COMPILED_BATCH.get((key, dtype))
     if fn is None:
-        source = batch_kernel_source(key)
+        source = batch_kernel_source(key, dtype)
         namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np,
                                      "tanh_n": tanh32 if dtype == "float32" else tanh64, "relu_n": _relu,
                                      "silu_n": _silu, "sigmoid_n": _sigmoid}
