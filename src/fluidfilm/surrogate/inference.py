@@ -489,7 +489,7 @@ class SurrogateForceModel:
             return fn, bp
         bp = bp._replace(counter=np.zeros(1))
         # one thread's parameters: their own scratch too (the kernel allocates none per call up to its size)
-        return fn, (bp if self._batch_key is None else with_workspace(bp, self._batch_key))
+        return fn, (with_workspace(bp, self._batch_key) if isinstance(bp, FastBatchParams) else bp)
 
     def merge_counts(self, bparams: BatchParams | FastBatchParams) -> None:
         """Add the domain count of private batch parameters to the model's (``BatchForceModel``)."""
