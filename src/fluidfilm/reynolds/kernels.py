@@ -57,6 +57,10 @@ Kernels:
 - ``capacitance_field``      the active-set iteration's linear solve by the axial
                              sine transform on runs of node columns and a
                              capacitance matrix on the active nodes inside them
+                             (``mode_tridiag_green``: its Green's function from
+                             the semi-separable inverse of each mode's matrix)
+- ``mode_one_film``          the active-set iteration's first guess: the film of
+                             the first axial mode's 1-D complementarity problem
 - ``swift_stieber_field``    either of them, by ``params.ss_method``
 - ``film_force_ss``          force with Swift-Stieber cavitation
 - ``general_linear_field``   the general path: film thickness h(theta, z)
@@ -990,23 +994,34 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
             for j in range(1, mh + 1):
                 if f2[(i + 1) % n, j] or f2[(i - 1) % n, j]:
                     free[i, j] = True
-    idx = np.empty((n, mh + 2), dtype=np.int64)
+    # the envelope factorisation's work arrays, allocated on its first use (the transform path needs none)
     cap = n * mh
-    first = np.empty(cap, dtype=np.int64)
-    start = np.empty(cap + 1, dtype=np.int64)
-    node_i = np.empty(cap, dtype=np.int64)
-    node_j = np.empty(cap, dtype=np.int64)
-    y = np.empty(cap)
-    x = np.empty(cap)
-    inv_diag = np.empty(cap)
+    idx = np.empty((0, 0), dtype=np.int64)
+    first = np.empty(0, dtype=np.int64)
+    start = np.empty(0, dtype=np.int64)
+    node_i = np.empty(0, dtype=np.int64)
+    node_j = np.empty(0, dtype=np.int64)
+    y = np.empty(0)
+    x = np.empty(0)
+    inv_diag = np.empty(0)
     env = np.empty(0)
+    count = np.empty(0, dtype=np.int64)
     nu_old = 0
     c0 = -1
-    count = np.empty(n, dtype=np.int64)
     for it in range(max_iter):
         if transform and capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric):
             nu_old = 0  # the envelope factor no longer matches: a later envelope solve starts afresh
         else:
+            if idx.shape[0] == 0:
+                idx = np.empty((n, mh + 2), dtype=np.int64)
+                first = np.empty(cap, dtype=np.int64)
+                start = np.empty(cap + 1, dtype=np.int64)
+                node_i = np.empty(cap, dtype=np.int64)
+                node_j = np.empty(cap, dtype=np.int64)
+                y = np.empty(cap)
+                x = np.empty(cap)
+                inv_diag = np.empty(cap)
+                count = np.empty(n, dtype=np.int64)
             # order: the columns after one with the fewest free nodes (held columns have none), that one last
             best = mh + 1
             for i in range(n):
