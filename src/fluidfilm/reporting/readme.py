@@ -179,8 +179,11 @@ def render_headline(reports: Path) -> str:
     if peer.exists():  # `make ross-peer`, outside the pipeline (ROSS lives in its own environment)
         p = json.loads(peer.read_text())
         if "ross_peer_speedup_lund_thomsen" in p:
-            rows.append(["grooved bearing (Lund & Thomsen), time per operating point, ROSS 3.1 / ours at equal "
-                         "accuracy (`make ross-peer`)", "-", _num(p["ross_peer_speedup_lund_thomsen"], ".1f", "x")])
+            err = p.get("lund_thomsen_max_coef_err_pct")
+            at = f", ours within {err:.1f} % on every row" if isinstance(err, (int, float)) else ""
+            rows.append(["grooved bearing (Lund & Thomsen), time per operating point, ROSS 3.1's most accurate "
+                         f"mesh / ours at equal or better accuracy{at} (`make ross-peer`)", "-",
+                         _num(p["ross_peer_speedup_lund_thomsen"], ".1f", "x")])
     if g("surrogate_goals") is not None:
         rows.append(["goals of the fast, accurate surrogate met (docs/results.md)", "-",
                      f"{g('surrogate_goals_met')} of {g('surrogate_goals')}"])
