@@ -598,9 +598,8 @@ def render_train_time_full_scale(reports: Path) -> str:
                       "stop reasons", "val. rel. RMSE per network", "val. rel. RMSE", "test rel. RMSE"], rows))
 
 
-#: the paper_scale study's reports, first found first: the pipeline's, the larger sizes', the full scale's, and a
-#: run by hand at 40 k committed before the pipeline's (its own label says so)
-PAPER_SCALE_REPORTS = ("paper_scale.json", "paper_scale_curve.json", "paper_full_scale.json", "paper_scale_40k.json")
+#: the paper_scale study's reports, first found first: the pipeline's (40 k), the larger sizes', the full scale's
+PAPER_SCALE_REPORTS = ("paper_scale.json", "paper_scale_curve.json", "paper_full_scale.json")
 
 
 def paper_scale_records(reports: Path) -> tuple[list[dict], list[str]]:
