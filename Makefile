@@ -24,7 +24,7 @@
 #                                  docs/paper_experiment.md): reports/train_time_ci.json
 #   make train-time-full-scale     one run per structure on all 4.5 M samples (Adam, same stopping rule):
 #                                  reports/train_time_full_scale.json
-#   make paper-scale-curve         the paper's networks at 640 k and 2.56 M samples (LM, hours):
+#   make paper-scale-curve         the paper's networks at 160 k, 640 k and 2.56 M samples (LM, hours):
 #                                  reports/paper_scale_curve.json (resumes where it stopped)
 #   make paper-full-scale          the paper's networks on all 4.5 M samples (LM; the split's eps > 0.7
 #                                  network to LM_BUDGET_S, then Adam): reports/paper_full_scale.json
@@ -141,7 +141,7 @@ train-time-full-scale: setup
 .PHONY: paper-scale-curve paper-full-scale
 # both resume an interrupted run (finished models and per-epoch LM checkpoints under cache/)
 paper-scale-curve: setup
-	$(PY) experiments/paper_scale.py 'sizes=[640000,2560000]' ablation.enabled=false \
+	$(PY) experiments/paper_scale.py 'sizes=[160000,640000,2560000]' ablation.enabled=false \
 	    cache_dir=cache/paper_scale_curve out=reports/paper_scale_curve.json \
 	    figure=reports/figures/paper_scale_curve.png \
 	    'include_reports=[reports/paper_scale.json,reports/paper_full_scale.json]'

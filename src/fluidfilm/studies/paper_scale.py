@@ -297,7 +297,7 @@ def summary_keys(records: list[dict]) -> dict:
 
 def included_records(paths) -> list[dict]:
     """The curve's and the full scale's records of other runs of this study (their reports), for the figure
-    and the keys: e.g. the pipeline's 40 k and 160 k beside `make paper-scale-curve`'s larger sizes."""
+    and the keys: e.g. the pipeline's 40 k beside `make paper-scale-curve`'s larger sizes."""
     out = []
     for p in paths or []:
         if Path(p).exists():
