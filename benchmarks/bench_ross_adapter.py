@@ -19,7 +19,9 @@ middle, ~28 kg in all) on two plain journal bearings (L = 25 mm, D = 50 mm, c = 
 4. Cost per Newmark step (ROSS's "simple" Newmark, ``linear_part="implicit"``): ROSS's own step without the
    callback; the callback with the reference solver (measured in the run); the callback with a
    surrogate-shaped model (an untrained 4-64-64-2 tanh ``SurrogateForceModel``: a network's cost, not its
-   accuracy) and the linearised film, replayed on the run's states.
+   accuracy) and the linearised film, replayed on the run's states, each through the compiled callback
+   (``FilmBearings.compiled``, where every node has a compiled kernel) and through the Python loop over the
+   nodes, side by side.
 
 Writes reports/benchmarks/ross_adapter.json (keys ``ross_adapter_linear_match_rel_err``,
 ``ross_adapter_threshold_rel_err``) and reports/figures/ross_orbits.png (the 200 N orbit beside ROSS's linear
@@ -212,16 +214,33 @@ def step_cost(rotor, loads, rpm: float, dt: float, t_end: float) -> dict:
                 f2.f_origin[n] = np.asarray(m.forces(film.origin[n], np.zeros(2)), dtype=float)
             f2.refresh()
         f2.predict = True
-        for q in states[:50]:
-            f2(1, time_step=dt, disp_resp=q, velc_resp=zeros, accl_resp=zeros)
-        f2.reset_timing()
-        for q in states:
-            f2(1, time_step=dt, disp_resp=q, velc_resp=zeros, accl_resp=zeros)
-        call = f2.seconds / f2.calls
+        # the compiled callback (the default where every node has a compiled kernel) and the Python loop over
+        # the nodes, interleaved in chunks of states, medians of the chunks' time per call
+        compiled_too = all(p[6] is not None for p in f2._plan)
+        paths = (True, False) if compiled_too else (False,)
+        for compiled in paths:
+            f2.compiled = compiled
+            for q in states[:50]:
+                f2(1, time_step=dt, disp_resp=q, velc_resp=zeros, accl_resp=zeros)
+        per_path: dict[bool, list[float]] = {c: [] for c in paths}
+        for chunk in np.array_split(states, 10):
+            for compiled in paths:
+                f2.compiled = compiled
+                f2.reset_timing()
+                for q in chunk:
+                    f2(1, time_step=dt, disp_resp=q, velc_resp=zeros, accl_resp=zeros)
+                per_path[compiled].append(f2.seconds / f2.calls)
+        f2.compiled = True
+        call = float(np.median(per_path[paths[0]]))
         out[f"{name}_replay_call_s"] = call
         out[f"{name}_share"] = call / (alone + call)
+        if compiled_too:
+            py = float(np.median(per_path[False]))
+            out[f"{name}_python_call_s"] = py
+            out[f"{name}_python_share"] = py / (alone + py)
         print(f"step cost: ROSS alone {1e6 * alone:.0f} us, callback {name} {1e6 * call:.1f} us "
-              f"({100 * out[f'{name}_share']:.0f} % of the step)", flush=True)
+              f"({100 * out[f'{name}_share']:.0f} % of the step)"
+              + (f"; Python loop {1e6 * out[f'{name}_python_call_s']:.1f} us" if compiled_too else ""), flush=True)
     return out
 
 
@@ -248,7 +267,8 @@ def main() -> None:
 
     metrics = {"ross_adapter_linear_match_rel_err": lm["none"][-1], "ross_adapter_threshold_rel_err": wo["rel_err"],
                "ross_adapter_reference_step_share": sc["reference_share"],
-               "ross_adapter_surrogate_step_share": sc["surrogate_share"]}
+               "ross_adapter_surrogate_step_share": sc["surrogate_share"],
+               "ross_adapter_surrogate_step_share_python_loop": sc["surrogate_python_share"]}
     header = ["check", "result"]
     rows = [["linear film through the callback (whole force, explicit) vs ROSS's BearingElement, max rel. diff.",
              ", ".join(f"{v:.2g} at dt {d:g} s" for d, v in zip(lm["dt"], lm["none"]))
@@ -262,8 +282,13 @@ def main() -> None:
             ["ROSS Newmark step alone (30 DOF rotor)", f"{1e6 * sc['ross_step_s']:.0f} us"],
             ["callback, reference solver 30x30, two bearings",
              f"{1e6 * sc['reference_call_s']:.0f} us per step ({100 * sc['reference_share']:.0f} % of the step)"],
-            ["callback, surrogate-shaped network, two bearings",
-             f"{1e6 * sc['surrogate_replay_call_s']:.0f} us per step ({100 * sc['surrogate_share']:.0f} % of the step)"],
+            ["callback, reference solver 30x30, two bearings, replayed: compiled callback / Python loop",
+             f"{1e6 * sc['reference_replay_call_s']:.0f} / {1e6 * sc['reference_python_call_s']:.0f} us per step"],
+            ["callback, surrogate-shaped network, two bearings (compiled callback)",
+             f"{1e6 * sc['surrogate_replay_call_s']:.1f} us per step ({100 * sc['surrogate_share']:.0f} % of the step)"],
+            ["same, the Python loop over the nodes (the callback before the compiled path)",
+             f"{1e6 * sc['surrogate_python_call_s']:.1f} us per step ({100 * sc['surrogate_python_share']:.0f} % of the "
+             f"step)"],
             ["callback, linearised film (numpy forces(), no compiled kernel)",
              f"{1e6 * sc['linearised_replay_call_s']:.0f} us per step ({100 * sc['linearised_share']:.0f} % of the step)"]]
     notes = (f"ROSS {ross.__version__} (Python {sys.version.split()[0]}), fluidfilm.interop.ross; Jeffcott rotor "
@@ -272,7 +297,8 @@ def main() -> None:
              f"on the disc. Whirl: runs of {wo['t_end']} s at dt {wo['dt']:g} s, growth rate fitted from "
              f"{wo['t_from']} s to peaks per whirl period. Step cost: median of 3 runs of {sc['steps']} steps "
              f"(ROSS alone and with the callback interleaved); the other models replay the run's states through "
-             f"the callback. Shares = callback / (ROSS's step + callback). Load average {load0[0]:.1f} before, "
+             f"the callback, compiled (FilmBearings.compiled, the default where every node has a compiled kernel) "
+             f"and as the Python loop over the nodes, interleaved in 10 chunks (medians). Shares = callback / (ROSS's step + callback). Load average {load0[0]:.1f} before, "
              f"{load1[0]:.1f} after ({os.cpu_count()} cores shared); wall time {wall:.0f} s.")
     for r in rows:
         print(" | ".join(r))

@@ -226,3 +226,28 @@ def test_study_rows_show_each_job_in_per_cent():
                        "0.70"]
     assert rows[1][8] == "-" and rows[1][9] == "no equilibrium"  # a job run without the cases; no equilibrium found
     assert rows[2][9] == "-"                                        # K/C not measured
+
+
+def test_the_readmes_mechanism_paragraph_states_the_records_own_numbers(tmp_path):
+    """The paragraph on what decides the paper's verdicts is generated from the paper_scale records: its
+    shares of the load are |static force error| / load of each record, its offsets the records' offsets, and
+    a variant that found no equilibrium says so instead of a number."""
+    from fluidfilm.reporting.readme import render_paper_scale_mechanism
+
+    def record(label, err, offset):
+        return {"label": label, "n_samples": 40000, "structure": "split",
+                "equilibrium": {"a": {"load_N": 20.0, "static_force_error_N": list(err), "offset_pct_c": offset}},
+                "resolution": {"newton_per_mapped_unit": [300.0, 400.0]},
+                "satisfactory_cases_position": "", "satisfactory_cases_paper_reading": "ab"}
+
+    assert "Not run yet" in render_paper_scale_mechanism(tmp_path)
+    (tmp_path / "paper_scale.json").write_text(json.dumps({
+        "machine": "m", "date": "d", "records": [record("curve split 40000", (60.0, 80.0), 27.0),
+                                                 record("ablation whirl_frame", (0.6, 0.8), 1.5),
+                                                 record("ablation map_per_speed", (30.0, 40.0), None)]}))
+    text = render_paper_scale_mechanism(tmp_path)
+    assert "by 5x the load (one mapped output unit is 500 N there)" in text  # |(60, 80)| / 20, |(300, 400)|
+    assert "offset 27.0 % of c" in text
+    assert "the whirl frame 0.05x the load, offset 1.5 % of c" in text
+    assert "1 + |V|/(c omega) 2.5x the load, no equilibrium under the load" in text
+    assert "by the 2 %-of-c rule none, by the paper's reading (span and shape) ab" in text

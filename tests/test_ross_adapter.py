@@ -169,3 +169,51 @@ def test_bad_input_is_refused_with_the_value(setup):
     film = fr.FilmBearings(rotor, {0: s, 4: s}, loads)
     with pytest.raises(ValueError, match="turns at"):
         fr.run_time_response(film, 100.0, np.arange(10) * 1e-4)
+
+
+def _network_shaped(bearing):
+    """An untrained 4-16-2 tanh network with fitted scalings (its kernel writes scratch arrays held in its
+    parameters): a second kind of compiled kernel, not an accurate film."""
+    from fluidfilm import ReynoldsSolver, SurrogateForceModel
+    from fluidfilm.perf.speed import sample_states
+    from fluidfilm.surrogate import Scaling
+
+    x, v = sample_states(bearing.clearance, n=200, v_max=0.01)
+    sc = Scaling.fit("standard", x, v, ReynoldsSolver(bearing, 16, 8).forces(x, v), bearing.clearance,
+                     bearing.omega, bearing.force_scale)
+    rng = np.random.default_rng(0)
+    layers = [(rng.normal(size=(o, i)) / np.sqrt(i), np.zeros(o)) for i, o in ((4, 16), (16, 2))]
+    return SurrogateForceModel(bearing, [layers], [sc], "tanh")
+
+
+def test_compiled_callback_equals_the_python_loop(setup):
+    """The compiled callback (every node on a compiled kernel: the default) returns the Python loop's forces
+    to round-off, with and without the prediction to the step's end, linear part implicit or not, with the
+    reference solver at one node and a network at the other; a journal at the sleeve is refused by both
+    with the same message."""
+    rotor, loads = setup
+    s = _solver(6000.0)
+    net = _network_shaped(s.bearing)
+    rng = np.random.default_rng(5)
+    for linear_part in ("implicit", "none"):
+        film = fr.FilmBearings(rotor, {0: s, 4: net}, None, linear_part=linear_part)
+        assert all(p[6] is not None for p in film._plan)  # every node on a compiled kernel
+        c = s.bearing.clearance
+        for _ in range(5):
+            q, v, a = (rng.normal(0.0, 0.1 * c * f, film.ndof) for f in (1.0, 2e3, 4e6))
+            for dt in (None, 1e-4):
+                film.compiled = True
+                fast = film(1, time_step=dt, disp_resp=q, velc_resp=v, accl_resp=a)
+                film.compiled = False
+                slow = film(1, time_step=dt, disp_resp=q, velc_resp=v, accl_resp=a)
+                assert np.any(fast != 0.0)
+                np.testing.assert_allclose(fast, slow, rtol=1e-12, atol=1e-12 * np.abs(slow).max())
+        q = np.zeros(film.ndof)
+        q[film.dofs[4][1]] = 2.0 * c  # node 4 pushed through the sleeve
+        messages = []
+        for compiled in (True, False):
+            film.compiled = compiled
+            with pytest.raises(ValueError, match="touches the sleeve") as err:
+                film(1, disp_resp=q, velc_resp=np.zeros(film.ndof))
+            messages.append(str(err.value))
+        assert messages[0] == messages[1] and "node 4" in messages[0]

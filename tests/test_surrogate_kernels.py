@@ -234,6 +234,30 @@ def test_the_float32_network_keeps_the_forces_within_1e_5_of_float64(name, kerne
     assert np.quantile(err / size, 0.999) < FLOAT32_REL  # and plainly relative but for a few states
 
 
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+def test_a_thread_workspace_gives_the_same_forces_and_counts_as_per_call_scratch(dtype):
+    """``with_workspace``: the kernel's scratch from the thread's workspace gives the bits of its per-call
+    allocation, for calls within the workspace, a call beyond it (allocated), and a smaller call after a
+    larger one (nothing of the earlier call's scratch leaks into it)."""
+    from fluidfilm.surrogate.kernels import batch_kernel, batch_shape_key, fast_batch_params, with_workspace
+
+    model = best_shaped_surrogate(paper_bearing())
+    key = batch_shape_key(model)
+    fn = batch_kernel(key, dtype)
+    X, V = sample_states(model.clearance, n=700, eps_max=0.93, v_max=0.1, seed=8)
+    fresh = fast_batch_params(model, dtype)._replace(counter=np.zeros(1))
+    ws = with_workspace(fast_batch_params(model, dtype)._replace(counter=np.zeros(1)), key, n_states=300)
+    for n in (300, 700, 57, 300):  # within, beyond (allocated), a smaller call after larger ones
+        a, b = np.empty((n, 2)), np.empty((n, 2))
+        fn(fresh, X[:n], V[:n], a)
+        fn(ws, X[:n], V[:n], b)
+        np.testing.assert_array_equal(a, b)
+        assert np.all(np.isfinite(b)) and np.abs(b).max() > 0.0
+    assert ws.counter[0] == fresh.counter[0]
+    with pytest.raises(ValueError, match="n_states must be a positive integer, got 0"):
+        with_workspace(fresh, key, n_states=0)
+
+
 def test_batch_params_refuses_an_unknown_dtype():
     from fluidfilm.surrogate.kernels import batch_params
 

@@ -162,13 +162,6 @@ def test_shipped_weights_match_their_checksums_and_a_damaged_file_is_refused(tmp
         uv.load_weights.cache_clear()
 
 
-#: the shipped weights were trained briefly on the shared machine (200 Adam epochs, 30 L-BFGS steps: validation
-#: median 2.5 %); the accuracy goals hold only after `make reproduce` + `make universal-weights`.  strict: a
-#: pass (better weights) fails here until this mark goes
-BRIEFLY_TRAINED = pytest.mark.xfail(strict=True, reason="shipped weights trained briefly (docs/universal.md)")
-
-
-@BRIEFLY_TRAINED
 @pytest.mark.parametrize("cavitation", ["gumbel", "swift-stieber"])
 def test_accuracy_on_a_bearing_it_never_saw(cavitation):
     # L/D 0.75 lies between the data's L/D values; the reference on a fine grid is the truth
@@ -182,6 +175,64 @@ def test_accuracy_on_a_bearing_it_never_saw(cavitation):
     G_ref = _dimless(ref, eps, alpha)
     rel = np.hypot(*(G - G_ref).T) / np.hypot(*G_ref.T)
     assert np.median(rel) < 0.01 and rel.max() < 0.05, (np.median(rel), rel.max())
+
+
+def _teacher_data(n=400, seed=5):
+    # targets from a known 4-4-2 tanh network (offset so that no target is near zero): a 4-8-2 student can
+    # fit them exactly, so the optimiser, not the data, decides the error
+    rng = np.random.default_rng(seed)
+    z = rng.uniform(-1.0, 1.0, (n, 4))
+    W1, b1 = rng.normal(0, 1, (4, 4)), rng.normal(0, 0.3, 4)
+    W2 = rng.normal(0, 1, (2, 4))
+    return z, np.tanh(z @ W1.T + b1) @ W2.T + np.array([3.0, -2.0])
+
+
+def test_levenberg_marquardt_fits_a_teacher_network_and_resumes_to_the_same_weights(tmp_path):
+    from fluidfilm.surrogate.universal_fit import train_region
+
+    z, y = _teacher_data()
+    kw = dict(width=8, floor_share=0.0, max_minutes=5.0, seed=1)
+    whole = train_region(z, y, steps=60, ckpt_dir=tmp_path / "a", **kw)
+    assert whole["val_rel_median"] < 1e-4 and whole["val_rel_max"] < 1e-3, whole["val_rel_max"]
+    # interrupted after 30 steps, then the same command with the full count: the same weights, bit for bit
+    train_region(z, y, steps=30, ckpt_dir=tmp_path / "b", **kw)
+    resumed = train_region(z, y, steps=60, ckpt_dir=tmp_path / "b", **kw)
+    assert resumed["steps"] == whole["steps"] == 60
+    for (wa, ba), (wb, bb) in zip(whole["layers"], resumed["layers"]):
+        np.testing.assert_array_equal(wa, wb)
+        np.testing.assert_array_equal(ba, bb)
+
+
+def test_region_layout_refusals():
+    from fluidfilm.surrogate.universal_fit import region_rows, train_universal
+
+    eps = np.array([0.1, 0.2, 0.3])
+    with pytest.raises(ValueError, match="region 3 does not exist"):
+        region_rows(eps, [0.15], 0.04, 3)
+    with pytest.raises(ValueError, match=r"region 1 \(0\.58 <= eps"):
+        region_rows(eps, [0.6], 0.04, 1, overlap=0)
+    frame = __import__("pandas").DataFrame({"eps": eps, "alpha": 0.0, "ld": 1.0, "G_r": 1.0, "G_t": 1.0})
+    with pytest.raises(ValueError, match=r"boundaries \[0\.5, 0\.52\]"):
+        train_universal(frame, boundaries=[0.5, 0.52], blend_width=0.04)
+
+
+#: the K and C goal (direct 2 %, cross 5 % along the equilibrium locus) is missed at high eccentricity: the
+#: stage universal_evaluate measures KC_MEASURED; docs/universal.md says where and why
+KC_MEASURED = "direct 8.7 %, cross 18.4 % (worst: Gumbel, L/D 1.8, eps 0.9; stage universal_evaluate)"
+
+
+@pytest.mark.xfail(strict=True, reason=f"K, C goal missed at eps 0.9: {KC_MEASURED}")
+def test_stiffness_and_damping_along_the_locus_on_a_bearing_it_never_saw():
+    from fluidfilm.studies.characteristics import coefficient_errors, coefficient_table, loads_for_eccentricities
+
+    b = JournalBearing(length=0.09, diameter=0.05, clearance=75e-6, speed_rpm=5000.0, viscosity=0.02)  # L/D 1.8
+    ref = ReynoldsSolver(b, 144, 81)
+    loads = loads_for_eccentricities(ref, [0.5, 0.9])
+    errors = coefficient_errors(coefficient_table({"reference": ref, "universal": universal_bearing(b)}, loads,
+                                                  {"default": 1e-4}), "reference")
+    direct = errors[errors.kind == "direct"].rel_err.max()
+    cross = errors[errors.kind == "cross"].rel_err.max()
+    assert direct <= 0.02 and cross <= 0.05, (direct, cross)
 
 
 def test_spec_refuses_bad_values():
@@ -226,7 +277,6 @@ def test_the_readme_block_runs_in_an_empty_folder_and_its_threshold_is_the_refer
     assert np.isfinite(rpm) and rpm > 0.0
 
 
-@BRIEFLY_TRAINED
 def test_the_readme_threshold_is_the_references():
     from fluidfilm.characteristics import threshold_speed
 

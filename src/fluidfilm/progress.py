@@ -91,6 +91,8 @@ _NOISE = (
     r"The number of training batches \(\d+\) is smaller than the logging interval",
     r"GPU available: |TPU available: |HPU available: |You are using a CUDA device",
     r"`Trainer.fit` stopped: `max_epochs=\d+` reached",
+    r"`weights_only` was not set, defaulting to `False`",
+    r"Time limit reached\. Elapsed time is",
 )
 
 
@@ -107,7 +109,8 @@ def quiet_third_party() -> None:
             return not pattern.search(record.getMessage())
 
     for name in ("lightning.pytorch.utilities.rank_zero", "lightning.fabric.utilities.rank_zero",
-                 "lightning.pytorch.accelerators.cuda", "lightning.pytorch"):
+                 "lightning.pytorch.accelerators.cuda", "lightning.pytorch",
+                 "lightning.pytorch.trainer.connectors.checkpoint_connector", "lightning.pytorch.callbacks.timer"):
         logger = logging.getLogger(name)
         if not any(isinstance(f, _Drop) for f in logger.filters):
             logger.addFilter(_Drop())

@@ -51,6 +51,63 @@ _T = np.array([1.0, -1.0])
 LINEAR_PARTS = ("implicit", "none")
 
 
+def _node_step(i, j, origin, f_origin, k, c, c2, fn):
+    """One film node's part of the callback, compiled with its constants and its model's compiled force
+    kernel ``fn`` frozen in (the kernel's parameters come as an argument: some kernels write scratch arrays
+    held in them).  Same arithmetic as ``FilmBearings.__call__``'s Python loop; returns False (and writes
+    nothing) where the journal would touch the sleeve."""
+    from numba import njit
+
+    ox1, ox2 = (float(x) for x in origin)
+    f01, f02 = (float(x) for x in f_origin)
+    implicit = k is not None
+    k00, k01, k10, k11 = (float(x) for x in np.ravel(k)) if implicit else (0.0, 0.0, 0.0, 0.0)
+    c00, c01, c10, c11 = (float(x) for x in np.ravel(c)) if implicit else (0.0, 0.0, 0.0, 0.0)
+
+    @njit
+    def step(q, v, acc, dt, predict, out, params):
+        qi, qj, vi, vj = q[i], q[j], v[i], v[j]
+        if predict:
+            h = 0.5 * dt * dt
+            qi, qj = qi + dt * vi + h * acc[i], qj + dt * vj + h * acc[j]
+            vi, vj = vi + dt * acc[i], vj + dt * acc[j]
+        d1, d2, v1, v2 = qi, -qj, vi, -vj
+        x1, x2 = ox1 + d1, ox2 + d2
+        if x1 * x1 + x2 * x2 >= c2:
+            return False
+        f1, f2 = fn(params, x1, x2, v1, v2)
+        f1 -= f01
+        f2 -= f02
+        if implicit:
+            f1 += k00 * d1 + k01 * d2 + c00 * v1 + c01 * v2
+            f2 += k10 * d1 + k11 * d2 + c10 * v1 + c11 * v2
+        out[i] = f1
+        out[j] = -f2
+        return True
+
+    return step
+
+
+def _chain(prev, step, index):
+    """The compiled callback of the nodes so far (``prev``, or None) followed by node ``index``'s ``step``:
+    returns 0, or 1 + the index of the first node whose journal touches its sleeve.  The kernels' parameters
+    come nested: node 0's alone, then (the earlier nodes', this node's)."""
+    from numba import njit
+
+    if prev is None:
+        @njit
+        def run(q, v, acc, dt, predict, out, params):
+            return 0 if step(q, v, acc, dt, predict, out, params) else index + 1
+    else:
+        @njit
+        def run(q, v, acc, dt, predict, out, params):
+            status = prev(q, v, acc, dt, predict, out, params[0])
+            if status:
+                return status
+            return 0 if step(q, v, acc, dt, predict, out, params[1]) else index + 1
+    return run
+
+
 def to_ross(vec) -> np.ndarray:
     """A vector (position, velocity or force; (..., 2)) from fluidfilm's (X1, X2) to ROSS's (x, y) or back.
 
@@ -246,6 +303,9 @@ class FilmBearings:
         self.dofs = {n: np.array([nd * n, nd * n + 1]) for n in self.nodes}
         self._c2 = {n: float(self.models[n].bearing.clearance) ** 2 for n in self.nodes}
         self.use_kernels = True  # each model's compiled force_kernel where it has one (else its forces())
+        # with every node on a compiled kernel: the whole callback compiled too (``_node_step``), built on its
+        # first call after ``refresh``; False: the Python loop over the nodes
+        self.compiled = True
         self.reset_timing()
         self.refresh()
 
@@ -260,7 +320,14 @@ class FilmBearings:
             plan.append((n, (int(self.dofs[n][0]), int(self.dofs[n][1])),
                          tuple(float(x) for x in self.origin[n]), tuple(float(x) for x in self.f_origin[n]),
                          self.K[n].tolist() if imp else None, self.C[n].tolist() if imp else None, kernel, m))
-        self._plan = plan
+        # the compiled callback of this plan (built on the first call that uses it), kept while the plan stays
+        # the same (``run_time_response`` refreshes before every run)
+        key = tuple((n, d, o, f, k, c, None if kernel is None else (id(kernel[0]), id(kernel[1])), id(m))
+                    for n, d, o, f, k, c, kernel, m in plan)
+        if key != getattr(self, "_plan_key", None):
+            self._run = None
+            self._run_params = None  # the kernels' parameters it is called with
+        self._plan, self._plan_key = plan, key
 
     def reset_timing(self) -> None:
         """Set the call counter and the time spent in the callback to zero."""
@@ -304,10 +371,12 @@ class FilmBearings:
             The forces, length ``ndof``.
         """
         t0 = time.perf_counter()
+        predict = bool(self.predict and time_step and accl_resp is not None)
+        if self.compiled and all(p[6] is not None for p in self._plan):
+            return self._call_compiled(t0, disp_resp, velc_resp, accl_resp, time_step, predict)
         # plain Python floats: a handful of components is cheaper in Python than in numpy (the call's own
         # overhead is what a fast model would otherwise pay per step)
         q, v = np.asarray(disp_resp, dtype=float).tolist(), np.asarray(velc_resp, dtype=float).tolist()
-        predict = bool(self.predict and time_step and accl_resp is not None)
         if predict:
             acc = np.asarray(accl_resp, dtype=float).tolist()
             dt = float(time_step)
@@ -335,6 +404,42 @@ class FilmBearings:
                 f1 += k[0][0] * d1 + k[0][1] * d2 + c[0][0] * v1 + c[0][1] * v2
                 f2 += k[1][0] * d1 + k[1][1] * d2 + c[1][0] * v1 + c[1][1] * v2
             out[i], out[j] = f1, -f2
+        self.seconds += time.perf_counter() - t0
+        self.calls += 1
+        return out
+
+    def _call_compiled(self, t0, disp_resp, velc_resp, accl_resp, time_step, predict):
+        """``__call__`` by the compiled callback (every node on a compiled kernel): one compiled call per step."""
+        q = np.ascontiguousarray(disp_resp, dtype=float)
+        v = np.ascontiguousarray(velc_resp, dtype=float)
+        acc = np.ascontiguousarray(accl_resp, dtype=float) if predict else q
+        out = np.zeros(self.ndof)
+        args = (q, v, acc, float(time_step) if predict else 0.0, predict, out, self._run_params)
+        if self._run is None:
+            run, params = None, None
+            for index, (n, (i, j), origin, f_origin, k, c, kernel, _) in enumerate(self._plan):
+                run = _chain(run, _node_step(i, j, origin, f_origin, k, c, self._c2[n], kernel[0]), index)
+                params = kernel[1] if params is None else (params, kernel[1])
+            self._run_params = params
+            args = args[:-1] + (params,)
+            status = run(*args)  # compiles (not counted in ``seconds``)
+            # later calls go to the compiled entry point itself: numba's dispatcher would type the parameter
+            # tuples on every call (microseconds: the Python overhead this path removes)
+            self._run = run.overloads[run.signatures[0]].entry_point
+            t0 = time.perf_counter()
+            status = self._run(*args)
+        else:
+            status = self._run(*args)
+        if status:  # the same state and message as the Python loop's
+            n, (i, j), (ox1, ox2) = self._plan[status - 1][:3]
+            qi, qj = float(q[i]), float(q[j])
+            if predict:
+                dt = float(time_step)
+                qi += dt * float(v[i]) + 0.5 * dt * dt * float(acc[i])
+                qj += dt * float(v[j]) + 0.5 * dt * dt * float(acc[j])
+            x1, x2 = ox1 + qi, ox2 - qj
+            raise ValueError(f"eccentricity ratio {math.hypot(x1, x2) / math.sqrt(self._c2[n]):.6g} >= 1 "
+                             f"at node {n}, X=({x1!r}, {x2!r}) m: the journal touches the sleeve")
         self.seconds += time.perf_counter() - t0
         self.calls += 1
         return out

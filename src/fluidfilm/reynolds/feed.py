@@ -74,8 +74,11 @@ def grooved_field(gparams, x1, x2, v1, v2, p, warm=None, warm_in=False):
     nz = p.shape[1]
     p_s = params.p_supply
     # start from the groove-free linear field (clipped where cavitation applies): close to the answer (not
-    # needed by a warm start: the free set is given, the interior values are solved for)
-    if warm_in and warm is not None and params.ss_method != SS_PSOR:
+    # needed by a warm start: the free set is given, the interior values are solved for; nor by a cold
+    # Swift-Stieber start of a symmetric field: the active-set iteration's first guess is then
+    # ``kernels.mode_one_film``'s)
+    direct = params.ss_method != SS_PSOR
+    if direct and ((warm_in and warm is not None) or (cav == kernels.CAV_SWIFT_STIEBER and p_s == 0.0)):
         for i in range(n):
             p[i, 0] = p_s
             p[i, nz - 1] = 0.0

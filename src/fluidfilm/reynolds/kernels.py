@@ -57,6 +57,10 @@ Kernels:
 - ``capacitance_field``      the active-set iteration's linear solve by the axial
                              sine transform on runs of node columns and a
                              capacitance matrix on the active nodes inside them
+                             (``mode_tridiag_green``: its Green's function from
+                             the semi-separable inverse of each mode's matrix)
+- ``mode_one_film``          the active-set iteration's first guess: the film of
+                             the first axial mode's 1-D complementarity problem
 - ``swift_stieber_field``    either of them, by ``params.ss_method``
 - ``film_force_ss``          force with Swift-Stieber cavitation
 - ``general_linear_field``   the general path: film thickness h(theta, z)
@@ -343,24 +347,32 @@ def forces_product(params, x, v, out):
             out[p, q, 1] = f2
 
 
-@njit(cache=True)
-def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out):
-    """Pressure before cavitation on the whole (n_theta, n_z) grid, boundaries included."""
+@njit(cache=True, fastmath=_FAST)
+def linear_field(params, x1, x2, v1, v2, full_basis, p_supply, out, rows=-1):
+    """Pressure before cavitation on the whole (n_theta, n_z) grid, boundaries included.
+
+    ``rows`` >= 0: only the interior rows 1..rows are reconstructed, the rest of the interior set to 0 (the
+    Swift-Stieber solvers' start needs the lower half of a symmetric field only: they solve the rest).  The
+    sums over modes are reassociated (vectorised); the field is the same to round-off."""
     n = params.n_theta
     nk = params.lam.shape[0]
     q0, qs, qc = position_modes(params, x1 * params.inv_c, x2 * params.inv_c)
     nz = out.shape[1]
+    last = nz - 2 if rows < 0 else min(rows, nz - 2)
     phat = np.empty(nk)
     for i in range(n):
         out[i, 0] = p_supply
         out[i, nz - 1] = 0.0
         for k in range(nk):
             phat[k] = q0[i, k] + v1 * qs[i, k] + v2 * qc[i, k]
-        for j in range(1, nz - 1):
+        for j in range(1, last + 1):
             acc = 0.0
+            bj = full_basis[j - 1]
             for k in range(nk):
-                acc += phat[k] * full_basis[j - 1, k]
+                acc += phat[k] * bj[k]
             out[i, j] = acc
+        for j in range(last + 1, nz - 1):
+            out[i, j] = 0.0
 
 
 @njit(cache=True, inline="always")
@@ -549,6 +561,66 @@ def mode_tridiag_solve(cols, nc, ae, dinv, x, r_first):
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
+def mode_tridiag_green(params, cols, nc, aw, ae, an, dinv, pc, npc):
+    """The entries (T_k^{-1})[pc[q], pc[q2]] of every mode's inverse between the rows ``pc[:npc]``
+    (ascending), as (npc, npc, n_modes), with the factors of ``mode_tridiag_factor`` and no solve per row.
+
+    The inverse of a symmetric tridiagonal matrix is semi-separable: its diagonal is 1 / (D_r + E_r - a_r)
+    (D the forward pivots, E the backward ones, a the diagonal), and above it column b is
+    x_r = x_{r+1} e_r / D_r (the homogeneous rows of the forward sweep; e_r the coupling of r and r + 1),
+    so the entries between the rows follow from products of these ratios between consecutive rows
+    (all below 1: the matrix is diagonally dominant).  O((nc + npc^2) n_modes)."""
+    lam = params.lam
+    nk = lam.shape[0]
+    scale = 1.0 / params.inv_dzeta2
+    # backward pivots E_r, only as far down as the first row asked for
+    r_lo = pc[0]
+    e_piv = np.empty((nc, nk))
+    for r in range(nc - 1, r_lo - 1, -1):
+        i = cols[r]
+        base = aw[i] + ae[i]
+        ani = an[i] * scale
+        if r == nc - 1:
+            for k in range(nk):
+                e_piv[r, k] = base - ani * lam[k]
+        else:
+            e = ae[i]
+            e2 = e * e
+            for k in range(nk):
+                e_piv[r, k] = base - ani * lam[k] - e2 / e_piv[r + 1, k]
+    gp = np.empty((npc, npc, nk))
+    seg = np.empty(nk)
+    for q in range(npc):
+        rq = pc[q]
+        i = cols[rq]
+        base = aw[i] + ae[i]
+        ani = an[i] * scale
+        for k in range(nk):
+            gp[q, q, k] = 1.0 / (1.0 / dinv[rq, k] + e_piv[rq, k] - (base - ani * lam[k]))
+    for q in range(npc - 1):
+        # seg = prod over rows pc[q] .. pc[q + 1] - 1 of e_r / D_r
+        for k in range(nk):
+            seg[k] = 1.0
+        for r in range(pc[q], pc[q + 1]):
+            e = ae[cols[r]]
+            for k in range(nk):
+                seg[k] *= e * dinv[r, k]
+        # gp[a, q + 1] = gp[a, q] * seg * diag[q + 1] / diag[q] for a < q + 1: build from the ratios instead
+        for a in range(q + 1):
+            for k in range(nk):
+                # the ratio product from pc[a] to pc[q + 1], kept in the lower triangle until written
+                prev = 1.0 if a == q else gp[q, a, k]
+                gp[q + 1, a, k] = prev * seg[k]
+    for b in range(1, npc):
+        for a in range(b):
+            for k in range(nk):
+                v = gp[b, a, k] * gp[b, b, k]
+                gp[a, b, k] = v
+                gp[b, a, k] = v
+    return gp
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
 def transform_column(params, values, m, out, coef):
     """out[k] += coef * (2 / (m + 1)) * sum_j basis[j, k] values[j + 1]: the sine coefficients of one node
     column's interior values (rows 1..m of a field column), scaled."""
@@ -631,41 +703,46 @@ def capacitance_run(params, cols, nc, aw, ae, an, rhs, free, fixed, p, m, mh, sy
                     sq[a] = npc - 1
                     a += 1
         # the run's Green's function between the partly cavitated columns, per mode
-        gp = np.empty((npc, npc, nk))
-        col = np.empty((nc, nk))
-        for q in range(npc):
-            col[:, :] = 0.0
-            col[pc[q], :] = 1.0
-            mode_tridiag_solve(cols, nc, ae, dinv, col, pc[q])
-            for q2 in range(npc):
-                for k in range(nk):
-                    gp[q, q2, k] = col[pc[q2], k]
-        # capacitance matrix (symmetric positive definite) and its right-hand side
+        gp = mode_tridiag_green(params, cols, nc, aw, ae, an, dinv, pc, npc)
+        # capacitance matrix (symmetric positive definite) and its right-hand side, block by block of
+        # partly cavitated columns (the active nodes of a column are consecutive in the list)
+        a_lo = np.zeros(npc + 1, dtype=np.int64)
+        for a in range(s):
+            a_lo[sq[a] + 1] = a + 1
         g = np.empty((s, s))
         y = np.empty(s)
-        for a in range(s):
-            ba = basis[sj[a]]
-            for b in range(a + 1):
-                bb = basis[sj[b]]
-                gab = gp[sq[a], sq[b]]
+        t = np.empty(nk)
+        for q in range(npc):
+            for a in range(a_lo[q], a_lo[q + 1]):
+                ba = basis[sj[a]]
+                for q2 in range(q + 1):
+                    w = gp[q, q2]
+                    for k in range(nk):
+                        t[k] = ba[k] * w[k]
+                    for b in range(a_lo[q2], min(a_lo[q2 + 1], a + 1)):
+                        bb = basis[sj[b]]
+                        acc = 0.0
+                        for k in range(nk):
+                            acc += t[k] * bb[k]
+                        g[a, b] = acc
+                        g[b, a] = acc
                 acc = 0.0
                 for k in range(nk):
-                    acc += ba[k] * bb[k] * gab[k]
-                g[a, b] = acc
-            acc = 0.0
-            for k in range(nk):
-                acc += ba[k] * bh[sr[a], k]
-            y[a] = -acc / two_m1
-        # dense Cholesky, lower triangle in place, then the two triangular solves
-        for a in range(s):
-            for b in range(a + 1):
-                acc = g[a, b]
-                for k in range(b):
-                    acc -= g[a, k] * g[b, k]
-                if b == a:
-                    g[a, a] = np.sqrt(acc)
-                else:
-                    g[a, b] = acc / g[b, b]
+                    acc += ba[k] * bh[sr[a], k]
+                y[a] = -acc / two_m1
+        # Cholesky factor (lower): LAPACK for the larger systems, else in place; then two triangular solves
+        if s > 24:
+            g = np.linalg.cholesky(g)
+        else:
+            for a in range(s):
+                for b in range(a + 1):
+                    acc = g[a, b]
+                    for k in range(b):
+                        acc -= g[a, k] * g[b, k]
+                    if b == a:
+                        g[a, a] = np.sqrt(acc)
+                    else:
+                        g[a, b] = acc / g[b, b]
         for a in range(s):
             acc = y[a]
             for k in range(a):
@@ -684,15 +761,12 @@ def capacitance_run(params, cols, nc, aw, ae, an, rhs, free, fixed, p, m, mh, sy
                 b_src[sr[a], k] += f * ba[k]
         mode_tridiag_solve(cols, nc, ae, dinv, b_src, 0)
         bh = b_src
-    # back to the nodes
+    # back to the nodes: one matrix product (BLAS) for the whole run, then the active nodes at 0
+    vals = np.dot(bh, basis[:mh].T)
     for r in range(nc):
         i = cols[r]
         for j in range(1, mh + 1):
-            val = 0.0
-            if free[i, j]:
-                bj = basis[j - 1]
-                for k in range(nk):
-                    val += bj[k] * bh[r, k]
+            val = vals[r, j - 1] if free[i, j] else 0.0
             p[i, j] = val
             if symmetric:
                 p[i, m + 1 - j] = val
@@ -728,7 +802,9 @@ def capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric)
         env_cost += 0.5 * c * mh * mh
     if b0 < 0:
         return False
-    cap_cost = (s_tot * s_tot * (nk + s_tot / 3.0) + n_part * n_run * nk * 3.0 + n_run * nk * (mh + 8.0))
+    # capacitance matrix and its Cholesky factor, the Green's function between partly cavitated columns,
+    # the tridiagonal factor and solves and the field (a BLAS product)
+    cap_cost = (s_tot * s_tot * (0.5 * nk + s_tot / 6.0) + n_part * n_part * nk + n_run * nk * (0.5 * mh + 12.0))
     if cap_cost > env_cost:
         return False
     cols = np.empty(n, dtype=np.int64)
@@ -748,6 +824,93 @@ def capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric)
             t += 1
         capacitance_run(params, cols, nc, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric)
     return True
+
+
+@njit(cache=True, error_model="numpy")
+def mode_one_film(params, aw, ae, an, rhs, fixed):
+    """The film's columns as the first axial mode alone predicts them: the first guess of the active-set
+    iteration (``active_set_field``) for a field symmetric about mid-length.
+
+    Projected onto the lowest sine mode (positive at every axial node) the discrete Reynolds equation is
+    one tridiagonal system in theta, T x = b (T = ``mode_tridiag_factor``'s operator of mode 1, b its
+    right-hand side); its complementarity problem x >= 0, T x - b >= 0, x (T x - b) = 0 is solved by the
+    same primal-dual active-set iteration in 1-D (a Thomas solve per run of free columns, held columns at
+    0), from the columns where b > 0 (the converging film).  The columns with x > 0 are returned (bool,
+    (n_theta,)): on the plain bearing the 2-D film to within a partly cavitated column at each end, so the
+    2-D iteration starts next to its answer.  A guess only: the 2-D iteration settles from any start."""
+    n = params.n_theta
+    lam0 = params.lam[0] / params.inv_dzeta2
+    sig0 = params.sig[0]
+    d = np.empty(n)
+    b = np.empty(n)
+    bmax = 0.0
+    for i in range(n):
+        d[i] = aw[i] + ae[i] - an[i] * lam0
+        b[i] = -rhs[i] * sig0
+        if abs(b[i]) > bmax:
+            bmax = abs(b[i])
+    free = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        free[i] = b[i] > 0.0 and not fixed[i]
+    x = np.zeros(n)
+    cp = np.empty(n)
+    cols = np.empty(n, dtype=np.int64)
+    for _ in range(2 * n):
+        b0 = -1
+        for i in range(n):
+            if not free[i]:
+                b0 = i
+        if b0 < 0:
+            break  # the whole ring (no held column): keep the last set, a guess anyway
+        # Thomas on each run of free columns, its neighbours at 0
+        t = 0
+        while t < n:
+            i = (b0 + 1 + t) % n
+            if not free[i]:
+                x[i] = 0.0
+                t += 1
+                continue
+            nc = 0
+            while t < n and free[(b0 + 1 + t) % n]:
+                cols[nc] = (b0 + 1 + t) % n
+                nc += 1
+                t += 1
+            for r in range(nc):
+                i = cols[r]
+                if r == 0:
+                    piv = d[i]
+                    x[i] = b[i] / piv
+                else:
+                    w = aw[i]
+                    piv = d[i] - w * cp[r - 1]
+                    x[i] = (b[i] + w * x[cols[r - 1]]) / piv
+                cp[r] = ae[i] / piv
+            for r in range(nc - 2, -1, -1):
+                x[cols[r]] += cp[r] * x[cols[r + 1]]
+        xmax = 0.0
+        for i in range(n):
+            if x[i] > xmax:
+                xmax = x[i]
+        thr = AS_TOL * xmax
+        changed = False
+        for i in range(n):
+            if fixed[i]:
+                continue
+            if free[i]:
+                if x[i] < -thr:
+                    free[i] = False
+                    changed = True
+            else:
+                im = i - 1 if i > 0 else n - 1
+                ip = i + 1 if i < n - 1 else 0
+                if aw[i] * x[im] + ae[i] * x[ip] + b[i] > thr * d[i] + AS_TOL * bmax:
+                    free[i] = True
+                    changed = True
+        if not changed:
+            break
+    for i in range(n):
+        free[i] = free[i] and x[i] > 0.0
+    return free
 
 
 @njit(cache=True, error_model="numpy")
@@ -815,7 +978,15 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
                 if not fixed[i]:
                     for j in range(1, mh + 1):
                         free[i, j] = warm[i, j]
-    for _ in range(int(round(AS_WIDEN * n)) if project and not warm_start else 0):
+    predicted = project and not warm_start and symmetric
+    if predicted:
+        # the film of the first axial mode's 1-D problem, every row (``mode_one_film``); p is not read
+        film = mode_one_film(params, aw, ae, an, rhs, fixed)
+        for i in range(n):
+            if not fixed[i]:
+                for j in range(1, mh + 1):
+                    free[i, j] = film[i]
+    for _ in range(int(round(AS_WIDEN * n)) if project and not warm_start and not predicted else 0):
         f2 = free.copy()
         for i in range(n):
             if fixed[i]:
@@ -823,23 +994,34 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
             for j in range(1, mh + 1):
                 if f2[(i + 1) % n, j] or f2[(i - 1) % n, j]:
                     free[i, j] = True
-    idx = np.empty((n, mh + 2), dtype=np.int64)
+    # the envelope factorisation's work arrays, allocated on its first use (the transform path needs none)
     cap = n * mh
-    first = np.empty(cap, dtype=np.int64)
-    start = np.empty(cap + 1, dtype=np.int64)
-    node_i = np.empty(cap, dtype=np.int64)
-    node_j = np.empty(cap, dtype=np.int64)
-    y = np.empty(cap)
-    x = np.empty(cap)
-    inv_diag = np.empty(cap)
+    idx = np.empty((0, 0), dtype=np.int64)
+    first = np.empty(0, dtype=np.int64)
+    start = np.empty(0, dtype=np.int64)
+    node_i = np.empty(0, dtype=np.int64)
+    node_j = np.empty(0, dtype=np.int64)
+    y = np.empty(0)
+    x = np.empty(0)
+    inv_diag = np.empty(0)
     env = np.empty(0)
+    count = np.empty(0, dtype=np.int64)
     nu_old = 0
     c0 = -1
-    count = np.empty(n, dtype=np.int64)
     for it in range(max_iter):
         if transform and capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric):
             nu_old = 0  # the envelope factor no longer matches: a later envelope solve starts afresh
         else:
+            if idx.shape[0] == 0:
+                idx = np.empty((n, mh + 2), dtype=np.int64)
+                first = np.empty(cap, dtype=np.int64)
+                start = np.empty(cap + 1, dtype=np.int64)
+                node_i = np.empty(cap, dtype=np.int64)
+                node_j = np.empty(cap, dtype=np.int64)
+                y = np.empty(cap)
+                x = np.empty(cap)
+                inv_diag = np.empty(cap)
+                count = np.empty(n, dtype=np.int64)
             # order: the columns after one with the fewest free nodes (held columns have none), that one last
             best = mh + 1
             for i in range(n):
@@ -1022,11 +1204,17 @@ def film_force_ss(params, x1, x2, v1, v2):
     full_basis = params.full_basis
     nz = full_basis.shape[0] + 2
     p = np.empty((n, nz))
-    linear_field(params, x1, x2, v1, v2, full_basis, params.p_supply, p)
-    for i in range(n):
-        for j in range(nz):
-            if p[i, j] < 0.0:
-                p[i, j] = 0.0
+    if params.p_supply == 0.0 and params.ss_method != SS_PSOR:
+        # the active-set iteration's first guess of a symmetric field is ``mode_one_film``'s: only the end
+        # rows of p are read
+        p[:, :] = 0.0
+    else:
+        # the solvers start from the clipped linear field
+        linear_field(params, x1, x2, v1, v2, full_basis, params.p_supply, p)
+        for i in range(n):
+            for j in range(nz):
+                if p[i, j] < 0.0:
+                    p[i, j] = 0.0
     swift_stieber_field(params, x1, x2, v1, v2, p)
     return integrate_field(params, p)
 

@@ -71,24 +71,30 @@ def _train(cfg) -> Logged:
     out = Path(cfg.models_dir)
     metrics: dict[str, Any] = {}
     parent = tracking.active_run()
-    for rule in cfg.train.rules:
+    tr = cfg.train
+    for rule in tr.rules:
         frame, meta = load_universal(cfg.dataset_dir, rule)
-        logger = None
+        logger_for = None
         if parent is not None:
-            logger = tracking.child_logger_factory(parent, cfg.tracking, f"universal_{rule}")(0).logger()
-        fit = train_universal(frame, power=cfg.train.power, width=cfg.train.width, depth=cfg.train.depth,
-                              adam_epochs=cfg.train.adam_epochs, lbfgs_steps=cfg.train.lbfgs_steps,
-                              batch_size=cfg.train.batch_size, lr=cfg.train.lr, seed=cfg.train.seed, logger=logger)
+            factory = tracking.child_logger_factory(parent, cfg.tracking, f"universal_{rule}")
+            logger_for = lambda r, factory=factory: factory(r).logger()  # noqa: E731
+        # finished regions and the running fit's checkpoint live beside the outputs: a rerun continues
+        work = out / "_work" / f"{rule}-{meta['config_hash'][:12]}"
+        fit = train_universal(frame, boundaries=list(tr.boundaries), blend_width=tr.blend_width, overlap=tr.overlap,
+                              power=tr.power, width=tr.width, steps=tr.steps, max_minutes=list(tr.max_minutes),
+                              floor_share=tr.floor_share, seed=tr.seed, work_dir=work, logger_for=logger_for,
+                              what=f"{rule} ")
         info = {"dataset_hash": meta["config_hash"], "n_rows": int(len(frame)),
                 **{k: v for k, v in fit.items() if k.startswith("val_") or k == "train_seconds"},
-                "width": int(cfg.train.width), "depth": int(cfg.train.depth)}
+                "width": int(tr.width), "depth": 1, "optimizer": "levenberg-marquardt",
+                "regions": [{k: v for k, v in reg.items() if isinstance(v, (int, float))} for reg in fit["regions"]]}
         write_weights(fit, rule, meta["spec"]["eps_max"], (meta["spec"]["ld_min"], meta["spec"]["ld_max"]), info,
                       directory=out)
         key = rule.replace("-", "_")
         metrics |= {f"{key}_val_rel_median": fit["val_rel_median"], f"{key}_val_rel_p99": fit["val_rel_p99"],
                     f"{key}_train_seconds": fit["train_seconds"]}
-        print(f"{rule}: validation relative error of G median {100 * fit['val_rel_median']:.3f} %, p99 "
-              f"{100 * fit['val_rel_p99']:.2f} %, {fit['train_seconds']:.0f} s")
+        print(f"{rule}: validation relative error of G (worst region) median {100 * fit['val_rel_median']:.3f} %, "
+              f"p99 {100 * fit['val_rel_p99']:.2f} %, {fit['train_seconds']:.0f} s")
     return Logged(metrics, [out])
 
 
@@ -216,7 +222,8 @@ def raimondi_boyd(cfg) -> pd.DataFrame:
             vals = {}
             for name, m in (("universal", model), ("reference", ref)):
                 F = m.forces(x, np.zeros(2))
-                vals[name] = (b.sommerfeld(float(np.hypot(*F))), math.degrees(math.atan2(-F[0], -F[1])))
+                # the attitude angle between the load (-F) and the line of centres (+X2), positive as tabulated
+                vals[name] = (b.sommerfeld(float(np.hypot(*F))), abs(math.degrees(math.atan2(-F[0], -F[1]))))
             rows.append({"ld": ld, "eps": eps, "S_pub": S_pub, "phi_pub": phi_pub,
                          "S": vals["universal"][0], "phi": vals["universal"][1],
                          "S_ref": vals["reference"][0], "phi_ref": vals["reference"][1],

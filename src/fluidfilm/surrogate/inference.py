@@ -40,7 +40,7 @@ from fluidfilm.core.force_model import ValidityDomain, check_precision
 from fluidfilm.core.states import as_state_pairs
 from fluidfilm.surrogate.kernels import (COUNTER, SETTING, BatchParams, FastBatchParams, batch_kernel, batch_params,
                                         batch_shape_key, fast_batch_params, fast_force_kernel, forces_batch, pack,
-                                        shape_key)
+                                        shape_key, with_workspace)
 from fluidfilm.surrogate.scaling import Scaling, check_whirl_use, network_inputs
 from fluidfilm.surrogate.transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
                          standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb, whirl_direction_nb)
@@ -485,7 +485,11 @@ class SurrogateForceModel:
             bp = self._batch_params[precision] = (batch_params(self, precision) if self._batch_key is None
                                                   else fast_batch_params(self, precision))
         fn = forces_batch if self._batch_key is None else batch_kernel(self._batch_key, precision)
-        return fn, (bp._replace(counter=np.zeros(1)) if private else bp)
+        if not private:
+            return fn, bp
+        bp = bp._replace(counter=np.zeros(1))
+        # one thread's parameters: their own scratch too (the kernel allocates none per call up to its size)
+        return fn, (with_workspace(bp, self._batch_key) if isinstance(bp, FastBatchParams) else bp)
 
     def merge_counts(self, bparams: BatchParams | FastBatchParams) -> None:
         """Add the domain count of private batch parameters to the model's (``BatchForceModel``)."""

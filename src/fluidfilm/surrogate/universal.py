@@ -114,8 +114,9 @@ def load_weights(cavitation: str) -> dict:
     Returns
     -------
     dict
-        ``layers`` [(W (out, in), b)], ``in_mean``, ``in_std`` (4: eps, the drive's direction (2),
-        ln L/D), ``out_mean``, ``out_std`` (2), ``power``, ``eps_max``, ``ld_min``, ``ld_max``, ``info``.
+        ``regions``: per eccentricity region ``layers`` [(W (out, in), b)], ``in_mean``, ``in_std`` (4: eps,
+        the drive's direction (2), ln L/D), ``out_mean``, ``out_std`` (2); ``boundaries`` (between the
+        regions), ``blend_width``, ``power``, ``eps_max``, ``ld_min``, ``ld_max``, ``activation``, ``info``.
 
     Raises
     ------
@@ -125,8 +126,8 @@ def load_weights(cavitation: str) -> dict:
     Examples
     --------
     >>> w = load_weights("gumbel")
-    >>> [W.shape for W, _ in w["layers"]][0], w["ld_min"], w["ld_max"]
-    ((64, 4), 0.2, 2.0)
+    >>> [W.shape for W, _ in w["regions"][0]["layers"]], w["ld_min"], w["ld_max"]
+    ([(64, 4), (2, 64)], 0.2, 2.0)
     """
     path = weights_file(cavitation)
     data = path.read_bytes()
@@ -135,22 +136,26 @@ def load_weights(cavitation: str) -> dict:
         raise ValueError(f"{path} is damaged or was replaced: its SHA-256 {digest} differs from the one in "
                          f"{WEIGHTS_DIR / 'SHA256SUMS'}")
     with np.load(path, allow_pickle=False) as z:
-        n = int(z["n_layers"])
-        layers = [(np.array(z[f"W{k}"]), np.array(z[f"b{k}"])) for k in range(n)]
-        out: dict[str, Any] = {k: np.array(z[k]) for k in ("in_mean", "in_std", "out_mean", "out_std")}
-        out.update({k: float(z[k]) for k in ("power", "eps_max", "ld_min", "ld_max")})
+        regions = []
+        for r in range(int(z["n_regions"])):
+            n = int(z[f"r{r}_n_layers"])
+            reg: dict[str, Any] = {k: np.array(z[f"r{r}_{k}"]) for k in ("in_mean", "in_std", "out_mean", "out_std")}
+            reg["layers"] = [(np.array(z[f"r{r}_W{k}"]), np.array(z[f"r{r}_b{k}"])) for k in range(n)]
+            regions.append(reg)
+        out: dict[str, Any] = {k: float(z[k]) for k in ("power", "blend_width", "eps_max", "ld_min", "ld_max")}
+        out["boundaries"] = tuple(float(b) for b in z["boundaries"])
         out["info"] = json.loads(str(z["info"]))
         out["activation"] = str(z["activation"])
-    out["layers"] = layers
+    out["regions"] = regions
     return out
 
 
-def _fold_slenderness(w: dict, slenderness: float) -> tuple[list, np.ndarray, np.ndarray]:
-    """The network of one L/D: its standardised ln(L/D) input folded into the first layer's bias."""
-    W0, b0 = w["layers"][0]
-    s = (math.log(slenderness) - w["in_mean"][3]) / w["in_std"][3]
-    layers = [(np.ascontiguousarray(W0[:, :3]), b0 + W0[:, 3] * s)] + [(W, b) for W, b in w["layers"][1:]]
-    return layers, w["in_mean"][:3], w["in_std"][:3]
+def _fold_slenderness(region: dict, slenderness: float) -> tuple[list, np.ndarray, np.ndarray]:
+    """One region's network at one L/D: its standardised ln(L/D) input folded into the first layer's bias."""
+    W0, b0 = region["layers"][0]
+    s = (math.log(slenderness) - region["in_mean"][3]) / region["in_std"][3]
+    layers = [(np.ascontiguousarray(W0[:, :3]), b0 + W0[:, 3] * s)] + [(W, b) for W, b in region["layers"][1:]]
+    return layers, region["in_mean"][:3], region["in_std"][:3]
 
 
 class UniversalBearingModel(SurrogateForceModel):
@@ -184,11 +189,16 @@ class UniversalBearingModel(SurrogateForceModel):
         if bearing.speed_rpm <= 0.0:
             raise ValueError(f"the universal model needs a turning shaft (its scale is mu omega R L (R/c)^2), "
                              f"got speed_rpm={bearing.speed_rpm!r}")
-        layers, in_mean, in_std = _fold_slenderness(w, ld)
-        scaling = Scaling("physics", bearing.clearance, bearing.omega, bearing.force_scale * slenderness_gain(ld),
-                          w["power"], in_mean, in_std, w["out_mean"], w["out_std"], frame="whirl")
-        super().__init__(bearing, [layers], [scaling], w["activation"], eps_max=w["eps_max"],
-                         name=f"universal ({cavitation})", info=dict(w["info"]))
+        networks, scalings = [], []
+        for region in w["regions"]:
+            layers, in_mean, in_std = _fold_slenderness(region, ld)
+            networks.append(layers)
+            scalings.append(Scaling("physics", bearing.clearance, bearing.omega,
+                                    bearing.force_scale * slenderness_gain(ld), w["power"], in_mean, in_std,
+                                    region["out_mean"], region["out_std"], frame="whirl"))
+        super().__init__(bearing, networks, scalings, w["activation"], boundaries=w["boundaries"],
+                         blend_width=w["blend_width"], eps_max=w["eps_max"], name=f"universal ({cavitation})",
+                         info=dict(w["info"]))
         self.cavitation = cavitation
 
     def with_speed(self, speed_rpm: float) -> "UniversalBearingModel":
