@@ -251,3 +251,15 @@ def test_the_readmes_mechanism_paragraph_states_the_records_own_numbers(tmp_path
     assert "the whirl frame 0.05x the load, offset 1.5 % of c" in text
     assert "1 + |V|/(c omega) 2.5x the load, no equilibrium under the load" in text
     assert "by the 2 %-of-c rule none, by the paper's reading (span and shape) ab" in text
+
+
+def test_the_readmes_universal_sentence_states_the_evaluations_numbers(tmp_path):
+    """The README's sentence on the universal model reads its numbers from reports/universal.json, in per cent."""
+    from fluidfilm.reporting.readme import render_universal_summary
+
+    (tmp_path / "universal.json").write_text(json.dumps({
+        "universal_rel_err_median": 0.0012, "universal_rel_err_p99": 0.034, "universal_whirl_threshold_rel_err": 0.005,
+        "universal_kc_max_rel_err_direct": 0.021, "universal_kc_max_rel_err_cross": 0.4}))
+    text = render_universal_summary(tmp_path)
+    assert "within 0.12 % (median; 3.4 % at the 99th percentile)" in text
+    assert "whirl threshold within 0.5 %" in text and "within 2.1 % (direct) and 40 % (cross)" in text

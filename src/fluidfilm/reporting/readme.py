@@ -427,6 +427,18 @@ def render_runup(reports: Path) -> str:
             f"/ run-down:\n\n"
             + _table(["run", "onset [rpm]", "vs Lund", "whirl ratio at onset", "established, up [rpm]",
                       "gone, down [rpm]", "ramp [rpm/s]"], rows))
+def render_universal_summary(reports: Path) -> str:
+    """The README's sentence on the shipped universal model's accuracy on bearings it never saw, from
+    ``reports/universal.json`` (the ``universal_evaluate`` stage)."""
+    u = _load(reports, "universal.json")
+    return (f"On bearings it never saw ([docs/results.md](docs/results.md#the-universal-plain-bearing-surrogate)) "
+            f"its forces are within {100 * u['universal_rel_err_median']:.2g} % (median; "
+            f"{100 * u['universal_rel_err_p99']:.2g} % at the 99th percentile) of the grid-converged reference and "
+            f"its whirl threshold within {100 * u['universal_whirl_threshold_rel_err']:.2g} %; its stiffness and "
+            f"damping along the equilibrium locus are within {100 * u['universal_kc_max_rel_err_direct']:.2g} % "
+            f"(direct) and {100 * u['universal_kc_max_rel_err_cross']:.2g} % (cross).\n")
+
+
 def render_universal(reports: Path) -> str:
     u = _load(reports, "universal.json")
     g = u["goals"]
@@ -764,6 +776,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "commands": render_commands,
     "headline": render_headline,
     "paper_scale_mechanism": render_paper_scale_mechanism,
+    "universal_summary": render_universal_summary,
     "grading_study": render_grading_study,
     "ablation": render_ablation,
     "error_map": render_error_map,
