@@ -721,14 +721,19 @@ class FastBatchParams(NamedTuple):
 WORKSPACE_STATES = 4096
 
 
-def _workspace_sizes(key, n: int) -> tuple[int, int, int]:
-    """Scratch of a batched kernel call of n states: (float64, int64, networks' type) elements."""
+def _workspace_terms(key) -> tuple[tuple[int, int], tuple[int, int], tuple[int, int]]:
+    """Scratch of a batched kernel call as (per state, fixed) elements: float64, int64, networks' type."""
     layout, _ = _batch_layout(key)
     n_in = 3 if key[2][0][1] >= 1 else 4
     nr = len(key[2])
     width = max([k for r in layout for (_, _, k, _) in r] + [1])
-    return (9 * n + 2, 6 * n + 2 * nr + 3,
-            (n_in + 5) * n + n_in * TILE + 3 * TILE + 2 * width * TILE + width)
+    return (9, 2), (6, 2 * nr + 3), (n_in + 5, n_in * TILE + 3 * TILE + 2 * width * TILE + width)
+
+
+def _workspace_sizes(key, n: int) -> tuple[int, int, int]:
+    """Scratch of a batched kernel call of n states: (float64, int64, networks' type) elements."""
+    (a64, b64), (ai, bi), (aw, bw) = _workspace_terms(key)
+    return a64 * n + b64, ai * n + bi, aw * n + bw
 
 
 def with_workspace(bp: FastBatchParams, key, n_states: int = WORKSPACE_STATES) -> FastBatchParams:
@@ -924,11 +929,11 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
     uniform_gain = physics and len({(r[0], r[4]) for r in regions}) == 1 and regions[0][4]
     ind1 = "    "
     ind2 = ind1 + "    "
-    n_fix_i, n_fix_w = 2 * nr + 3, n_in * TILE + 3 * TILE + 2 * width * TILE + width
+    (a64, b64), (ai, bi), (aw, bw) = _workspace_terms(key)  # the sizes with_workspace allocates
     L = ["def batch_kernel(bp, x, v, out):",
          f"{ind1}w = bp.weights", f"{ind1}q = bp.consts", f"{ind1}inv_c2 = bp.setting[0]", f"{ind1}n = x.shape[0]",
          # the scratch: the thread's workspace where it is large enough (with_workspace), else allocated here
-         f"{ind1}k64 = 9 * n + 2", f"{ind1}ki = 6 * n + {n_fix_i}", f"{ind1}kw = {n_in + 5} * n + {n_fix_w}",
+         f"{ind1}k64 = {a64} * n + {b64}", f"{ind1}ki = {ai} * n + {bi}", f"{ind1}kw = {aw} * n + {bw}",
          f"{ind1}s64 = bp.work if bp.work.size >= k64 else np.empty(k64)",
          f"{ind1}si = bp.iwork if bp.iwork.size >= ki else np.empty(ki, dtype=np.int64)",
          f"{ind1}sw = bp.wwork if bp.wwork.size >= kw else np.empty(kw, dtype=w.dtype)",
