@@ -16,7 +16,7 @@ import pytest
 
 from fluidfilm import ReynoldsSolver, paper_bearing
 from fluidfilm.characteristics.static import equilibrium
-from fluidfilm.studies.paper_scale import equilibrium_offset, locus_errors, summary_keys, verdicts
+from fluidfilm.studies.paper_scale import equilibrium_offset, locus_errors, points, summary_keys, verdicts
 
 
 class _Doubled:
@@ -79,6 +79,18 @@ def test_flat_keys_name_size_structure_and_variant():
     assert keys["equilibrium_offset_pct_c_ablation_whirl_frame"] == 27.0
     assert keys["satisfactory_cases_single_full_scale"] == 2
     assert keys["train_time_reduction_pct_full_scale_lm"] == pytest.approx(25.0)
+
+
+def test_a_size_budget_caps_every_network_of_that_size_only():
+    cfg = {"sizes": [40000, 640000], "structures": ["single", "split"], "boundaries": [0.5, 0.7],
+           "size_budget_s": {"640000": 300}, "ablation": {"enabled": False}, "full_scale": {}}
+    by_label = {p["label"]: p for p in points(cfg)}
+    assert by_label["curve split 40000"]["network_protocol"] is None
+    assert by_label["curve single 640000"]["network_protocol"] == {0: {"max_time_s": 300.0}}
+    assert by_label["curve split 640000"]["network_protocol"] == {r: {"max_time_s": 300.0} for r in range(3)}
+    # the checkpoints are shared with the unbudgeted point (point_key without the network protocol)
+    unbudgeted = dict(by_label["curve split 640000"], network_protocol=None)
+    assert unbudgeted == dict(points(cfg | {"size_budget_s": {}})[3])
 
 
 def test_resolution_is_the_maps_half_range_at_the_equilibrium(reference):

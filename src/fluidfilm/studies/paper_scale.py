@@ -250,9 +250,17 @@ def points(cfg: Mapping) -> list[dict]:
     """The study's models: the curve (every size x structure) and the ablation's variants."""
     out = []
     base = {"boundaries": list(cfg["boundaries"]), "scaling": None, "static_rows": False, "network_protocol": None}
+    budgets = {int(k): v for k, v in (cfg.get("size_budget_s") or {}).items()}
     for n in cfg["sizes"]:
         for structure in cfg["structures"]:
-            out.append(base | {"label": f"curve {structure} {int(n)}", "n_samples": int(n), "structure": structure})
+            p = base | {"label": f"curve {structure} {int(n)}", "n_samples": int(n), "structure": structure}
+            if budgets.get(int(n)) is not None:
+                # every network of the model stops by this LM time budget if the validation rule has not
+                # stopped it first (recorded, and not counted as converged); the checkpoints are the
+                # unbudgeted run's, so a larger budget later continues from where this one stopped
+                n_nets = 1 if structure == "single" else len(cfg["boundaries"]) + 1
+                p["network_protocol"] = {r: {"max_time_s": float(budgets[int(n)])} for r in range(n_nets)}
+            out.append(p)
     ab = cfg.get("ablation") or {}
     if ab.get("enabled"):
         for name, change in ab["variants"].items():
