@@ -79,6 +79,7 @@ def test_flat_keys_name_size_structure_and_variant():
     assert keys["equilibrium_offset_pct_c_ablation_whirl_frame"] == 27.0
     assert keys["satisfactory_cases_single_full_scale"] == 2
     assert keys["train_time_reduction_pct_full_scale_lm"] == pytest.approx(25.0)
+    assert keys["converged_split_40000"] == 1.0 and keys["converged_single_full_scale"] == 1.0
 
 
 def test_a_size_budget_caps_every_network_of_that_size_only():

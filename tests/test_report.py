@@ -263,3 +263,28 @@ def test_the_readmes_universal_sentence_states_the_evaluations_numbers(tmp_path)
     text = render_universal_summary(tmp_path)
     assert "within 0.12 % (median; 3.4 % at the 99th percentile)" in text
     assert "whirl threshold within 0.5 %" in text and "within 2.1 % (direct) and 40 % (cross)" in text
+
+
+def test_the_headline_reads_the_largest_converged_split_and_flags_a_larger_one_stopped_by_its_budget(tmp_path):
+    """The README's headline: the paper's split at the largest size trained to the validation rule, and a larger
+    one stopped by its LM time budget beside it, said to be unconverged (never passed off as the verdict)."""
+    import json
+
+    from fluidfilm.reporting.readme import render_headline
+
+    m = {}
+    for size, conv, sat, off in (("40000", 1.0, 0, 27.2), ("160000", 1.0, 1, 24.3), ("2560000", 0.0, 2, 40.0),
+                                 ("full_scale", 0.0, 3, 50.0)):
+        m |= {f"satisfactory_cases_split_{size}": sat, f"satisfactory_cases_split_{size}_paper_reading": sat + 1,
+              f"equilibrium_offset_pct_c_split_{size}": off, f"converged_split_{size}": conv}
+    (tmp_path / "metrics.json").write_text(json.dumps(m))
+    text = render_headline(tmp_path)
+    rows = [line for line in text.splitlines() if "the paper's split at the largest size" in line]
+    assert len(rows) == 2, rows
+    assert "trained to the validation rule (160,000 samples)" in rows[0] and "1 / 2 of 7; 24.3 % of c" in rows[0]
+    assert "not converged" in rows[1] and "(all samples)" in rows[1] and "3 / 4 of 7; 50.0 % of c" in rows[1]
+    # everything converged: one row, the largest
+    (tmp_path / "metrics.json").write_text(json.dumps({k: (1.0 if k.startswith("converged_") else v)
+                                                       for k, v in m.items()}))
+    rows = [line for line in render_headline(tmp_path).splitlines() if "the paper's split at the largest" in line]
+    assert len(rows) == 1 and "(all samples)" in rows[0] and "validation rule" in rows[0]

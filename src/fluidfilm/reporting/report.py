@@ -208,7 +208,7 @@ def paper_scale_metrics(ps: Mapping) -> dict:
     ablation variant, at full scale) as they are in its report."""
     prefixes = ("satisfactory_cases_", "equilibrium_offset_pct_c_", "orbit_rms_pct_max_", "train_time_s_",
                 "static_force_error_share_max_", "train_time_reduction_pct_full_scale_lm",
-                "train_time_converged_full_scale_lm")
+                "train_time_converged_full_scale_lm", "converged_")
     return {k: v for k, v in ps.items() if k.startswith(prefixes)}
 #: the universal surrogate's keys in reports/universal.json, copied into the metrics as they are
 UNIVERSAL_KEYS = ("universal_rel_err_median", "universal_rel_err_p99", "universal_kc_max_rel_err_direct",

@@ -292,6 +292,8 @@ def summary_keys(records: list[dict]) -> dict:
         out[f"orbit_rms_pct_max_{sfx}"] = r["orbit_rms_pct_max"]
         out[f"train_time_s_{sfx}"] = r["train_time_s"]
         out[f"static_force_error_share_max_{sfx}"] = r["locus"]["error_share_of_load_max"]
+        # 1: every network stopped by the validation rule; 0: one stopped by a time or epoch budget
+        out[f"converged_{sfx}"] = 1.0 if r["converged"] else 0.0
     full = {r["label"]: r for r in records if r["label"].startswith("full scale ")}
     if "full scale single" in full and "full scale split" in full:
         # the paper's 26 % from one LM run per structure (one seed; converged only if every network stopped by
