@@ -16,7 +16,8 @@ import pytest
 
 from fluidfilm import ReynoldsSolver, paper_bearing
 from fluidfilm.characteristics.static import equilibrium
-from fluidfilm.studies.paper_scale import equilibrium_offset, locus_errors, points, summary_keys, verdicts
+from fluidfilm.studies.paper_scale import (equilibrium_offset, locus_errors, points, size_label, summary_keys,
+                                          verdicts)
 
 
 class _Doubled:
@@ -80,6 +81,15 @@ def test_flat_keys_name_size_structure_and_variant():
     assert keys["satisfactory_cases_single_full_scale"] == 2
     assert keys["train_time_reduction_pct_full_scale_lm"] == pytest.approx(25.0)
     assert keys["converged_split_40000"] == 1.0 and keys["converged_single_full_scale"] == 1.0
+
+
+def test_the_full_scale_points_train_on_every_sample_and_print_as_all():
+    cfg = {"sizes": [], "structures": ["single"], "boundaries": [0.5, 0.7], "ablation": {"enabled": False},
+           "full_scale": {"single": {"enabled": True, "structure": "single", "network_protocol": None},
+                          "split": {"enabled": False, "structure": "split"}}}
+    (p,) = points(cfg)
+    assert p["label"] == "full scale single" and p["n_samples"] is None
+    assert size_label(p["n_samples"]) == "all" and size_label(160000) == "160,000"
 
 
 def test_a_size_budget_caps_every_network_of_that_size_only():

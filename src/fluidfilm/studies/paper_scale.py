@@ -185,6 +185,11 @@ def evaluate(model, reference, references: dict, testset: pd.DataFrame, cfg: Map
     return out
 
 
+def size_label(n_samples: int | None) -> str:
+    """A point's sample count in words: "40,000", or "all" for the full scale (n_samples None)."""
+    return "all" if n_samples is None else f"{int(n_samples):,}"
+
+
 def train_point(frame, meta, point: Mapping, protocol: Mapping, seed: int, ckpt_dir: Path, reference):
     """Train one model of the study (``point``: n_samples, structure, boundaries, scaling, static_rows,
     network_protocol); returns the force model and the training report."""
@@ -192,7 +197,7 @@ def train_point(frame, meta, point: Mapping, protocol: Mapping, seed: int, ckpt_
 
     bounds = [] if point["structure"] == "single" else list(point["boundaries"])
     extra = static_rows(frame, reference) if point.get("static_rows") else None
-    name = f"{point['structure']}_{point['n_samples']}"
+    name = f"{point['structure']}_{'full' if point['n_samples'] is None else point['n_samples']}"
     return train_protocol_model(frame, meta, protocol, bounds, seed=seed, n_samples=point["n_samples"], name=name,
                                 scaling=point.get("scaling"), extra_rows=extra, checkpoint_dir=ckpt_dir,
                                 network_protocol=point.get("network_protocol"))
@@ -221,7 +226,7 @@ def run_point(frame, meta, testset, point: Mapping, protocol: Mapping, cfg: Mapp
                                            rec["networks"])
         return rec
     t0 = time.perf_counter()
-    print(f"paper_scale: {point['label']}: {point['structure']}, {point['n_samples']:,} samples "
+    print(f"paper_scale: {point['label']}: {point['structure']}, {size_label(point['n_samples'])} samples "
           f"(record {path})", flush=True)
     # the checkpoints: shared by points that differ only in one network's protocol (the full-scale split's
     # Adam arm resumes the LM networks the LM arm finished; each file checks it belongs to its network)
