@@ -288,3 +288,16 @@ def test_the_headline_reads_the_largest_converged_split_and_flags_a_larger_one_s
                                                        for k, v in m.items()}))
     rows = [line for line in render_headline(tmp_path).splitlines() if "the paper's split at the largest" in line]
     assert len(rows) == 1 and "(all samples)" in rows[0] and "validation rule" in rows[0]
+
+
+def test_paper_scale_keys_join_the_runs_beyond_the_pipeline_with_the_pipelines_own_first():
+    from fluidfilm.reporting.report import paper_scale_all_metrics
+
+    own = {"satisfactory_cases_split_40000": 0, "equilibrium_offset_pct_c_split_40000": 27.2, "machine": "x"}
+    curve = {"satisfactory_cases_split_40000": 5, "satisfactory_cases_split_160000": 1, "converged_split_160000": 1.0}
+    full = {"equilibrium_offset_pct_c_split_full_scale": 40.0, "train_time_reduction_pct_full_scale_lm": -3.0}
+    m = paper_scale_all_metrics(own, [curve, full])
+    assert m["satisfactory_cases_split_40000"] == 0  # the pipeline's own, not the curve report's copy of it
+    assert m["satisfactory_cases_split_160000"] == 1 and m["converged_split_160000"] == 1.0
+    assert m["equilibrium_offset_pct_c_split_full_scale"] == 40.0 and "machine" not in m
+    assert paper_scale_all_metrics(None, [full]) == full and paper_scale_all_metrics(None) == {}

@@ -50,6 +50,9 @@ class ReportInputs:
     ablation: dict | None = None      # reports/ablation/summary.json, where that stage ran
     error_map: dict | None = None     # reports/error_map.json, where that stage ran
     paper_scale: dict | None = None   # reports/paper_scale.json, where that stage ran
+    # reports/paper_scale_curve.json and paper_full_scale.json (make paper-scale-curve / paper-full-scale,
+    # committed), those present
+    paper_scale_beyond: tuple = ()
     runup: dict | None = None         # reports/runup.json, where that stage ran
     universal: dict | None = None     # reports/universal.json, where that stage ran
 
@@ -79,6 +82,8 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         characteristics=optional(charac), ensemble=optional(ens),
         grading_study=optional(rd / "grading_study" / "summary.json"), ablation=optional(rd / "ablation" / "summary.json"),
         error_map=optional(rd / "error_map.json"), paper_scale=optional(rd / "paper_scale.json"),
+        paper_scale_beyond=tuple(_load(p) for p in (rd / "paper_scale_curve.json", rd / "paper_full_scale.json")
+                                 if p.exists()),
         runup=optional(rd / "runup.json"),
         universal=optional(rd / "universal.json"))
 
@@ -177,8 +182,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
         metrics.update(extra)
     if inp.error_map is not None:  # the error map: the seeds' force errors held out and along the reference orbits
         metrics.update(error_map_metrics(inp.error_map))
-    if inp.paper_scale is not None:  # the paper's networks at larger sizes and the recipe's ingredients
-        metrics.update(paper_scale_metrics(inp.paper_scale))
+    # the paper's networks at larger sizes, the recipe's ingredients, the full scale
+    metrics.update(paper_scale_all_metrics(inp.paper_scale, inp.paper_scale_beyond))
     if inp.runup is not None:  # the run-up: onset of whirl from the transient against Lund's threshold
         metrics.update(inp.runup["metrics"])
     if inp.universal is not None:  # the universal plain-bearing surrogate on bearings it never saw
@@ -210,6 +215,16 @@ def paper_scale_metrics(ps: Mapping) -> dict:
                 "static_force_error_share_max_", "train_time_reduction_pct_full_scale_lm",
                 "train_time_converged_full_scale_lm", "converged_")
     return {k: v for k, v in ps.items() if k.startswith(prefixes)}
+def paper_scale_all_metrics(own: Mapping | None, beyond: Sequence[Mapping] = ()) -> dict:
+    """``paper_scale_metrics`` of the pipeline's report (``own``, may be None) and of the committed reports of
+    the runs beyond it (``beyond``: the curve's larger sizes, the full scale); a key of the pipeline's own run
+    wins over the same key in a report that included its records."""
+    out = dict(paper_scale_metrics(own)) if own is not None else {}
+    for rep in beyond:
+        out.update({k: v for k, v in paper_scale_metrics(rep).items() if k not in out})
+    return out
+
+
 #: the universal surrogate's keys in reports/universal.json, copied into the metrics as they are
 UNIVERSAL_KEYS = ("universal_rel_err_median", "universal_rel_err_p99", "universal_kc_max_rel_err_direct",
                   "universal_kc_max_rel_err_cross", "universal_whirl_threshold_rel_err", "satisfactory_cases_universal",
