@@ -139,7 +139,8 @@ train-time-full-scale: setup
 	$(PY) -m fluidfilm.reporting.readme
 
 .PHONY: paper-scale-curve paper-full-scale
-# both resume an interrupted run (finished models and per-epoch LM checkpoints under cache/). Time budgets
+# both resume an interrupted run from their finished models and per-epoch LM checkpoints, committed under
+# models/paper_scale_curve and models/paper_full_scale (a fresh clone continues where the last run stopped). Time budgets
 # (seconds of LM per network; a network stopped by one is recorded with stop reason max_time and not counted
 # as converged; rerun with a larger budget and the LM continues from its checkpoint):
 #   CURVE_BUDGET_S        per size of the curve, e.g. '{640000: 1800, 2560000: 1800}' (null: to the validation rule)
@@ -149,7 +150,7 @@ CURVE_BUDGET_S ?= null
 paper-scale-curve: setup
 	$(PY) experiments/paper_scale.py 'sizes=[160000,640000,2560000]' ablation.enabled=false \
 	    'size_budget_s=$(CURVE_BUDGET_S)' \
-	    cache_dir=cache/paper_scale_curve out=reports/paper_scale_curve.json \
+	    cache_dir=models/paper_scale_curve out=reports/paper_scale_curve.json \
 	    figure=reports/figures/paper_scale_curve.png \
 	    'include_reports=[reports/paper_scale.json,reports/paper_full_scale.json]'
 
@@ -162,7 +163,7 @@ paper-full-scale: setup
 	    'full_scale.single.network_protocol={0: {max_time_s: $(FULL_SCALE_BUDGET_S)}}' \
 	    'full_scale.split.network_protocol={0: {max_time_s: $(FULL_SCALE_BUDGET_S)}, 1: {max_time_s: $(FULL_SCALE_BUDGET_S)}, 2: {max_time_s: $(LM_BUDGET_S)}}' \
 	    'full_scale.split_adam.network_protocol={0: {max_time_s: $(FULL_SCALE_BUDGET_S)}, 1: {max_time_s: $(FULL_SCALE_BUDGET_S)}, 2: {name: adam, batch_size: 4096, lr: 3.0e-3, threads: 2, max_time_s: $(ADAM_BUDGET_S)}}' \
-	    protocol.progress_every_s=0 cache_dir=cache/paper_full_scale out=reports/paper_full_scale.json \
+	    protocol.progress_every_s=0 cache_dir=models/paper_full_scale out=reports/paper_full_scale.json \
 	    figure=reports/figures/paper_full_scale.png \
 	    'include_reports=[reports/paper_scale.json,reports/paper_scale_curve.json]'
 
