@@ -81,6 +81,11 @@ def test_flat_keys_name_size_structure_and_variant():
     assert keys["satisfactory_cases_single_full_scale"] == 2
     assert keys["train_time_reduction_pct_full_scale_lm"] == pytest.approx(25.0)
     assert keys["converged_split_40000"] == 1.0 and keys["converged_single_full_scale"] == 1.0
+    # a full-scale network stopped by its time budget: no reduction (it would compare the budgets)
+    capped = summary_keys([rec("full scale single", "single", None),
+                           rec("full scale split", "split", None) | {"train_time_s": 300.0, "converged": False}])
+    assert capped["train_time_converged_full_scale_lm"] is False and capped["converged_split_full_scale"] == 0.0
+    assert "train_time_reduction_pct_full_scale_lm" not in capped
 
 
 def test_the_full_scale_points_train_on_every_sample_and_print_as_all():

@@ -301,12 +301,13 @@ def summary_keys(records: list[dict]) -> dict:
         out[f"converged_{sfx}"] = 1.0 if r["converged"] else 0.0
     full = {r["label"]: r for r in records if r["label"].startswith("full scale ")}
     if "full scale single" in full and "full scale split" in full:
-        # the paper's 26 % from one LM run per structure (one seed; converged only if every network stopped by
-        # the validation rule: see train_time_converged_full_scale_lm)
-        t1, t3 = full["full scale single"]["train_time_s"], full["full scale split"]["train_time_s"]
-        out["train_time_reduction_pct_full_scale_lm"] = 100.0 * (1.0 - t3 / t1)
-        out["train_time_converged_full_scale_lm"] = bool(full["full scale single"]["converged"]
-                                                         and full["full scale split"]["converged"])
+        # the paper's 26 % from one LM run per structure (one seed), only where every network stopped by the
+        # validation rule: times capped by budgets compare the budgets, not the structures
+        converged = bool(full["full scale single"]["converged"] and full["full scale split"]["converged"])
+        out["train_time_converged_full_scale_lm"] = converged
+        if converged:
+            t1, t3 = full["full scale single"]["train_time_s"], full["full scale split"]["train_time_s"]
+            out["train_time_reduction_pct_full_scale_lm"] = 100.0 * (1.0 - t3 / t1)
     return out
 
 
