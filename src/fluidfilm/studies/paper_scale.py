@@ -331,22 +331,27 @@ def plot_curve(records: list[dict], path) -> None:
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for structure, marker in (("single", "s"), ("split", "o")):
-        rs = sorted((r for r in records if r["structure"] == structure and not r["label"].startswith("ablation")),
-                    key=lambda r: r["n_samples"])
+        # the curve and the full scale's LM runs (the Adam arm is a second arm of the full scale, not a size)
+        rs = sorted((r for r in records if r["structure"] == structure and not r["label"].startswith("ablation")
+                     and not r["label"].endswith("_adam")), key=lambda r: r["n_samples"])
         if not rs:
             continue
-        n = [r["n_samples"] for r in rs]
-        off = [np.nan if r["equilibrium_offset_pct_c"] is None else r["equilibrium_offset_pct_c"] for r in rs]
-        rms = [min(r["orbit_rms_pct_median"], 1e3) for r in rs]
-        axes[0].plot(n, off, marker=marker, label=structure)
-        axes[1].plot(n, rms, marker=marker, label=structure)
+        n = np.array([r["n_samples"] for r in rs])
+        off = np.array([np.nan if r["equilibrium_offset_pct_c"] is None else r["equilibrium_offset_pct_c"] for r in rs])
+        rms = np.array([min(r["orbit_rms_pct_median"], 1e3) for r in rs])
+        capped = np.array([not r.get("converged", True) for r in rs])
+        for ax, y in ((axes[0], off), (axes[1], rms)):
+            line, = ax.plot(n, y, marker=marker, label=f"{structure}, trained to the validation rule")
+            if capped.any():  # hollow: a network stopped by its time budget (not converged)
+                ax.plot(n[capped], y[capped], ls="none", marker=marker, ms=9, mfc="white", color=line.get_color(),
+                        label=f"{structure}, stopped by its LM time budget")
     axes[0].set_ylabel("equilibrium offset under the rotor's weight [% of c]")
     axes[1].set_ylabel("median over cases a-g of the orbit RMS error [% of c]")
     for ax in axes:
         ax.set_xscale("log")
         ax.set_xlabel("samples drawn from the paper dataset (70 % train)")
         ax.axhline(2.0, color="k", lw=0.8, ls="--")
-        ax.legend()
+        ax.legend(fontsize=7)
     fig.suptitle("The paper's networks (1x50 tanh, min-max, LM) against data size")
     fig.tight_layout()
     io.save_figure(fig, path, dpi=120)
