@@ -619,8 +619,8 @@ def render_train_time_full_scale(reports: Path) -> str:
                       "stop reasons", "val. rel. RMSE per network", "val. rel. RMSE", "test rel. RMSE"], rows))
 
 
-#: the paper_scale study's reports, first found first: the pipeline's (40 k), the larger sizes', the full scale's
-PAPER_SCALE_REPORTS = ("paper_scale.json", "paper_scale_curve.json", "paper_full_scale.json")
+#: the paper_scale study's reports, first found first (``report.PAPER_SCALE_REPORTS``)
+PAPER_SCALE_REPORTS = report.PAPER_SCALE_REPORTS
 
 
 def paper_scale_records(reports: Path) -> tuple[list[dict], list[str]]:

@@ -50,11 +50,15 @@ class ReportInputs:
     ablation: dict | None = None      # reports/ablation/summary.json, where that stage ran
     error_map: dict | None = None     # reports/error_map.json, where that stage ran
     paper_scale: dict | None = None   # reports/paper_scale.json, where that stage ran
-    # reports/paper_scale_curve.json and paper_full_scale.json (make paper-scale-curve / paper-full-scale,
-    # committed), those present
+    # the other PAPER_SCALE_REPORTS (make paper-scale-curve / paper-full-scale, committed), those present
     paper_scale_beyond: tuple = ()
     runup: dict | None = None         # reports/runup.json, where that stage ran
     universal: dict | None = None     # reports/universal.json, where that stage ran
+
+
+#: the paper_scale study's reports, the pipeline's own first: the stage's (40 k and the ablation), then the
+#: committed runs beyond it, the curve's larger sizes (make paper-scale-curve) and the full scale (make paper-full-scale)
+PAPER_SCALE_REPORTS = ("paper_scale.json", "paper_scale_curve.json", "paper_full_scale.json")
 
 
 def _load(path: Path) -> Any:
@@ -82,8 +86,7 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         characteristics=optional(charac), ensemble=optional(ens),
         grading_study=optional(rd / "grading_study" / "summary.json"), ablation=optional(rd / "ablation" / "summary.json"),
         error_map=optional(rd / "error_map.json"), paper_scale=optional(rd / "paper_scale.json"),
-        paper_scale_beyond=tuple(_load(p) for p in (rd / "paper_scale_curve.json", rd / "paper_full_scale.json")
-                                 if p.exists()),
+        paper_scale_beyond=tuple(_load(rd / name) for name in PAPER_SCALE_REPORTS[1:] if (rd / name).exists()),
         runup=optional(rd / "runup.json"),
         universal=optional(rd / "universal.json"))
 

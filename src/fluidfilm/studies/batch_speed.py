@@ -57,20 +57,19 @@ def run(cfg) -> dict:
     if reps < 1:
         raise ValueError(f"threads_repeats must be >= 1, got {reps!r}")
     walls: dict = {(name, arm): [] for name in models for arm in ("one", "all")}
-    threaded = {}
+    n_ok = {}
     for _ in range(reps):
         for name, model in models.items():
             for arm, th in (("one", 1), ("all", cfg.get("threads"))):
                 r = trajectories_per_second(model, n_max, cfg.t_end, cfg.dt, batched=True, threads=th)
                 walls[(name, arm)].append(r["wall_s"])
-                if arm == "all":
-                    threaded[name] = {"threads": r["threads"] if r["threads"] is not None else "all",
-                                      "n_ok": r["n_ok"]}
+                n_ok[name] = r["n_ok"]
+    threaded = {}
     for name in models:
         one, every = float(np.median(walls[(name, "one")])), float(np.median(walls[(name, "all")]))
-        threaded[name].update({"batched_per_s": n_max / every, "one_thread_wall_per_s": n_max / one,
-                               "scaling": one / every, "wall_s_one_thread": walls[(name, "one")],
-                               "wall_s_all_threads": walls[(name, "all")]})
+        threaded[name] = {"threads": cfg.get("threads") or "all", "n_ok": n_ok[name], "batched_per_s": n_max / every,
+                          "one_thread_wall_per_s": n_max / one, "scaling": one / every,
+                          "wall_s_one_thread": walls[(name, "one")], "wall_s_all_threads": walls[(name, "all")]}
     out["threads"] = threaded
     out["threads_repeats"] = reps
     out["precision"] = r["precision"]  # the surrogate networks' arithmetic in the batched runs

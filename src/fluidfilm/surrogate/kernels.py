@@ -139,7 +139,7 @@ def sigmoid64(x):
 @njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def silu64(x):
     """SiLU, x sigma(x), in float64 from ``tanh64`` (vectorises)."""
-    return x * (0.5 + 0.5 * tanh64(0.5 * x))
+    return x * sigmoid64(x)
 
 
 @njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
@@ -151,7 +151,7 @@ def sigmoid32(x):
 @njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def silu32(x):
     """SiLU in float32 from ``tanh32`` (vectorises)."""
-    return x * (np.float32(0.5) + np.float32(0.5) * tanh32(np.float32(0.5) * x))
+    return x * sigmoid32(x)
 
 
 # ---------------------------------------------------------------------------------------------- folding
