@@ -208,3 +208,21 @@ def test_committed_reports_are_the_outputs_dvc_lock_records():
             assert hashlib.md5(path.read_bytes()).hexdigest() == out["md5"], (stage, out["path"])
             checked += 1
     assert checked >= 10
+
+
+def test_resumable_work_survives_dvc_repro():
+    """DVC deletes a stage's outputs before it runs it, unless they are ``persist``: every study's resumable
+    work (``cache_dir`` in conf/*.yaml: finished fits, checkpoints) must lie in no output that is not
+    persistent, or `dvc repro` after an interruption would start it over (universal_train kept its finished
+    regions inside models/universal until 2026-12-02)."""
+    outs = []  # (path, persist)
+    for stage in _stages().values():
+        for entry in stage.get("outs", []):
+            path, opts = (entry, {}) if isinstance(entry, str) else next(iter(entry.items()))
+            outs.append((Path(path), bool(opts.get("persist", False))))
+    caches = {f.name: Path(yaml.safe_load(f.read_text())["cache_dir"]) for f in sorted((ROOT / "conf").glob("*.yaml"))
+              if "cache_dir" in (yaml.safe_load(f.read_text()) or {})}
+    assert "universal.yaml" in caches and "paper_scale.yaml" in caches, sorted(caches)
+    for name, cache in caches.items():
+        inside = [str(p) for p, persist in outs if not persist and (cache == p or p in cache.parents)]
+        assert not inside, f"conf/{name}: cache_dir {cache} lies in the non-persistent output(s) {inside}"

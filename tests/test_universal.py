@@ -203,6 +203,132 @@ def test_levenberg_marquardt_fits_a_teacher_network_and_resumes_to_the_same_weig
         np.testing.assert_array_equal(ba, bb)
 
 
+@pytest.mark.parametrize("cavitation", ["gumbel", "swift-stieber"])
+def test_the_datasets_derivatives_are_the_reference_solvers_own_stiffness_and_damping(cavitation):
+    # A second method: the dataset's dG/deps and dG/dalpha at alpha = 0 (the journal at rest), mapped through
+    # F = S |u| G(eps, alpha) with u = (eps - 2 v_t, 2 v_r), are the solver's K and C from perturbing the physical
+    # state X, V: K[:, 2] = -(S / c) (G + eps dG/deps), C[:, 2] = -(2 S / (c omega)) dG/dalpha and
+    # C[:, 1] = +(2 S / (c omega)) G (components (t, r) = (X1, X2)).  The dataset's G at alpha = 0 is taken at
+    # unit drive, i.e. with v_t = (eps - 1) / 2, where the solver's wedge term (a finite difference of h) and
+    # squeeze term (exact) differ by O(dtheta^2): 1.4e-4 of the matrix on 72 nodes, 3.6e-5 on 144 (measured),
+    # hence the tolerance; dG/dalpha enters alone and agrees to 2e-9.
+    from fluidfilm.characteristics.coefficients import coefficients
+    from fluidfilm.data.universal import _compute_row
+
+    ld, nt, nz = 0.6, 144, 33
+    part = _compute_row({"index": 0, "ld": ld, "cavitation": cavitation, "n_theta": nt, "n_z": nz,
+                         "eps": [0.3, 0.8], "alpha": [0.0, 1.0]})["columns"]
+    solver = ReynoldsSolver(canonical_bearing(ld), nt, nz, cavitation=cavitation)
+    b = solver.bearing
+    S, c, om = b.force_scale, b.clearance, b.omega
+    for i in np.flatnonzero(part["alpha"] == 0.0):
+        eps = part["eps"][i]
+        G = np.array([part["G_t"][i], part["G_r"][i]])                      # (X1, X2)
+        dGe = np.array([part["dG_t_deps"][i], part["dG_r_deps"][i]])
+        dGa = np.array([part["dG_t_dalpha"][i], part["dG_r_dalpha"][i]])
+        kc = coefficients(solver, np.array([0.0, eps * c]), h_rel=1e-5)
+        K, C = np.asarray(kc["K"]), np.asarray(kc["C"])
+        np.testing.assert_allclose(K[:, 1], -(S / c) * (G + eps * dGe), rtol=0, atol=1e-4 * np.abs(K).max())
+        np.testing.assert_allclose(C[:, 1], -(2 * S / (c * om)) * dGa, rtol=0, atol=1e-6 * np.abs(C).max())
+        np.testing.assert_allclose(C[:, 0], (2 * S / (c * om)) * G, rtol=0, atol=1e-4 * np.abs(C).max())
+
+
+def test_derivative_targets_are_the_derivatives_of_the_targets():
+    # an analytic G(eps, alpha, L/D) with its derivative columns: derivative_targets must equal a numerical
+    # derivative of features()'s targets in eps and alpha (the factor (1 - eps^2)^p / gain(L/D) included)
+    import pandas as pd
+
+    from fluidfilm.surrogate.universal_fit import derivative_targets, features
+
+    def frame(eps, alpha, ld=0.7):
+        eps, alpha = np.asarray(eps, float), np.asarray(alpha, float)
+        return pd.DataFrame({"ld": ld, "eps": eps, "alpha": alpha,
+                             "G_r": np.exp(2 * eps) * np.cos(alpha), "G_t": eps**3 + np.sin(alpha),
+                             "dG_r_deps": 2 * np.exp(2 * eps) * np.cos(alpha), "dG_t_deps": 3 * eps**2,
+                             "dG_r_dalpha": -np.exp(2 * eps) * np.sin(alpha), "dG_t_dalpha": np.cos(alpha)})
+
+    eps, alpha, h = np.array([0.2, 0.6, 0.9]), np.array([0.0, 1.3, 0.0]), 1e-6
+    got = derivative_targets(frame(eps, alpha), power=2.0, rows="all")
+    for a, (de, da) in enumerate([(h, 0.0), (0.0, h)]):
+        num = (features(frame(eps + de, alpha + da), 2.0)[1] - features(frame(eps - de, alpha - da), 2.0)[1]) / (2 * h)
+        np.testing.assert_allclose(got[:, a], num, rtol=1e-7, atol=1e-9)
+    static = derivative_targets(frame(eps, alpha), power=2.0)          # only the rows at rest keep targets
+    assert np.isfinite(static[[0, 2]]).all() and np.isnan(static[1]).all()
+    with pytest.raises(ValueError, match="'some'"):
+        derivative_targets(frame(eps, alpha), 2.0, rows="some")
+    with pytest.raises(ValueError, match="derivative columns"):
+        derivative_targets(frame(eps, alpha).drop(columns="dG_t_dalpha"), 2.0)
+
+
+def test_the_derivative_residuals_jacobian_is_autograds():
+    import torch
+
+    from fluidfilm.surrogate.universal_fit import UniversalNet
+
+    torch.manual_seed(3)
+    net = UniversalNet(width=5, derivative_weight=1.0)
+    theta = net._theta().clone()
+    z, S, T = (torch.randn(*shape, dtype=torch.float64) for shape in ((7, 4), (7, 2, 4), (7, 2, 2)))
+    Wd = torch.rand(7, 2, 2, dtype=torch.float64)
+    H, D, Q, r = net._derivative_residuals(theta, z, S, T, Wd)
+    J = net._derivative_jacobian(theta, z, S, Wd, H, D, Q)
+    J_auto = torch.autograd.functional.jacobian(lambda t: net._derivative_residuals(t, z, S, T, Wd)[3].reshape(-1), theta)
+    torch.testing.assert_close(J, J_auto, rtol=1e-12, atol=1e-13)
+    # and the residual's derivative is the network's own input derivative along S (autograd through its forward)
+    zz = z.clone().requires_grad_(True)
+    out = net.net(zz)
+    grads = torch.stack([torch.autograd.grad(out[:, k].sum(), zz, retain_graph=True)[0] for k in range(2)], 1)
+    d = net._derivative_residuals(theta, z, S, torch.zeros_like(T), torch.ones_like(Wd))[3]
+    torch.testing.assert_close(d, torch.einsum("mki,mai->mak", grads, S), rtol=1e-12, atol=1e-13)
+
+
+def test_a_sobolev_fit_learns_a_teachers_derivatives_and_resumes_to_the_same_weights(tmp_path):
+    # values of a known network on few rows, and its input derivatives there: fitted on values alone the
+    # student's derivatives are loose; fitted on both from the values-only start, they match the teacher's
+    import torch
+
+    from fluidfilm.surrogate.universal_fit import train_region
+
+    rng = np.random.default_rng(8)
+    n = 120
+    raw = np.stack([rng.uniform(0.1, 0.9, n), *(lambda a: (np.cos(a), np.sin(a)))(rng.uniform(0, 2 * np.pi, n)),
+                    rng.uniform(-1.0, 0.5, n)], axis=-1)
+    W1, b1, W2 = rng.normal(0, 1, (6, 4)), rng.normal(0, 0.3, 6), rng.normal(0, 1, (2, 6))
+
+    def teacher(x):
+        return np.tanh(x @ W1.T + b1) @ W2.T + np.array([4.0, -3.0])
+
+    x = torch.as_tensor(raw, dtype=torch.float64).requires_grad_(True)
+    y_t = torch.tanh(x @ torch.as_tensor(W1).T + torch.as_tensor(b1)) @ torch.as_tensor(W2).T
+    g = np.stack([torch.autograd.grad(y_t[:, k].sum(), x, retain_graph=True)[0].numpy() for k in range(2)], 1)
+    # d/deps and d/dalpha of the teacher (alpha enters through cos and sin)
+    deriv = np.stack([g[:, :, 0], -raw[:, None, 2] * g[:, :, 1] + raw[:, None, 1] * g[:, :, 2]], axis=1)
+    y = teacher(raw)
+    kw = dict(width=8, floor_share=0.0, max_minutes=5.0, seed=2, val_fraction=0.25)
+    first = train_region(raw, y, steps=40, **kw)
+    sob = dict(derivatives=deriv, derivative_weight=1.0, init=first)
+    both = train_region(raw, y, steps=80, ckpt_dir=tmp_path / "a", **kw, **sob)
+    values_only = train_region(raw, y, steps=80, **kw, derivatives=deriv, derivative_weight=1e-9, init=first)
+    assert both["val_deriv_rel_median"] < 0.2 * values_only["val_deriv_rel_median"], (both, values_only)
+    assert both["val_rel_median"] < 1e-3
+    train_region(raw, y, steps=40, ckpt_dir=tmp_path / "b", **kw, **sob)
+    resumed = train_region(raw, y, steps=80, ckpt_dir=tmp_path / "b", **kw, **sob)
+    for (wa, ba), (wb, bb) in zip(both["layers"], resumed["layers"]):
+        np.testing.assert_array_equal(wa, wb)
+        np.testing.assert_array_equal(ba, bb)
+    with pytest.raises(ValueError, match=r"shape \(8, 4\) does not fit"):
+        train_region(raw, y, steps=1, **{**kw, "width": 9}, init=first)
+
+
+def test_a_derivative_weight_per_rule_must_name_the_rule():
+    from fluidfilm.studies.universal import derivative_weight_for
+    from fluidfilm.workflow.config_check import ConfigError
+
+    assert derivative_weight_for({"gumbel": 2.0, "swift-stieber": 0.5}, "gumbel") == 2.0
+    with pytest.raises(ConfigError, match="'swift-stieber' is missing"):
+        derivative_weight_for({"gumbel": 2.0}, "swift-stieber")
+
+
 def test_region_layout_refusals():
     from fluidfilm.surrogate.universal_fit import region_rows, train_universal
 

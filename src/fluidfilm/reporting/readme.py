@@ -445,6 +445,22 @@ def render_universal_summary(reports: Path) -> str:
             f"(direct) and {100 * u['universal_kc_max_rel_err_cross']:.2g} % (cross).\n")
 
 
+def render_universal_kc(reports: Path) -> str:
+    """Where along the equilibrium locus the shipped universal model's K and C miss the converged reference:
+    the worst over the held-out L/D at each eccentricity, per rule (``reports/universal.json``, ``kc_by_eps``)."""
+    u = _load(reports, "universal.json")
+    by = u["kc_by_eps"]
+    rules = sorted({k.split(":")[0] for k in by})
+    eps = sorted({k.split(":")[2] for k in by}, key=float)
+    rows = [[e] + [_num(100 * by[f"{r}:{kind}:{e}"], ".2f", " %") for r in rules for kind in ("direct", "cross")]
+            for e in eps]
+    goals = u["goals"]
+    return (_table(["eps at equilibrium"] + [f"{r}, {kind}" for r in rules for kind in ("direct", "cross")], rows)
+            + f"\nGoals: direct ≤ {100 * goals['kc_direct']:g} %, cross ≤ {100 * goals['kc_cross']:g} %; held-out L/D "
+              f"{', '.join(f'{x:g}' for x in u['held_out_ld'])}; error |K - K_ref| / max(|K_ref|, "
+              "0.1 x the largest coefficient of the matrix) at the same load.\n")
+
+
 def render_universal(reports: Path) -> str:
     u = _load(reports, "universal.json")
     g = u["goals"]
@@ -473,6 +489,15 @@ def render_universal(reports: Path) -> str:
             [f"time per force (best model's shape: {u['cost']['force_eval_us_best_shape']:.3f} us, same run)",
              f"{u['force_eval_us_universal']:.3f} us", f"≤ {u['cost']['force_eval_us_best_shape']:.3f} us",
              "yes" if u["cost"]["universal_vs_best_cost_ratio"] <= 1.0 else "no"]]
+    if "reference_equal_accuracy" in u:  # evaluations before 2026-12-02 did not time the reference
+        same = u["reference_equal_accuracy"]
+        worst = min(same, key=lambda r: r["speedup"])
+        grids = sorted({f"{r['n_theta']} x {r['n_z']}" for r in same}, key=lambda t: int(t.split(" x ")[0]))
+        rows.append([f"speed-up per force over the reference on the grid as accurate as the model (grids "
+                     f"{', '.join(grids)}; least: {worst['cavitation']}, L/D {worst['ld']:g}, "
+                     f"{worst['reference_us']:.0f} us)", f"{worst['speedup']:.0f}x",
+                     f"≥ {g.get('speedup_equal_accuracy', 100):g}x",
+                     "yes" if worst["speedup"] >= g.get("speedup_equal_accuracy", 100) else "no"])
     by_rule = "; ".join(f"{r}: median {100 * v['median']:.2f} %, p99 {100 * v['p99']:.1f} %"
                         for r, v in u["by_rule"].items())
     return (_table(["quantity", "measured", "goal", "met"], rows)
@@ -788,6 +813,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "error_map": render_error_map,
     "runup": render_runup,
     "universal": render_universal,
+    "universal_kc": render_universal_kc,
     "surrogate_goals": render_surrogate_goals,
     "control": render_control,
     "figures": render_figures,

@@ -76,6 +76,11 @@ CAPTIONS: dict[str, str] = {
         "of samples they are trained on: the equilibrium offset under the rotor's weight (left) and the median "
         "orbit RMS error over cases a-g (right), in % of the clearance, single and split; the recipe's variants "
         "at one size beside them."),
+    "figures/paper_scale_curve.png": (
+        "The paper's networks against data size, every size on record: the pipeline's 40,000 samples and the "
+        "committed runs beyond it (160,000 to 2,560,000 samples: make paper-scale-curve; all 4,512,900: make "
+        "paper-full-scale). Filled: trained to the validation rule; hollow: stopped by a Levenberg-Marquardt time "
+        "budget, not converged. Dashed: the 2 %-of-c rule."),
     "figures/runup_cascade.png": (
         "Run-up and run-down of the paper's rotor through its oil-whirl threshold (reference model): the full "
         "spectrum of the journal's orbit in windows of 16 revolutions, each drawn at the height of its shaft speed "

@@ -26,8 +26,10 @@ import pandas as pd
 
 from fluidfilm import io
 from fluidfilm.core.bearing import JournalBearing
+from fluidfilm.data.spec import config_hash
 from fluidfilm.workflow.config import bearing_from_cfg
 from fluidfilm.workflow.config_check import ConfigError
+from fluidfilm.workflow.entry import plain
 from fluidfilm.workflow.tracking import Logged
 
 PARTS = ("dataset", "train", "evaluate")
@@ -63,6 +65,22 @@ def _dataset(cfg) -> Logged:
 
 
 # ------------------------------------------------------------------------------------------------ training
+def derivative_weight_for(value, rule: str) -> float:
+    """``train.derivative_weight`` for one rule: one number for both, or a mapping rule -> number.
+
+    Examples
+    --------
+    >>> derivative_weight_for(2.0, "gumbel"), derivative_weight_for({"gumbel": 2, "swift-stieber": 0.5}, "swift-stieber")
+    (2.0, 0.5)
+    """
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    try:
+        return float(value[rule])
+    except (KeyError, TypeError):
+        raise ConfigError(f"train.derivative_weight={value!r}: give one number or one per rule ({rule!r} is missing)") from None
+
+
 def _train(cfg) -> Logged:
     from fluidfilm.data.universal import load_universal
     from fluidfilm.surrogate.universal_fit import train_universal, write_weights
@@ -78,15 +96,22 @@ def _train(cfg) -> Logged:
         if parent is not None:
             factory = tracking.child_logger_factory(parent, cfg.tracking, f"universal_{rule}")
             logger_for = lambda r, factory=factory: factory(r).logger()  # noqa: E731
-        # finished regions and the running fit's checkpoint live beside the outputs: a rerun continues
-        work = out / "_work" / f"{rule}-{meta['config_hash'][:12]}"
+        # finished regions and the running fit's checkpoint: a rerun continues them.  Keyed by the data and
+        # the first phase's settings (the second phase keys its own files: train_universal)
+        first = {k: plain(tr)[k] for k in ("boundaries", "blend_width", "overlap", "power", "width", "steps",
+                                           "max_minutes", "floor_share", "seed")}
+        work = Path(cfg.cache_dir) / f"{rule}-{meta['config_hash'][:12]}-{config_hash(first)[:8]}"
+        weight = derivative_weight_for(tr.derivative_weight, rule)
         fit = train_universal(frame, boundaries=list(tr.boundaries), blend_width=tr.blend_width, overlap=tr.overlap,
                               power=tr.power, width=tr.width, steps=tr.steps, max_minutes=list(tr.max_minutes),
                               floor_share=tr.floor_share, seed=tr.seed, work_dir=work, logger_for=logger_for,
-                              what=f"{rule} ")
+                              what=f"{rule} ", derivative_weight=weight,
+                              derivative_rows=str(tr.derivative_rows), refine_minutes=list(tr.refine_minutes),
+                              refine_steps=int(tr.refine_steps))
         info = {"dataset_hash": meta["config_hash"], "n_rows": int(len(frame)),
                 **{k: v for k, v in fit.items() if k.startswith("val_") or k == "train_seconds"},
                 "width": int(tr.width), "depth": 1, "optimizer": "levenberg-marquardt",
+                "derivative_weight": weight, "derivative_rows": str(tr.derivative_rows),
                 "regions": [{k: v for k, v in reg.items() if isinstance(v, (int, float))} for reg in fit["regions"]]}
         write_weights(fit, rule, meta["spec"]["eps_max"], (meta["spec"]["ld_min"], meta["spec"]["ld_max"]), info,
                       directory=out)
@@ -275,6 +300,31 @@ def force_cost(cfg) -> dict:
             "loadavg_1min": [load0, os.getloadavg()[0]]}
 
 
+def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, t_universal: float) -> pd.DataFrame:
+    """Per rule and held-out L/D: the grid the reference needs to be as accurate as the shipped model there
+    (the convergence check of the dataset, ``data.universal.converged_grid``, at the model's median relative
+    error for that rule and L/D), the reference's time per force on it (its compiled kernel, the same loop as
+    the model's) and the ratio to the model's ``t_universal`` [s] (rows: rule, ld, tol, n_theta, n_z,
+    reference_us, speedup)."""
+    from fluidfilm import ReynoldsSolver
+    from fluidfilm.data.universal import _n_z, converged_grid
+    from fluidfilm.perf.speed import sample_states, time_per_force_eval
+
+    rows = []
+    for (rule, ld), g in errors.groupby(["cavitation", "ld"]):
+        tol = float(g.rel_err.median())
+        nt, _, _ = converged_grid(float(ld), rule, 0.8, tol)
+        b = JournalBearing(length=0.05 * float(ld), diameter=0.05, clearance=75e-6, speed_rpm=5000.0, viscosity=0.02)
+        ref = ReynoldsSolver(b, nt, _n_z(nt, float(ld)), cavitation=rule)
+        x, v = sample_states(b.clearance, n=40, eps_max=0.9, v_max=0.05)
+        t_ref = time_per_force_eval(ref, x, v, repeats=3)
+        rows.append({"cavitation": rule, "ld": float(ld), "tol": tol, "n_theta": nt, "n_z": _n_z(nt, float(ld)),
+                     "reference_us": 1e6 * t_ref, "speedup": t_ref / t_universal})
+        print(f"  {rule} L/D={ld:g}: the reference as accurate ({100 * tol:.3f} %) needs {nt} x {_n_z(nt, float(ld))}: "
+              f"{1e6 * t_ref:.0f} us per force, {t_ref / t_universal:.0f}x the universal model", flush=True)
+    return pd.DataFrame(rows)
+
+
 def error_map(errors: pd.DataFrame, eps_edges) -> pd.DataFrame:
     """Median and 99th-percentile relative error per (rule, L/D, eps bin)."""
     e = errors.assign(eps_bin=pd.cut(errors.eps, list(eps_edges), include_lowest=True))
@@ -355,6 +405,8 @@ def _evaluate(cfg) -> Logged:
     print("Fig. 4 cases", flush=True)
     cases = fig4_cases(cfg)
     cost = force_cost(cfg)
+    print("the reference at equal accuracy", flush=True)
+    same = reference_cost_at_equal_accuracy(cfg, errors, 1e-6 * cost["force_eval_us_universal"])
     out = {
         "universal_rel_err_median": float(errors.rel_err.median()),
         "universal_rel_err_p99": float(errors.rel_err.quantile(0.99)),
@@ -365,12 +417,18 @@ def _evaluate(cfg) -> Logged:
         "n_cases": int(len(cases)),
         "force_eval_us_universal": cost["force_eval_us_universal"],
         "cost": cost,
+        "universal_speedup_vs_reference_equal_accuracy_min": float(same.speedup.min()),
+        "reference_equal_accuracy": same.to_dict(orient="records"),
         "by_rule": {rule: {"median": float(g.rel_err.median()), "p99": float(g.rel_err.quantile(0.99)),
                            "max": float(g.rel_err.max()), "n": int(len(g))}
                     for rule, g in errors.groupby("cavitation")},
         "by_ld": {f"{rule}:{ld:g}": {"median": float(g.rel_err.median()), "p99": float(g.rel_err.quantile(0.99))}
                   for (rule, ld), g in errors.groupby(["cavitation", "ld"])},
         "kc_by_rule": {f"{rule}:{kind}": float(g.rel_err.max()) for (rule, kind), g in kc.groupby(["cavitation", "kind"])},
+        # the worst over the held-out L/D at each equilibrium of the locus (the reference's eps, 1 d.p.)
+        "held_out_ld": [float(x) for x in cfg.evaluate.held_out_ld],
+        "kc_by_eps": {f"{rule}:{kind}:{eps:.1f}": float(g.rel_err.max())
+                      for (rule, kind, eps), g in kc.assign(eps=kc.eps_ref.round(1)).groupby(["cavitation", "kind", "eps"])},
         "whirl": whirl.to_dict(orient="records"),
         "raimondi_boyd": {"max_S_err_pct": float(rb.S_err_pct.abs().max()),
                           "max_phi_err_pct": float(rb.phi_err_pct.abs().max()),
@@ -381,7 +439,7 @@ def _evaluate(cfg) -> Logged:
         "error_map": [{**r, "eps_bin": str(r["eps_bin"])} for r in emap.to_dict(orient="records")],
         "weights": {rule: load_weights(rule)["info"] for rule in ("gumbel", "swift-stieber")},
         "goals": {"rel_err_median": 0.005, "rel_err_p99": 0.05, "kc_direct": 0.02, "kc_cross": 0.05,
-                  "whirl_threshold": 0.01, "raimondi_boyd_pct": 2.0, "cases": 7},
+                  "whirl_threshold": 0.01, "raimondi_boyd_pct": 2.0, "cases": 7, "speedup_equal_accuracy": 100.0},
     }
     io.write_json(report / "universal.json", out)
     print(f"universal: median {100 * out['universal_rel_err_median']:.3f} %, p99 {100 * out['universal_rel_err_p99']:.2f} %, "

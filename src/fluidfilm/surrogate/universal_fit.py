@@ -33,9 +33,11 @@ import torch
 from torch import nn
 
 from fluidfilm import io
+from fluidfilm.data.spec import config_hash
 from fluidfilm.surrogate.universal import WEIGHTS_DIR, slenderness_gain
 
-__all__ = ["UniversalNet", "features", "region_rows", "train_region", "train_universal", "write_weights"]
+__all__ = ["UniversalNet", "features", "derivative_targets", "region_rows", "train_region", "train_universal",
+           "save_fit", "write_weights"]
 
 
 def features(frame: pd.DataFrame, power: float) -> tuple[np.ndarray, np.ndarray]:
@@ -59,6 +61,49 @@ def features(frame: pd.DataFrame, power: float) -> tuple[np.ndarray, np.ndarray]
     factor = (1.0 - eps**2) ** power / slenderness_gain(ld)
     y = np.stack([frame["G_r"].to_numpy(), frame["G_t"].to_numpy()], axis=-1) * factor[:, None]
     return z, y
+
+
+def derivative_targets(frame: pd.DataFrame, power: float, rows: str = "static") -> np.ndarray:
+    """Raw target derivatives d y / d eps and d y / d alpha of ``features``' targets, NaN where not fitted.
+
+    y = G (1 - eps^2)^p / gain(L/D), so d y / d eps = (dG/deps (1 - eps^2)^p - 2 p eps G (1 - eps^2)^(p-1)) /
+    gain and d y / d alpha = dG/dalpha (1 - eps^2)^p / gain, from the dataset's derivative columns.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        Rows of the dimensionless dataset with the derivative columns (``data.universal``).
+    power : float
+        The exponent p.
+    rows : {"static", "all"}, default "static"
+        Which rows carry derivative targets: "static", the rows at alpha = 0 (the journal at rest, where
+        stiffness and damping are taken: K comes from dG/deps there, C from dG/dalpha and the homogeneity);
+        "all", every row.
+
+    Returns
+    -------
+    ndarray, shape (n, 2, 2)
+        [row, (d/deps, d/dalpha), (radial, tangential)]; NaN for rows without a target.
+    """
+    if rows not in ("static", "all"):
+        raise ValueError(f"derivative rows must be 'static' or 'all', got {rows!r}")
+    missing = [c for c in ("dG_r_deps", "dG_t_deps", "dG_r_dalpha", "dG_t_dalpha") if c not in frame]
+    if missing:
+        raise ValueError(f"the dataset has no derivative columns {missing} (made before format 2: regenerate it)")
+    eps = frame["eps"].to_numpy()
+    ld = frame["ld"].to_numpy()
+    gain = slenderness_gain(ld)
+    f = (1.0 - eps**2) ** power
+    df = -2.0 * power * eps * (1.0 - eps**2) ** (power - 1.0)
+    G = np.stack([frame["G_r"].to_numpy(), frame["G_t"].to_numpy()], axis=-1)
+    dGe = np.stack([frame["dG_r_deps"].to_numpy(), frame["dG_t_deps"].to_numpy()], axis=-1)
+    dGa = np.stack([frame["dG_r_dalpha"].to_numpy(), frame["dG_t_dalpha"].to_numpy()], axis=-1)
+    out = np.stack([(dGe * f[:, None] + G * df[:, None]) / gain[:, None], dGa * (f / gain)[:, None]], axis=1)
+    if rows == "static":
+        alpha = np.mod(frame["alpha"].to_numpy(), 2.0 * np.pi)
+        at_rest = np.minimum(alpha, 2.0 * np.pi - alpha) < 1e-12
+        out[~at_rest] = np.nan
+    return out
 
 
 def region_rows(eps: np.ndarray, boundaries, blend_width: float, region: int, overlap: int = 1) -> np.ndarray:
@@ -126,7 +171,7 @@ class UniversalNet(L.LightningModule):
     """
 
     def __init__(self, width: int = 64, out_mean=(0.0, 0.0), out_std=(1.0, 1.0), mu: float = 1e-3,
-                 mu_max: float = 1e10):
+                 mu_max: float = 1e10, derivative_weight: float = 0.0):
         super().__init__()
         self.save_hyperparameters()
         self.automatic_optimization = False
@@ -148,12 +193,27 @@ class UniversalNet(L.LightningModule):
                 p.copy_(theta[k:k + p.numel()].view_as(p))
                 k += p.numel()
 
-    def _residuals(self, theta, z, y, w):
+    def _unpack(self, theta):
         h = self.hparams.width
-        W1, b1 = theta[:4 * h].view(h, 4), theta[4 * h:5 * h]
-        W2, b2 = theta[5 * h:7 * h].view(2, h), theta[7 * h:]
+        return theta[:4 * h].view(h, 4), theta[4 * h:5 * h], theta[5 * h:7 * h].view(2, h), theta[7 * h:]
+
+    def _residuals(self, theta, z, y, w):
+        W1, b1, W2, b2 = self._unpack(theta)
         H = torch.tanh(z @ W1.T + b1)
         return H, ((H @ W2.T + b2) - y) * w
+
+    def _derivative_residuals(self, theta, z, S, T, Wd):
+        """Residuals of the network's input derivatives: (d_a net_k - T_ak) Wd_ak for the directions S_a.
+
+        ``S`` (m, 2, 4): the directions d/deps and d/dalpha in standardised input space; ``T`` (m, 2, 2) the
+        targets (standardised outputs per raw eps or alpha); the network's derivative along S_a is
+        W2 (D * (W1 S_a)), D = 1 - tanh^2."""
+        W1, b1, W2, _ = self._unpack(theta)
+        H = torch.tanh(z @ W1.T + b1)
+        D = 1.0 - H * H
+        Q = S @ W1.T                                              # (m, 2, h): W1 S_a
+        d = (D[:, None, :] * Q) @ W2.T                            # (m, 2, 2): [row, direction, output]
+        return H, D, Q, (d - T) * Wd
 
     def _jacobian(self, theta, z, H, w):
         """d residual / d theta, rows (n, k) flattened, columns in ``_theta``'s order (W1, b1, W2, b2)."""
@@ -170,20 +230,63 @@ class UniversalNet(L.LightningModule):
             J[:, k, 7 * h + k] = w[:, k]
         return J.reshape(2 * n, -1)
 
+    def _derivative_jacobian(self, theta, z, S, Wd, H, D, Q):
+        """d (derivative residual) / d theta, rows (m, a, k) flattened (``_derivative_residuals``'s order).
+
+        With A = W1 z + b1, d_ak = sum_j W2_kj D_j Q_aj: d/dW2_kj = D_j Q_aj, d/db1_j = -2 W2_kj H_j D_j Q_aj,
+        d/dW1_ji = W2_kj (-2 H_j D_j Q_aj z_i + D_j S_ai), d/db2 = 0."""
+        h = self.hparams.width
+        m = z.shape[0]
+        W2 = theta[5 * h:7 * h].view(2, h)
+        J = torch.zeros((m, 2, 2, theta.numel()), dtype=theta.dtype)
+        HD2 = -2.0 * H * D
+        for a in range(2):
+            for k in range(2):
+                c = Wd[:, a, k:k + 1] * W2[k]                    # (m, h)
+                g1 = c * HD2 * Q[:, a, :]                          # coefficient of z_i (and of b1)
+                g2 = c * D                                         # coefficient of S_ai
+                J[:, a, k, :4 * h] = (g1[:, :, None] * z[:, None, :] + g2[:, :, None] * S[:, a, None, :]).reshape(m, 4 * h)
+                J[:, a, k, 4 * h:5 * h] = g1
+                J[:, a, k, 5 * h + k * h:5 * h + (k + 1) * h] = Wd[:, a, k:k + 1] * D * Q[:, a, :]
+        return J.reshape(4 * m, -1)
+
+    def _sse(self, theta, z, y, w, deriv):
+        _, r = self._residuals(theta, z, y, w)
+        sse = float((r * r).sum())
+        if deriv is not None:
+            rd = self._derivative_residuals(theta, *deriv)[3]
+            sse += float((rd * rd).sum())
+        return sse
+
+    @staticmethod
+    def _derivative_rows(batch):
+        """The rows of the batch with derivative targets: (z, S, T, Wd) restricted to them, or None."""
+        z, _, _, S, T, Wd = batch
+        rows = torch.nonzero(Wd.abs().sum(dim=(1, 2)) > 0).flatten()
+        if rows.numel() == 0:
+            return None
+        return z[rows], S[rows], T[rows], Wd[rows]
+
     def training_step(self, batch, batch_idx):
-        z, y, w = batch
+        z, y, w = batch[:3]
+        deriv = self._derivative_rows(batch)
         theta = self._theta()
         H, r = self._residuals(theta, z, y, w)
-        sse = float((r * r).sum())
-        J = self._jacobian(theta, z, H, w)
+        J, res = self._jacobian(theta, z, H, w), r.reshape(-1)
+        sse_values = float((r * r).sum())
+        sse = sse_values
+        if deriv is not None:
+            Hd, Dd, Qd, rd = self._derivative_residuals(theta, *deriv)
+            J = torch.cat([J, self._derivative_jacobian(theta, deriv[0], deriv[1], deriv[3], Hd, Dd, Qd)])
+            res = torch.cat([res, rd.reshape(-1)])
+            sse += float((rd * rd).sum())
         A = J.T @ J
-        g = J.T @ r.reshape(-1)
+        g = J.T @ res
         diag = torch.diagonal(A) + 1e-12
         mu = float(self.mu)
         while mu <= self.hparams.mu_max:
             step = torch.linalg.solve(A + mu * torch.diag(diag), -g)
-            _, r_new = self._residuals(theta + step, z, y, w)
-            sse_new = float((r_new * r_new).sum())
+            sse_new = self._sse(theta + step, z, y, w, deriv)
             if sse_new < sse:
                 self._set_theta(theta + step)
                 sse = sse_new
@@ -193,16 +296,22 @@ class UniversalNet(L.LightningModule):
         self.mu.fill_(mu)
         if mu > self.hparams.mu_max:
             self.trainer.should_stop = True
-        self.log("train_rel_rms", (sse / z.shape[0]) ** 0.5, on_step=False, on_epoch=True)
+        self.log("train_rel_rms", (sse_values / z.shape[0]) ** 0.5, on_step=False, on_epoch=True)
+        self.log("train_loss", sse, on_step=False, on_epoch=True)
         self.log("mu", mu, on_step=False, on_epoch=True)
 
     def validation_step(self, batch, batch_idx):
-        z, y, _ = batch
+        z, y = batch[:2]
         pred = self(z) * self.out_std + self.out_mean
         raw = y * self.out_std + self.out_mean
         rel = (pred - raw).norm(dim=-1) / raw.norm(dim=-1)
         self.log("val_rel_median", rel.median(), on_step=False, on_epoch=True)
         self.log("val_rel_p99", torch.quantile(rel, 0.99), on_step=False, on_epoch=True)
+        deriv = self._derivative_rows(batch)
+        if deriv is not None:
+            rd = self._derivative_residuals(self._theta(), *deriv)[3]
+            scaled = rd.norm(dim=-1).flatten() / float(self.hparams.derivative_weight)
+            self.log("val_deriv_rel_median", scaled.median(), on_step=False, on_epoch=True)
 
     def configure_optimizers(self):
         # the Levenberg-Marquardt step is taken in training_step; Lightning's loop only needs an optimiser object
@@ -253,13 +362,23 @@ class _EpochLog(L.Callback):
 
 def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 3000, max_minutes: float = 5.0,
                  floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0, ckpt_dir=None, logger=None,
-                 what: str = "region") -> dict:
-    """Fit one region's network (``UniversalNet``) on raw inputs ``z`` and raw targets ``y``.
+                 what: str = "region", derivatives: np.ndarray | None = None, derivative_weight: float = 0.0,
+                 init: dict | None = None) -> dict:
+    """Fit one region's network (``UniversalNet``) on raw inputs ``z`` and raw targets ``y``, and optionally on
+    the targets' derivatives (a Sobolev fit).
 
     Parameters
     ----------
     z, y : ndarray, shape (n, 4), (n, 2)
         Raw inputs and targets (``features``).
+    derivatives : ndarray, shape (n, 2, 2), or None, default None
+        Raw target derivatives d y / d eps and d y / d alpha (``derivative_targets``), NaN where not fitted.
+        Each is a residual of relative weight ``derivative_weight`` / sqrt(|dy|^2 + |y|^2 + floor^2): an error
+        of 1 % in a derivative costs what one of 1 % x ``derivative_weight`` in a value does.
+    derivative_weight : float, default 0.0
+        Weight of the derivative residuals (0: values only).
+    init : dict or None, default None
+        A finished fit (what this function returns) to start from: its weights and standardisation.
     width : int, default 64
         Hidden units.
     steps : int, default 3000
@@ -293,18 +412,45 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
     L.seed_everything(seed, workers=True, verbose=False)
     rng = np.random.default_rng(seed)
     val = rng.random(len(z)) < val_fraction
-    in_mean, in_std = z[~val].mean(0), z[~val].std(0) + 1e-12
-    out_mean, out_std = y[~val].mean(0), y[~val].std(0) + 1e-12
+    if init is not None:
+        in_mean, in_std, out_mean, out_std = (np.asarray(init[k], dtype=np.float64)
+                                              for k in ("in_mean", "in_std", "out_mean", "out_std"))
+    else:
+        in_mean, in_std = z[~val].mean(0), z[~val].std(0) + 1e-12
+        out_mean, out_std = y[~val].mean(0), y[~val].std(0) + 1e-12
     floor = float(floor_share * np.median(np.linalg.norm(y[~val], axis=-1)))
     w = (1.0 / np.sqrt((y**2).sum(-1) + floor**2))[:, None] * out_std
+    # derivative rows: directions d/deps and d/dalpha in standardised input space (z = eps, cos a, sin a, ln L/D),
+    # targets per standardised output, weights (0 where a row has no target)
+    S = np.zeros((len(z), 2, 4))
+    S[:, 0, 0] = 1.0 / in_std[0]
+    S[:, 1, 1], S[:, 1, 2] = -z[:, 2] / in_std[1], z[:, 1] / in_std[2]
+    T = np.zeros((len(z), 2, 2))
+    Wd = np.zeros((len(z), 2, 2))
+    if derivatives is not None and derivative_weight > 0.0:
+        has = np.isfinite(derivatives).all(axis=-1)                       # (n, 2)
+        dy = np.where(np.isfinite(derivatives), derivatives, 0.0)
+        scale = np.sqrt((dy**2).sum(-1) + (y**2).sum(-1)[:, None] + floor**2)   # (n, 2)
+        T = dy / out_std
+        Wd = np.where(has[:, :, None], float(derivative_weight) * out_std / scale[:, :, None], 0.0)
 
     def tensors(mask):
-        return [torch.as_tensor(a[mask]) for a in ((z - in_mean) / in_std, (y - out_mean) / out_std, w)]
+        return [torch.as_tensor(a[mask]) for a in ((z - in_mean) / in_std, (y - out_mean) / out_std, w, S, T, Wd)]
 
     def loader(mask):
         return torch.utils.data.DataLoader(torch.utils.data.TensorDataset(*tensors(mask)), batch_size=int(mask.sum()))
 
-    net = UniversalNet(width, out_mean.tolist(), out_std.tolist())
+    net = UniversalNet(width, out_mean.tolist(), out_std.tolist(), derivative_weight=float(derivative_weight))
+    if init is not None:
+        with torch.no_grad():
+            linears = [m for m in net.net if isinstance(m, nn.Linear)]
+            if len(linears) != len(init["layers"]):
+                raise ValueError(f"init has {len(init['layers'])} layers, the network {len(linears)}")
+            for m, (W, b) in zip(linears, init["layers"]):
+                if tuple(m.weight.shape) != np.shape(W):
+                    raise ValueError(f"init layer of shape {np.shape(W)} does not fit the network's {tuple(m.weight.shape)}")
+                m.weight.copy_(torch.as_tensor(np.asarray(W, dtype=np.float64)))
+                m.bias.copy_(torch.as_tensor(np.asarray(b, dtype=np.float64)))
     callbacks: list[Any] = [_EpochLog(what, 100)]
     ckpt_path = None
     if ckpt_dir is not None:
@@ -322,17 +468,30 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
     with torch.no_grad():
         pred = net(torch.as_tensor((z[val] - in_mean) / in_std)).numpy() * out_std + out_mean
     rel = np.linalg.norm(pred - y[val], axis=-1) / np.linalg.norm(y[val], axis=-1)
-    return {"layers": net.layers(), "in_mean": in_mean, "in_std": in_std, "out_mean": out_mean,
-            "out_std": out_std, "steps": int(trainer.current_epoch), "train_seconds": seconds,
-            "val_rel_median": float(np.median(rel)), "val_rel_p99": float(np.quantile(rel, 0.99)),
-            "val_rel_max": float(rel.max())}
+    out = {"layers": net.layers(), "in_mean": in_mean, "in_std": in_std, "out_mean": out_mean,
+           "out_std": out_std, "steps": int(trainer.current_epoch), "train_seconds": seconds,
+           "val_rel_median": float(np.median(rel)), "val_rel_p99": float(np.quantile(rel, 0.99)),
+           "val_rel_max": float(rel.max())}
+    if derivatives is not None and derivative_weight > 0.0:
+        rows = val & (Wd.reshape(len(z), -1) != 0).any(-1)
+        if rows.any():
+            v = [torch.as_tensor(a[rows]) for a in ((z - in_mean) / in_std, S, T, Wd)]
+            rd = net._derivative_residuals(net._theta(), *v)[3].detach().numpy()
+            out["val_deriv_rel_median"] = float(np.median(np.linalg.norm(rd, axis=-1)) / derivative_weight)
+    return out
 
 
 def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.87), blend_width: float = 0.04,
                     overlap: int = 1, power: float = 2.0, width: int = 64, steps: int = 3000,
                     max_minutes=5.0, floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0,
-                    work_dir=None, logger_for=None, what: str = "") -> dict:
+                    work_dir=None, logger_for=None, what: str = "", derivative_weight: float = 0.0,
+                    derivative_rows: str = "static", refine_minutes=5.0, refine_steps: int = 3000) -> dict:
     """Fit the universal networks of one cavitation rule, one per eccentricity region.
+
+    Two phases per region: a fit to the values G (Levenberg-Marquardt from a random start), then, if
+    ``derivative_weight`` > 0, the same fit continued on the values and their derivatives d/deps and d/dalpha
+    (``derivative_rows``; a Sobolev fit): a value error of a few tenths of a per cent becomes a few per cent in
+    stiffness and damping at high eccentricity (docs/universal.md), so the derivatives are fitted directly.
 
     Parameters
     ----------
@@ -365,6 +524,14 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         ``region -> Lightning logger`` (MLflow child runs from the workflow layer).
     what : str, default ""
         Prefix of the progress lines.
+    derivative_weight : float, default 0.0
+        Weight of the derivative residuals in the second phase (``train_region``); 0: no second phase.
+    derivative_rows : {"static", "all"}, default "static"
+        The rows with derivative targets (``derivative_targets``).
+    refine_minutes : float or sequence of float, default 5.0
+        Most wall time of the second phase per region, or one value per region.
+    refine_steps : int, default 3000
+        Most Levenberg-Marquardt steps of the second phase per region.
 
     Returns
     -------
@@ -380,39 +547,74 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
     if minutes.size not in (1, len(bounds) + 1):
         raise ValueError(f"max_minutes={list(minutes)} needs one value or one per region ({len(bounds) + 1})")
     minutes = np.broadcast_to(minutes, (len(bounds) + 1,))
+    refine = np.atleast_1d(np.asarray(refine_minutes, dtype=float))
+    if refine.size not in (1, len(bounds) + 1):
+        raise ValueError(f"refine_minutes={list(refine)} needs one value or one per region ({len(bounds) + 1})")
+    refine = np.broadcast_to(refine, (len(bounds) + 1,))
+    if derivative_weight < 0.0:
+        raise ValueError(f"derivative_weight must be >= 0, got {derivative_weight!r}")
     z, y = features(frame, power)
+    dy = derivative_targets(frame, power, derivative_rows) if derivative_weight > 0.0 else None
     eps = frame["eps"].to_numpy()
     work = Path(work_dir) if work_dir is not None else None
     regions = []
     for r in range(len(bounds) + 1):
-        done = work / f"region{r}.npz" if work is not None else None
-        if done is not None and done.exists():
-            with np.load(done, allow_pickle=False) as f:
-                res: dict[str, Any] = json.loads(str(f["meta"]))
-                res["layers"] = [(np.array(f[f"W{k}"]), np.array(f[f"b{k}"])) for k in range(int(f["n_layers"]))]
-                res |= {k: np.array(f[k]) for k in ("in_mean", "in_std", "out_mean", "out_std")}
-            print(f"  {what}region {r}: finished before, kept", flush=True)
-        else:
-            rows = region_rows(eps, bounds, blend_width, r, overlap)
-            res = train_region(z[rows], y[rows], width=width, steps=steps, max_minutes=float(minutes[r]),
-                               floor_share=floor_share, val_fraction=val_fraction, seed=seed + r,
-                               ckpt_dir=work / f"region{r}_ckpt" if work is not None else None,
-                               logger=logger_for(r) if logger_for is not None else None, what=f"{what}region {r}")
-            res["n_rows"] = int(rows.sum())
-            if done is not None:
-                arrays: dict[str, Any] = {f"W{k}": W for k, (W, _) in enumerate(res["layers"])}
-                arrays |= {f"b{k}": b for k, (_, b) in enumerate(res["layers"])}
-                arrays |= {k: res[k] for k in ("in_mean", "in_std", "out_mean", "out_std")}
-                arrays |= {"n_layers": np.array(len(res["layers"])), "meta": np.array(json.dumps(
-                    {k: v for k, v in res.items() if isinstance(v, (int, float))}))}
-                with io.atomic_path(done, suffix=".npz") as tmp:
-                    np.savez(tmp, **arrays)
-        print(f"  {what}region {r}: validation median {100 * res['val_rel_median']:.3f} %, p99 "
-              f"{100 * res['val_rel_p99']:.2f} % ({res['steps']} steps, {res['train_seconds']:.0f} s)", flush=True)
+        rows = region_rows(eps, bounds, blend_width, r, overlap)
+        res = _finished_or_fit(work, f"region{r}", f"{what}region {r}", lambda ckpt, r=r, rows=rows: {
+            **train_region(z[rows], y[rows], width=width, steps=steps, max_minutes=float(minutes[r]),
+                           floor_share=floor_share, val_fraction=val_fraction, seed=seed + r, ckpt_dir=ckpt,
+                           logger=logger_for(r) if logger_for is not None else None, what=f"{what}region {r}"),
+            "n_rows": int(rows.sum())})
+        if dy is not None:
+            first = res
+            # the second phase's file is keyed by its own settings: another weight or budget is another fit
+            key = config_hash(float(derivative_weight), derivative_rows, float(refine[r]), int(refine_steps))[:8]
+            res = _finished_or_fit(work, f"region{r}_derivatives-{key}", f"{what}region {r} (values and derivatives)",
+                                   lambda ckpt, r=r, rows=rows, first=first: {
+                **train_region(z[rows], y[rows], width=width, steps=refine_steps, max_minutes=float(refine[r]),
+                               floor_share=floor_share, val_fraction=val_fraction, seed=seed + r, ckpt_dir=ckpt,
+                               logger=logger_for(r) if logger_for is not None else None,
+                               what=f"{what}region {r} (values and derivatives)", derivatives=dy[rows],
+                               derivative_weight=derivative_weight, init=first),
+                "n_rows": int(rows.sum()), "n_derivative_rows": int(np.isfinite(dy[rows]).all(-1).any(-1).sum())})
+            res["train_seconds"] = float(first["train_seconds"] + res["train_seconds"])
+            res["steps_values"], res["steps_derivatives"] = int(first["steps"]), int(res["steps"])
+            res["steps"] = int(first["steps"] + res["steps"])
+            res["val_rel_median_values_only"] = float(first["val_rel_median"])
         regions.append(res)
     return {"regions": regions, "boundaries": bounds, "blend_width": float(blend_width), "power": float(power),
             "train_seconds": float(sum(r["train_seconds"] for r in regions)),
             **{k: float(max(r[k] for r in regions)) for k in ("val_rel_median", "val_rel_p99", "val_rel_max")}}
+
+
+def _finished_or_fit(work, name: str, what: str, fit) -> dict:
+    """A finished fit kept as ``<work>/<name>.npz``, or ``fit(checkpoint folder)``, then kept there (atomically)."""
+    done = work / f"{name}.npz" if work is not None else None
+    if done is not None and done.exists():
+        with np.load(done, allow_pickle=False) as f:
+            res: dict[str, Any] = json.loads(str(f["meta"]))
+            res["layers"] = [(np.array(f[f"W{k}"]), np.array(f[f"b{k}"])) for k in range(int(f["n_layers"]))]
+            res |= {k: np.array(f[k]) for k in ("in_mean", "in_std", "out_mean", "out_std")}
+        print(f"  {what}: finished before, kept", flush=True)
+    else:
+        res = fit(work / f"{name}_ckpt" if work is not None else None)
+        if done is not None:
+            save_fit(res, done)
+    deriv = f", derivatives {100 * res['val_deriv_rel_median']:.2f} %" if "val_deriv_rel_median" in res else ""
+    print(f"  {what}: validation median {100 * res['val_rel_median']:.3f} %, p99 {100 * res['val_rel_p99']:.2f} %"
+          f"{deriv} ({res['steps']} steps, {res['train_seconds']:.0f} s)", flush=True)
+    return res
+
+
+def save_fit(res: dict, path) -> None:
+    """Keep one region's finished fit (what ``train_region`` returns) as an ``.npz``, written atomically."""
+    arrays: dict[str, Any] = {f"W{k}": W for k, (W, _) in enumerate(res["layers"])}
+    arrays |= {f"b{k}": b for k, (_, b) in enumerate(res["layers"])}
+    arrays |= {k: res[k] for k in ("in_mean", "in_std", "out_mean", "out_std")}
+    arrays |= {"n_layers": np.array(len(res["layers"])), "meta": np.array(json.dumps(
+        {k: v for k, v in res.items() if isinstance(v, (int, float))}))}
+    with io.atomic_path(Path(path), suffix=".npz") as tmp:
+        np.savez(tmp, **arrays)
 
 
 def write_weights(fit: dict, cavitation: str, eps_max: float, ld_range: tuple[float, float], info: dict,
