@@ -492,7 +492,7 @@ def render_universal(reports: Path) -> str:
     if "reference_equal_accuracy" in u:  # evaluations before 2026-12-02 did not time the reference
         same = u["reference_equal_accuracy"]
         worst = min(same, key=lambda r: r["speedup"])
-        grids = sorted({f"{r['n_theta']} x {r['n_z']}" for r in same}, key=lambda t: int(t.split(" x ")[0]))
+        grids = [f"{nt} x {nz}" for nt, nz in sorted({(int(r["n_theta"]), int(r["n_z"])) for r in same})]
         rows.append([f"speed-up per force over the reference on the grid as accurate as the model (grids "
                      f"{', '.join(grids)}; least: {worst['cavitation']}, L/D {worst['ld']:g}, "
                      f"{worst['reference_us']:.0f} us)", f"{worst['speedup']:.0f}x",
