@@ -560,22 +560,22 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
     regions = []
     for r in range(len(bounds) + 1):
         rows = region_rows(eps, bounds, blend_width, r, overlap)
-        res = _finished_or_fit(work, f"region{r}", f"{what}region {r}", lambda ckpt, r=r, rows=rows: {
-            **train_region(z[rows], y[rows], width=width, steps=steps, max_minutes=float(minutes[r]),
-                           floor_share=floor_share, val_fraction=val_fraction, seed=seed + r, ckpt_dir=ckpt,
-                           logger=logger_for(r) if logger_for is not None else None, what=f"{what}region {r}"),
+        # what both phases share: the region's rows, the network, the loss floor and the validation split
+        common = dict(width=width, floor_share=floor_share, val_fraction=val_fraction, seed=seed + r,
+                      logger=logger_for(r) if logger_for is not None else None)
+        res = _finished_or_fit(work, f"region{r}", f"{what}region {r}", lambda ckpt, r=r, rows=rows, common=common: {
+            **train_region(z[rows], y[rows], steps=steps, max_minutes=float(minutes[r]), ckpt_dir=ckpt,
+                           what=f"{what}region {r}", **common),
             "n_rows": int(rows.sum())})
         if dy is not None:
             first = res
             # the second phase's file is keyed by its own settings: another weight or budget is another fit
             key = config_hash(float(derivative_weight), derivative_rows, float(refine[r]), int(refine_steps))[:8]
             res = _finished_or_fit(work, f"region{r}_derivatives-{key}", f"{what}region {r} (values and derivatives)",
-                                   lambda ckpt, r=r, rows=rows, first=first: {
-                **train_region(z[rows], y[rows], width=width, steps=refine_steps, max_minutes=float(refine[r]),
-                               floor_share=floor_share, val_fraction=val_fraction, seed=seed + r, ckpt_dir=ckpt,
-                               logger=logger_for(r) if logger_for is not None else None,
+                                   lambda ckpt, r=r, rows=rows, first=first, common=common: {
+                **train_region(z[rows], y[rows], steps=refine_steps, max_minutes=float(refine[r]), ckpt_dir=ckpt,
                                what=f"{what}region {r} (values and derivatives)", derivatives=dy[rows],
-                               derivative_weight=derivative_weight, init=first),
+                               derivative_weight=derivative_weight, init=first, **common),
                 "n_rows": int(rows.sum()), "n_derivative_rows": int(np.isfinite(dy[rows]).all(-1).any(-1).sum())})
             res["train_seconds"] = float(first["train_seconds"] + res["train_seconds"])
             res["steps_values"], res["steps_derivatives"] = int(first["steps"]), int(res["steps"])
