@@ -406,3 +406,37 @@ def test_the_readme_threshold_is_the_references():
     rpm = threshold_speed(universal_bearing(b), mass=50.0, load=(0.0, 490.5))["speed_rpm"]
     ref = threshold_speed(ReynoldsSolver(b, 72, 21), mass=50.0, load=(0.0, 490.5))["speed_rpm"]
     assert abs(rpm / ref - 1.0) < 0.03, (rpm, ref)
+
+
+def test_each_phase_of_a_tracked_fit_is_its_own_run_and_a_rerun_adds_none(tmp_path):
+    # the two phases log different hyperparameters (derivative_weight 0, then w); MLflow refuses to change a
+    # logged parameter, so one shared run fails the second phase (the quick pipeline did, in CI)
+    import mlflow
+
+    from fluidfilm.data.universal import generate_universal, load_universal
+    from fluidfilm.surrogate.universal_fit import train_universal
+    from fluidfilm.workflow import tracking
+
+    spec = UniversalSpec(n_ld=2, n_eps=4, n_alpha=6, grid_tol=0.05, cavitation=("gumbel",))
+    generate_universal(spec, tmp_path / "u", scheduler="inline", progress=False)
+    frame, _ = load_universal(tmp_path / "u", "gumbel")
+    cfg = {"uri": f"sqlite:///{tmp_path / 'mlflow.db'}", "experiment": "fluidfilm", "enabled": True}
+    client = mlflow.tracking.MlflowClient(cfg["uri"])
+    parent = client.get_run(client.create_run(tracking.ensure_experiment(cfg["uri"], cfg["experiment"])).info.run_id)
+    factory = tracking.child_logger_factory(parent, cfg, "universal_gumbel")
+
+    def fit():
+        return train_universal(frame, boundaries=[0.5], width=4, steps=2, max_minutes=[1, 1], seed=0,
+                               work_dir=tmp_path / "work", logger_for=lambda r: factory(r).logger(),
+                               derivative_weight=1.5, refine_minutes=[1, 1], refine_steps=2)
+
+    def children():
+        runs = client.search_runs([parent.info.experiment_id], f"tags.mlflow.parentRunId = '{parent.info.run_id}'")
+        return {r.info.run_name: r.data.params.get("derivative_weight") for r in runs}
+
+    fit()
+    assert children() == {"universal_gumbel/network0": "0.0", "universal_gumbel/network1": "0.0",
+                          "universal_gumbel/network0_derivatives": "1.5",
+                          "universal_gumbel/network1_derivatives": "1.5"}
+    fit()
+    assert len(children()) == 4

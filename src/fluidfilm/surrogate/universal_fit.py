@@ -521,7 +521,8 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         Where each finished region is kept (``region<r>.npz``) and each running fit checkpoints: a rerun
         skips finished regions and resumes the running one.
     logger_for : callable or None, default None
-        ``region -> Lightning logger`` (MLflow child runs from the workflow layer).
+        ``key -> Lightning logger`` (MLflow child runs from the workflow layer); called, when a phase trains,
+        with the region ``r`` (first phase) or ``f"{r}_derivatives"`` (second phase).
     what : str, default ""
         Prefix of the progress lines.
     derivative_weight : float, default 0.0
@@ -560,12 +561,14 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
     regions = []
     for r in range(len(bounds) + 1):
         rows = region_rows(eps, bounds, blend_width, r, overlap)
-        # what both phases share: the region's rows, the network, the loss floor and the validation split
-        common = dict(width=width, floor_share=floor_share, val_fraction=val_fraction, seed=seed + r,
-                      logger=logger_for(r) if logger_for is not None else None)
+        # what both phases share: the region's rows, the network, the loss floor and the validation split.
+        # Not the logger: each phase is its own tracked run (its hyperparameters differ, and MLflow refuses
+        # to change a logged parameter), created only when that phase actually trains
+        common = dict(width=width, floor_share=floor_share, val_fraction=val_fraction, seed=seed + r)
         res = _finished_or_fit(work, f"region{r}", f"{what}region {r}", lambda ckpt, r=r, rows=rows, common=common: {
             **train_region(z[rows], y[rows], steps=steps, max_minutes=float(minutes[r]), ckpt_dir=ckpt,
-                           what=f"{what}region {r}", **common),
+                           what=f"{what}region {r}", logger=logger_for(r) if logger_for is not None else None,
+                           **common),
             "n_rows": int(rows.sum())})
         if dy is not None:
             first = res
@@ -575,7 +578,8 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
                                    lambda ckpt, r=r, rows=rows, first=first, common=common: {
                 **train_region(z[rows], y[rows], steps=refine_steps, max_minutes=float(refine[r]), ckpt_dir=ckpt,
                                what=f"{what}region {r} (values and derivatives)", derivatives=dy[rows],
-                               derivative_weight=derivative_weight, init=first, **common),
+                               derivative_weight=derivative_weight, init=first,
+                               logger=logger_for(f"{r}_derivatives") if logger_for is not None else None, **common),
                 "n_rows": int(rows.sum()), "n_derivative_rows": int(np.isfinite(dy[rows]).all(-1).any(-1).sum())})
             res["train_seconds"] = float(first["train_seconds"] + res["train_seconds"])
             res["steps_values"], res["steps_derivatives"] = int(first["steps"]), int(res["steps"])
