@@ -15,7 +15,7 @@ import pytest
 from numba import njit
 
 import golden_models as gm
-from fluidfilm import Rotor, paper_bearing, simulate
+from fluidfilm import Rotor, paper_bearing, simulate, universal_bearing
 from fluidfilm.perf.speed import best_shaped_surrogate, sample_states
 from fluidfilm.surrogate import SurrogateForceModel
 from fluidfilm.surrogate.inference import surrogate_force
@@ -112,9 +112,24 @@ def test_silu_and_sigmoid_through_tanh_keep_the_exp_forms_values():
     assert np.all(np.abs(silu32_ - x32 * ref) <= 3e-7 * np.abs(x32.astype(np.float64)) + 1.5e-45)
 
 
+def _with_power(model, power):
+    """The same model with the physics scaling's exponent ``power`` in every region."""
+    import dataclasses
+
+    return SurrogateForceModel(model.bearing, model.networks, [dataclasses.replace(sc, power=power) for sc in model.scalings],
+                               model.activation, boundaries=model.boundaries, blend_width=model.blend_width,
+                               domain=model.domain, eps_max=model.eps_max, name=f"{model.name}, power {power}")
+
+
 def _surrogates():
     out = {name: (m, s) for name, (m, s) in gm.models().items() if isinstance(m, SurrogateForceModel)}
     out["best_shaped"] = (best_shaped_surrogate(paper_bearing(), restoring=False), None)
+    # the exponent is built into the code as products and a square root (2, 2.5: the universal model's 2) or
+    # left to a run-time pow (1.7): each must give the generic kernel's d ** p
+    for p in (2.0, 2.5, 1.7):
+        out[f"best_shaped_power{p}"] = (_with_power(out["best_shaped"][0], p), None)
+    # the shipped universal model on the paper's bearing: six regions, exponent 2, L/D folded into the bias
+    out["universal_gumbel"] = (universal_bearing(paper_bearing(), "gumbel"), None)
     return out
 
 

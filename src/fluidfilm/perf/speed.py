@@ -10,7 +10,8 @@ from numba import njit
 
 from fluidfilm.perf.benchmarking import median_seconds
 
-__all__ = ["sample_states", "time_per_force_eval", "best_shaped_surrogate", "paper_shaped_surrogate"]
+__all__ = ["sample_states", "time_per_force_eval", "time_per_force_eval_batched", "best_shaped_surrogate",
+           "paper_shaped_surrogate"]
 
 
 @njit  # not cached: numba's on-disk cache cannot always pickle a specialisation on a function argument
@@ -91,6 +92,27 @@ def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
     kernel, params = model.force_kernel
     _kernel_loop(kernel, params, x[:2], v[:2])  # compile
     return median_seconds(lambda: _kernel_loop(kernel, params, x, v), repeats, warmup=False) / len(x)
+
+
+def time_per_force_eval_batched(model, x, v, precision: str = "float32", repeats: int = 7) -> float:
+    """Median seconds per force of ``model.batch_force_kernel(precision)`` on all the states (x, v) in one
+    call, in the calling thread: what ``simulate_batch`` does once per RK4 stage.  ``time_per_force_eval``'s
+    arguments, plus ``precision`` ("float32", ``simulate_batch``'s default, or "float64") for a surrogate's
+    networks (a reference solver computes in float64 whatever it is given); a surrogate gains with the
+    number of states (it runs its networks on tiles of them).
+
+    >>> from fluidfilm import paper_bearing
+    >>> from fluidfilm.perf.speed import best_shaped_surrogate, time_per_force_eval_batched
+    >>> model = best_shaped_surrogate(paper_bearing())
+    >>> x, v = sample_states(model.clearance, n=256)
+    >>> 0.0 < time_per_force_eval_batched(model, x, v, "float64", repeats=3) < 1e-4
+    True
+    """
+    fn, params = model.batch_force_kernel(precision, private=True)
+    x, v = np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(v, dtype=np.float64)
+    out = np.empty_like(x)
+    fn(params, x[:2], v[:2], out[:2])  # compile
+    return median_seconds(lambda: fn(params, x, v, out), repeats, warmup=True) / len(x)
 
 
 def best_shaped_surrogate(bearing, seed: int = 0, restoring: bool = True):

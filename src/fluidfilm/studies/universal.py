@@ -170,9 +170,14 @@ def held_out_force_errors(cfg, rng) -> pd.DataFrame:
                 V = b.clearance * b.omega * np.stack([vmag * np.cos(vang), vmag * np.sin(vang)], axis=1)
                 F = model.forces(X, V)
                 F_ref = ref.forces(X, V)
+                fn, bp = model.batch_force_kernel("float32", private=True)
+                F32 = np.empty_like(F)
+                fn(bp, np.ascontiguousarray(X), np.ascontiguousarray(V), F32)
                 rel = np.hypot(*(F - F_ref).T) / np.hypot(*F_ref.T)
+                rel32 = np.hypot(*(F32 - F_ref).T) / np.hypot(*F_ref.T)
                 rows.append(pd.DataFrame({"cavitation": rule, "ld": float(ld), "bearing": k, "eps": eps,
-                                          "v_rel": vmag, "rel_err": rel, "n_theta": grid[0], "n_z": grid[1],
+                                          "v_rel": vmag, "rel_err": rel, "rel_err_float32": rel32,
+                                          "n_theta": grid[0], "n_z": grid[1],
                                           "speed_rpm": b.speed_rpm, "viscosity": b.viscosity,
                                           "clearance": b.clearance}))
             print(f"  {rule} L/D={ld}: reference grid {grid[0]} x {grid[1]}, median "
@@ -281,47 +286,69 @@ def fig4_cases(cfg) -> pd.DataFrame:
 
 
 def force_cost(cfg) -> dict:
-    """Seconds per force of the shipped model's compiled kernel and of the best model's shape (five regions,
-    3-64-2; ``perf.speed.best_shaped_surrogate``), side by side, medians, with the load."""
-    from fluidfilm.perf.speed import best_shaped_surrogate, sample_states, time_per_force_eval
+    """Seconds per force of the shipped model and of the best model's shape (five regions, 3-64-2;
+    ``perf.speed.best_shaped_surrogate``), side by side, medians of interleaved runs, with the load: the
+    one-state kernel in the integrator's loop (``simulate``), and the batched kernel on ``evaluate.n_batch``
+    states per call in one thread (``simulate_batch``'s per RK4 stage), its networks in float32 (its default)
+    and float64."""
+    from fluidfilm.perf.speed import (best_shaped_surrogate, sample_states, time_per_force_eval,
+                                      time_per_force_eval_batched)
     from fluidfilm.surrogate.universal import universal_bearing
 
     bearing = bearing_from_cfg(cfg.bearing)
     x, v = sample_states(bearing.clearance, n=int(cfg.evaluate.n_timing), eps_max=0.9, v_max=0.05)
-    uni = universal_bearing(bearing, "gumbel")
-    best = best_shaped_surrogate(bearing)
+    xb, vb = sample_states(bearing.clearance, n=int(cfg.evaluate.n_batch), eps_max=0.9, v_max=0.05, seed=1)
+    models = {"universal": universal_bearing(bearing, "gumbel"), "best_shape": best_shaped_surrogate(bearing)}
+    arms = {"": lambda m: time_per_force_eval(m, x, v),
+            "_batched_float32": lambda m: time_per_force_eval_batched(m, xb, vb, "float32"),
+            "_batched_float64": lambda m: time_per_force_eval_batched(m, xb, vb, "float64")}
     load0 = os.getloadavg()[0]
-    t_u, t_b = [], []
+    t: dict[str, list] = {f"{name}{arm}": [] for arm in arms for name in models}
     for _ in range(3):  # interleaved: both see the same machine load
-        t_u.append(time_per_force_eval(uni, x, v))
-        t_b.append(time_per_force_eval(best, x, v))
-    return {"force_eval_us_universal": 1e6 * float(np.median(t_u)), "force_eval_us_best_shape": 1e6 * float(np.median(t_b)),
-            "universal_vs_best_cost_ratio": float(np.median(t_u) / np.median(t_b)),
-            "loadavg_1min": [load0, os.getloadavg()[0]]}
+        for arm, timed in arms.items():
+            for name, model in models.items():
+                t[f"{name}{arm}"].append(timed(model))
+    us = {k: 1e6 * float(np.median(v)) for k, v in t.items()}
+    return {**{f"force_eval_us_{k}": val for k, val in us.items()},
+            "universal_vs_best_cost_ratio": us["universal"] / us["best_shape"],
+            "universal_vs_best_cost_ratio_batched_float32": us["universal_batched_float32"] / us["best_shape_batched_float32"],
+            "n_batch": int(cfg.evaluate.n_batch), "loadavg_1min": [load0, os.getloadavg()[0]]}
 
 
-def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, t_universal: float) -> pd.DataFrame:
+def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, t_universal: float,
+                                     t_universal_batched: float | None = None) -> pd.DataFrame:
     """Per rule and held-out L/D: the grid the reference needs to be as accurate as the shipped model there
     (the convergence check of the dataset, ``data.universal.converged_grid``, at the model's median relative
-    error for that rule and L/D), the reference's time per force on it (its compiled kernel, the same loop as
-    the model's) and the ratio to the model's ``t_universal`` [s] (rows: rule, ld, tol, n_theta, n_z,
-    reference_us, speedup)."""
+    error for that rule and L/D, the larger of its float64 and float32 readings where both are given), the
+    reference's time per force on it and the ratio to the model's.
+
+    Two readings, each model run the same way: the one-state kernel in the integrator's loop (``t_universal``
+    [s]), and the batched kernel as ``simulate_batch`` calls it, in one thread (``t_universal_batched`` [s],
+    the float32 networks; the reference's batched kernel is its one-state solve per row, in float64).  Rows:
+    rule, ld, tol, n_theta, n_z, reference_us, speedup, and with ``t_universal_batched`` reference_batched_us,
+    speedup_batched."""
     from fluidfilm import ReynoldsSolver
     from fluidfilm.data.universal import _n_z, converged_grid
-    from fluidfilm.perf.speed import sample_states, time_per_force_eval
+    from fluidfilm.perf.speed import sample_states, time_per_force_eval, time_per_force_eval_batched
 
     rows = []
     for (rule, ld), g in errors.groupby(["cavitation", "ld"]):
-        tol = float(g.rel_err.median())
+        tol = float(max(g.rel_err.median(), g.rel_err_float32.median() if "rel_err_float32" in g else 0.0))
         nt, _, _ = converged_grid(float(ld), rule, 0.8, tol)
         b = JournalBearing(length=0.05 * float(ld), diameter=0.05, clearance=75e-6, speed_rpm=5000.0, viscosity=0.02)
         ref = ReynoldsSolver(b, nt, _n_z(nt, float(ld)), cavitation=rule)
         x, v = sample_states(b.clearance, n=40, eps_max=0.9, v_max=0.05)
         t_ref = time_per_force_eval(ref, x, v, repeats=3)
-        rows.append({"cavitation": rule, "ld": float(ld), "tol": tol, "n_theta": nt, "n_z": _n_z(nt, float(ld)),
-                     "reference_us": 1e6 * t_ref, "speedup": t_ref / t_universal})
-        print(f"  {rule} L/D={ld:g}: the reference as accurate ({100 * tol:.3f} %) needs {nt} x {_n_z(nt, float(ld))}: "
-              f"{1e6 * t_ref:.0f} us per force, {t_ref / t_universal:.0f}x the universal model", flush=True)
+        row = {"cavitation": rule, "ld": float(ld), "tol": tol, "n_theta": nt, "n_z": _n_z(nt, float(ld)),
+               "reference_us": 1e6 * t_ref, "speedup": t_ref / t_universal}
+        line = (f"  {rule} L/D={ld:g}: the reference as accurate ({100 * tol:.3f} %) needs {nt} x {_n_z(nt, float(ld))}: "
+                f"{1e6 * t_ref:.0f} us per force, {t_ref / t_universal:.0f}x the universal model")
+        if t_universal_batched is not None:
+            t_ref_b = time_per_force_eval_batched(ref, x, v, repeats=3)
+            row |= {"reference_batched_us": 1e6 * t_ref_b, "speedup_batched": t_ref_b / t_universal_batched}
+            line += f" ({t_ref_b / t_universal_batched:.0f}x batched)"
+        rows.append(row)
+        print(line, flush=True)
     return pd.DataFrame(rows)
 
 
@@ -406,10 +433,14 @@ def _evaluate(cfg) -> Logged:
     cases = fig4_cases(cfg)
     cost = force_cost(cfg)
     print("the reference at equal accuracy", flush=True)
-    same = reference_cost_at_equal_accuracy(cfg, errors, 1e-6 * cost["force_eval_us_universal"])
+    same = reference_cost_at_equal_accuracy(cfg, errors, 1e-6 * cost["force_eval_us_universal"],
+                                            1e-6 * cost["force_eval_us_universal_batched_float32"])
     out = {
         "universal_rel_err_median": float(errors.rel_err.median()),
         "universal_rel_err_p99": float(errors.rel_err.quantile(0.99)),
+        # the batched kernel's float32 networks (simulate_batch's default) at the same states
+        "universal_rel_err_median_float32": float(errors.rel_err_float32.median()),
+        "universal_rel_err_p99_float32": float(errors.rel_err_float32.quantile(0.99)),
         "universal_kc_max_rel_err_direct": float(kc[kc.kind == "direct"].rel_err.max()),
         "universal_kc_max_rel_err_cross": float(kc[kc.kind == "cross"].rel_err.max()),
         "universal_whirl_threshold_rel_err": float(whirl.rel_err.max()),
@@ -418,6 +449,7 @@ def _evaluate(cfg) -> Logged:
         "force_eval_us_universal": cost["force_eval_us_universal"],
         "cost": cost,
         "universal_speedup_vs_reference_equal_accuracy_min": float(same.speedup.min()),
+        "universal_speedup_vs_reference_equal_accuracy_batched_min": float(same.speedup_batched.min()),
         "reference_equal_accuracy": same.to_dict(orient="records"),
         "by_rule": {rule: {"median": float(g.rel_err.median()), "p99": float(g.rel_err.quantile(0.99)),
                            "max": float(g.rel_err.max()), "n": int(len(g))}

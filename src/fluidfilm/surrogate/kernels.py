@@ -195,13 +195,36 @@ def _folded_networks(model):
     return out
 
 
+def power_form(power: float) -> float | None:
+    """The physics scaling's exponent p of (1 - eps^2)^p as the compiled kernels take it: a multiple of 1/2
+    up to 6 is built into the code as products and one square root (``_power_source``); any other is None,
+    a run-time ``**`` (a generic pow costs about as much as a quarter of a 3-64-2 network here).
+
+    >>> power_form(1.5), power_form(2), power_form(1.7)
+    (1.5, 2.0, None)
+    """
+    twice = 2.0 * power
+    return float(power) if twice == round(twice) and 0.0 <= power <= 6.0 else None
+
+
+def _power_source(x: str, power: float) -> str:
+    """Source of x**power for a ``power_form`` exponent: x * x * math.sqrt(x) for 2.5, 1.0 for 0.
+
+    >>> _power_source("d", 1.5), _power_source("d", 2.0), _power_source("d", 0.0)
+    ('d * math.sqrt(d)', 'd * d', '1.0')
+    """
+    n = int(power)
+    terms = [x] * n + ([f"math.sqrt({x})"] if power - n == 0.5 else [])
+    return " * ".join(terms) if terms else "1.0"
+
+
 def shape_key(model) -> tuple:
     """What the compiled one-state kernel depends on (everything else is in its parameter vector)."""
     regions = []
     for net, sc in zip(model.networks, model.scalings):
         static, damping = (net, []) if model.structure == "plain" else net
         row = sc.kernel_row()
-        regions.append((int(row[0]), int(row[19]), int(row[20]), bool(row[21] == 1.0), bool(row[4] == 1.5),
+        regions.append((int(row[0]), int(row[19]), int(row[20]), bool(row[21] == 1.0), power_form(float(row[4])),
                         tuple(np.shape(W) for W, _ in static), tuple(np.shape(W) for W, _ in damping)))
     return (model.structure, model.activation, tuple(regions), len(model.boundaries), model.blend_width > 0.0,
             int(np.shape(model.domain)[0]))
@@ -325,7 +348,7 @@ def _net_source(chain, offs, inputs, act, lay, ind, out_names):
 def _region_source(r, region_key, act, lay, ind):
     """The body of region r: inputs from the state, the network(s), the gain and the frame back.
     Mirrors ``inference._region_force`` step by step (the generic kernel is the specification)."""
-    kind, frame, n_extra, sleeve, power15, static, damping = region_key
+    kind, frame, n_extra, sleeve, power, static, damping = region_key
     physics = kind >= 1
     polar = frame >= 1
     rc = lay.regions + 4 * r
@@ -359,7 +382,7 @@ def _region_source(r, region_key, act, lay, ind):
         L += [f"{ind}y1 += d0 * {w1} + d1 * {w2}", f"{ind}y2 += d2 * {w1} + d3 * {w2}"]
     if physics:
         L.append(f"{ind}d = 1.0 - e2")
-        L.append(f"{ind}g = fscale / (d * math.sqrt(d))" if power15 else f"{ind}g = fscale / d ** w[{rc + 3}]")
+        L.append(f"{ind}g = fscale / d ** w[{rc + 3}]" if power is None else f"{ind}g = fscale / ({_power_source('d', power)})")
         if kind == 2:
             L.append(f"{ind}g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)")
         if frame == 2:
@@ -967,7 +990,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
     any_kind2 = any(r[0] == 2 for r in regions)
     nr = len(regions)
     width = max([n for r in layout for (_, _, n, _) in r] + [1])
-    uniform_gain = physics and len({(r[0], r[4]) for r in regions}) == 1 and regions[0][4]
+    uniform_gain = physics and len({(r[0], r[4]) for r in regions}) == 1 and regions[0][4] is not None
     ind1 = "    "
     ind2 = ind1 + "    "
     (a64, b64), (ai, bi), (aw, bw) = _workspace_terms(key)  # the sizes with_workspace allocates
@@ -1027,7 +1050,8 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
         L += [f"{ind2}Z[0, p] = x1", f"{ind2}Z[1, p] = x2", f"{ind2}Z[2, p] = v1", f"{ind2}Z[3, p] = v2"]
     if physics:
         L += [f"{ind2}d = {'f(1.0 - e2)' if f32 else '1.0 - e2'}"] + ([] if uniform_gain else [f"{ind2}DD[p] = d"])
-        L.append(f"{ind2}G[p] = gs{ft} * drive / (d * math.sqrt(d))" if uniform_gain else f"{ind2}G[p] = gs{ft} * drive")
+        L.append(f"{ind2}G[p] = gs{ft} * drive / ({_power_source('d', regions[0][4])})" if uniform_gain
+                 else f"{ind2}G[p] = gs{ft} * drive")
         if any_kind2:
             L.append(f"{ind2}KV[p] = {one} + math.sqrt(v1{ft} * v1{ft} + v2{ft} * v2{ft}) * inv_cw")
         if uniform_gain and any_kind2:
@@ -1075,7 +1099,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
     if n_extra:
         L.append(f"{ind1}wx = sw[{o0} + {offs[6]}:{o0} + {offs[7]}]")
     for r, region in enumerate(regions):
-        kind, _, _, _, p15 = region[:5]
+        kind, _, _, _, power = region[:5]
         layers = list(layout[r])
         ind3 = ind1 + "    "
         L += [f"{ind1}for t0 in range(start[{r}], start[{r + 1}], {TILE}):",
@@ -1094,7 +1118,8 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
         L += [f"{ind3}ob1 = q[{ob}]", f"{ind3}ob2 = q[{ob + 1}]"]
         gain = "went[t0 + j]"
         if physics and not uniform_gain:
-            gain += " / (DD[p] * math.sqrt(DD[p]))" if p15 else f" * DD[p] ** -q[{4 + nb + 3 * n_dom + r}]"
+            gain += (f" * DD[p] ** -q[{4 + nb + 3 * n_dom + r}]" if power is None
+                     else f" / ({_power_source('DD[p]', power)})")
             if kind == 2:
                 gain += " * KV[p]"
         L += [f"{ind3}for j in range(m):"]
