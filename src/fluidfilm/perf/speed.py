@@ -96,13 +96,32 @@ def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
 
 def time_per_force_eval_batched(model, x, v, precision: str = "float32", repeats: int = 7) -> float:
     """Median seconds per force of ``model.batch_force_kernel(precision)`` on all the states (x, v) in one
-    call, in the calling thread: what ``simulate_batch`` does once per RK4 stage.  ``time_per_force_eval``'s
-    arguments, plus ``precision`` ("float32", ``simulate_batch``'s default, or "float64") for a surrogate's
-    networks (a reference solver computes in float64 whatever it is given); a surrogate gains with the
-    number of states (it runs its networks on tiles of them).
+    call, in the calling thread: what ``simulate_batch`` does once per RK4 stage.
 
+    A surrogate gains with the number of states (it runs its networks on tiles of them); compiling is
+    done before the timing.
+
+    Parameters
+    ----------
+    model : ForceModel
+        Any force model with a ``batch_force_kernel`` (a reference solver or a surrogate).
+    x, v : ndarray, shape (n, 2)
+        States [m], [m/s] (e.g. from ``sample_states``), all evaluated in one call.
+    precision : {"float32", "float64"}, default "float32"
+        Arithmetic of a surrogate's networks (``simulate_batch``'s default is float32); a reference
+        solver computes in float64 whatever it is given.
+    repeats : int, default 7
+        Timed samples of the whole call (``median_seconds``).
+
+    Returns
+    -------
+    float
+        Time per force evaluation [s].
+
+    Examples
+    --------
     >>> from fluidfilm import paper_bearing
-    >>> from fluidfilm.perf.speed import best_shaped_surrogate, time_per_force_eval_batched
+    >>> from fluidfilm.perf.speed import best_shaped_surrogate, sample_states, time_per_force_eval_batched
     >>> model = best_shaped_surrogate(paper_bearing())
     >>> x, v = sample_states(model.clearance, n=256)
     >>> 0.0 < time_per_force_eval_batched(model, x, v, "float64", repeats=3) < 1e-4
