@@ -66,6 +66,12 @@ def test_batch_with_contact_stops_only_that_trajectory(stage_batched):
     assert batch.ok.tolist() == [True, False]
     for p in range(2):
         _assert_same(batch, p, simulate(lin, rotors[p], 0.12, 1e-5, record_every=5, t0=0.1))
+    # the outputs start empty: the loops write the recorded rows and NaN in every row past them
+    n_rec = batch.n_recorded
+    assert n_rec[1] < n_rec[0] < batch.x.shape[1]  # one spare row: a stop between two recorded steps
+    for p in range(2):
+        for out in (batch.x, batch.v):
+            assert np.isfinite(out[p, :n_rec[p]]).all() and np.isnan(out[p, n_rec[p]:]).all()
 
 
 def _random_active_surrogate(seed=0):
