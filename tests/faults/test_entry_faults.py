@@ -200,3 +200,15 @@ def test_every_stage_may_write_what_its_study_writes(monkeypatch):
         written = study.outputs(cfg) if hasattr(study, "outputs") else getattr(study, "OUTPUTS", {})
         assert guard_outputs(cfg, written, job) == [], name
     entry._set_job(None)
+
+
+@pytest.mark.parametrize("override, key", [("threads_repeats=0", "threads_repeats=0"),
+                                           ("threads_min_seconds=-1", "threads_min_seconds=-1"),
+                                           ("threads_min_seconds=inf", "threads_min_seconds=inf")])
+def test_batch_speed_refuses_bad_repeat_rules_before_any_timing(tmp_path, override, key):
+    # surrogate_dir exists (an empty folder): the rule is refused before a model is loaded or a run timed
+    proc = run_entry("batch_speed", override, f"surrogate_dir={tmp_path}", f"out_json={tmp_path / 'b.json'}")
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    assert "Traceback" not in proc.stderr
+    assert proc.stderr.strip().splitlines()[-1].startswith("error: configuration refused: " + key)
+    assert not (tmp_path / "b.json").exists()

@@ -6,6 +6,7 @@ Batched runs take ``simulate_batch``'s defaults (the library's path: the stage-b
 timing follows a warm-up run of the same batch (``trajectories_per_second``), so no compilation is timed."""
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -13,19 +14,32 @@ import numpy as np
 from fluidfilm import io, load_surrogate
 from fluidfilm.perf.throughput import trajectories_per_second
 from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
+from fluidfilm.workflow.config_check import ConfigError
 from fluidfilm.workflow.entry import plain
 
 INPUTS = ("surrogate_dir",)
 OUTPUTS = {"out_json": [""]}
 
 
+def _threads_repeats(cfg) -> tuple[int, float]:
+    """``threads_repeats`` (>= 1) and ``threads_min_seconds`` (>= 0, finite), or a ConfigError naming the value."""
+    reps, min_s = cfg.get("threads_repeats", 3), cfg.get("threads_min_seconds", 0.0)
+    if isinstance(reps, bool) or not isinstance(reps, int) or reps < 1:
+        raise ConfigError(f"threads_repeats={reps}: one thread and all threads need at least one run each")
+    if isinstance(min_s, bool) or not isinstance(min_s, (int, float)) or not 0.0 <= float(min_s) < math.inf:
+        raise ConfigError(f"threads_min_seconds={min_s}: must be a finite number of seconds >= 0")
+    return reps, float(min_s)
+
+
 def run(cfg) -> dict:
+    _threads_repeats(cfg)  # refused before any timing
     models = {"reference": reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference),
               "surrogate": load_surrogate(cfg.surrogate_dir)}
     rows = []
     for n in cfg.batch_sizes:
-        reps = int(cfg.repeats_small) if n == 1 else 1
         for name, model in models.items():
+            # the surrogate's runs are short (0.1 s at N = 1024): the median of repeats_small of them at every N
+            reps = int(cfg.repeats_small) if n == 1 or name == "surrogate" else 1
             row: dict = {"model": name, "n": int(n)}
             if name == "surrogate" or n <= cfg.reference_one_by_one_max_n:
                 r = trajectories_per_second(model, n, cfg.t_end, cfg.dt, batched=False, repeats=reps,
@@ -53,17 +67,22 @@ def run(cfg) -> dict:
     # thread and all threads alternately, ``threads_repeats`` times each, in WALL time both (the table above
     # takes the one-thread CPU time, which leaves out the waits a shared machine adds; a scaling of wall time
     # over CPU time mixes clocks), the medians compared
-    reps = int(cfg.get("threads_repeats", 3))
-    if reps < 1:
-        raise ValueError(f"threads_repeats must be >= 1, got {reps!r}")
+    # each model's pair of runs is repeated at least threads_repeats times and until its runs add up to
+    # threads_min_seconds: the surrogate's batch takes ~0.1 s, where three runs on this shared VM left the
+    # median at the mercy of one slow run (two medians of 3 of the same code: scaling 1.46 and 1.60)
+    reps, min_s = _threads_repeats(cfg)
     walls: dict = {(name, arm): [] for name in models for arm in ("one", "all")}
     n_ok = {}
-    for _ in range(reps):
-        for name, model in models.items():
-            for arm, th in (("one", 1), ("all", cfg.get("threads"))):
-                r = trajectories_per_second(model, n_max, cfg.t_end, cfg.dt, batched=True, threads=th)
-                walls[(name, arm)].append(r["wall_s"])
-                n_ok[name] = r["n_ok"]
+    def pending(name):
+        return len(walls[(name, "one")]) < reps or sum(walls[(name, "one")]) + sum(walls[(name, "all")]) < min_s
+
+    while any(pending(name) for name in models):
+        for name, model in models.items():  # interleaved while both run: both see the same machine
+            if pending(name):
+                for arm, th in (("one", 1), ("all", cfg.get("threads"))):
+                    r = trajectories_per_second(model, n_max, cfg.t_end, cfg.dt, batched=True, threads=th)
+                    walls[(name, arm)].append(r["wall_s"])
+                    n_ok[name] = r["n_ok"]
     threaded = {}
     for name in models:
         one, every = float(np.median(walls[(name, "one")])), float(np.median(walls[(name, "all")]))
@@ -72,9 +91,11 @@ def run(cfg) -> dict:
                           "wall_s_one_thread": walls[(name, "one")], "wall_s_all_threads": walls[(name, "all")]}
     out["threads"] = threaded
     out["threads_repeats"] = reps
+    out["threads_min_seconds"] = min_s
     out["precision"] = r["precision"]  # the surrogate networks' arithmetic in the batched runs
     out["clock"] = ("table and one-thread ratios: the thread's CPU time; threads section: wall time of one "
-                    "thread and of all threads alternately, medians of threads_repeats runs")
+                    "thread and of all threads alternately, medians of at least threads_repeats runs each and "
+                    "of threads_min_seconds of runs per model")
     out["trajectories_per_s_batch_speedup_threads"] = (threaded["surrogate"]["batched_per_s"]
                                                        / threaded["reference"]["batched_per_s"])
     out["batch_thread_scaling"] = min(t["scaling"] for t in threaded.values())
