@@ -21,32 +21,49 @@ INPUTS = ("surrogate_dir",)
 OUTPUTS = {"out_json": [""]}
 
 
-def _threads_repeats(cfg) -> tuple[int, float]:
-    """``threads_repeats`` (>= 1) and ``threads_min_seconds`` (>= 0, finite), or a ConfigError naming the value."""
-    reps, min_s = cfg.get("threads_repeats", 3), cfg.get("threads_min_seconds", 0.0)
+def _threads_repeats(cfg) -> tuple[int, float, float]:
+    """``threads_repeats`` (>= 1), ``threads_min_seconds`` and ``table_min_seconds`` (>= 0, finite), or a
+    ConfigError naming the value."""
+    reps = cfg.get("threads_repeats", 3)
     if isinstance(reps, bool) or not isinstance(reps, int) or reps < 1:
         raise ConfigError(f"threads_repeats={reps}: one thread and all threads need at least one run each")
-    if isinstance(min_s, bool) or not isinstance(min_s, (int, float)) or not 0.0 <= float(min_s) < math.inf:
-        raise ConfigError(f"threads_min_seconds={min_s}: must be a finite number of seconds >= 0")
-    return reps, float(min_s)
+    seconds = []
+    for key in ("threads_min_seconds", "table_min_seconds"):
+        val = cfg.get(key, 0.0)
+        if isinstance(val, bool) or not isinstance(val, (int, float)) or not 0.0 <= float(val) < math.inf:
+            raise ConfigError(f"{key}={val}: must be a finite number of seconds >= 0")
+        seconds.append(float(val))
+    return reps, seconds[0], seconds[1]
+
+
+def _timed(model, n: int, cfg, batched: bool, base_reps: int, min_s: float) -> dict:
+    """``trajectories_per_second`` in this thread's CPU time: the median of at least ``base_reps`` runs and of
+    enough runs to add up to ``min_s`` seconds (a first run says how long one takes; where one run is enough
+    it is the result). A single trajectory of the surrogate takes ~0.5 ms: three runs of it moved the
+    one-trajectory ratio between 15x and 43x in one day's runs."""
+    first = trajectories_per_second(model, n, cfg.t_end, cfg.dt, batched=batched, repeats=1, clock=time.thread_time)
+    t_run = n / first["trajectories_per_s"]
+    reps = max(base_reps, math.ceil(min_s / t_run))
+    if reps <= 1:
+        return first
+    return trajectories_per_second(model, n, cfg.t_end, cfg.dt, batched=batched, repeats=reps, clock=time.thread_time)
 
 
 def run(cfg) -> dict:
-    _threads_repeats(cfg)  # refused before any timing
+    _, _, table_s = _threads_repeats(cfg)  # refused before any timing
     models = {"reference": reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference),
               "surrogate": load_surrogate(cfg.surrogate_dir)}
     rows = []
     for n in cfg.batch_sizes:
         for name, model in models.items():
-            # the surrogate's runs are short (0.1 s at N = 1024): the median of repeats_small of them at every N
+            # the surrogate's runs are short (0.1 s at N = 1024): the median of repeats_small of them at every N,
+            # and every arm at least table_min_seconds of runs
             reps = int(cfg.repeats_small) if n == 1 or name == "surrogate" else 1
             row: dict = {"model": name, "n": int(n)}
             if name == "surrogate" or n <= cfg.reference_one_by_one_max_n:
-                r = trajectories_per_second(model, n, cfg.t_end, cfg.dt, batched=False, repeats=reps,
-                                            clock=time.thread_time)
+                r = _timed(model, n, cfg, False, reps, table_s)
                 row["one_by_one_per_s"] = r["trajectories_per_s"]
-            r = trajectories_per_second(model, n, cfg.t_end, cfg.dt, batched=True, repeats=reps,
-                                        clock=time.thread_time)
+            r = _timed(model, n, cfg, True, reps, table_s)
             row["batched_per_s"] = r["trajectories_per_s"]
             row["n_ok"] = r["n_ok"]
             rows.append(row)
@@ -70,7 +87,7 @@ def run(cfg) -> dict:
     # each model's pair of runs is repeated at least threads_repeats times and until its runs add up to
     # threads_min_seconds: the surrogate's batch takes ~0.1 s, where three runs on this shared VM left the
     # median at the mercy of one slow run (two medians of 3 of the same code: scaling 1.46 and 1.60)
-    reps, min_s = _threads_repeats(cfg)
+    reps, min_s, _ = _threads_repeats(cfg)
     walls: dict = {(name, arm): [] for name in models for arm in ("one", "all")}
     n_ok = {}
     def pending(name):
@@ -92,8 +109,10 @@ def run(cfg) -> dict:
     out["threads"] = threaded
     out["threads_repeats"] = reps
     out["threads_min_seconds"] = min_s
+    out["table_min_seconds"] = table_s
     out["precision"] = r["precision"]  # the surrogate networks' arithmetic in the batched runs
-    out["clock"] = ("table and one-thread ratios: the thread's CPU time; threads section: wall time of one "
+    out["clock"] = ("table and one-thread ratios: the thread's CPU time, medians of at least repeats_small runs "
+                    "(N = 1, and the surrogate at every N) and of table_min_seconds of runs; threads section: wall time of one "
                     "thread and of all threads alternately, medians of at least threads_repeats runs each and "
                     "of threads_min_seconds of runs per model")
     out["trajectories_per_s_batch_speedup_threads"] = (threaded["surrogate"]["batched_per_s"]
