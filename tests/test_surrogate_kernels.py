@@ -130,7 +130,21 @@ def _surrogates():
         out[f"best_shaped_power{p}"] = (_with_power(out["best_shaped"][0], p), None)
     # the shipped universal model on the paper's bearing: six regions, exponent 2, L/D folded into the bias
     out["universal_gumbel"] = (universal_bearing(paper_bearing(), "gumbel"), None)
+    # regions of one shape whose scalings differ in speed and clearance: the one-body kernel of a uniform
+    # shape must redo the frame for a blend zone's second region
+    out["best_shaped_mixed_scalings"] = (_with_mixed_scalings(out["best_shaped"][0]), None)
     return out
+
+
+def _with_mixed_scalings(model):
+    """The same networks with every other region's scaling at 1.3 x the speed and 0.9 x the clearance."""
+    import dataclasses
+
+    scalings = [sc if r % 2 == 0 else dataclasses.replace(sc, omega=1.3 * sc.omega, clearance=0.9 * sc.clearance)
+                for r, sc in enumerate(model.scalings)]
+    return SurrogateForceModel(model.bearing, model.networks, scalings, model.activation, boundaries=model.boundaries,
+                               blend_width=model.blend_width, domain=model.domain, eps_max=model.eps_max,
+                               name=f"{model.name}, mixed scalings")
 
 
 def _generic(model, X, V):
@@ -143,7 +157,7 @@ def test_the_fast_kernel_equals_the_generic_one(name):
     if sleeve is not None:
         model.set_sleeve(sleeve)
     X, V = gm.states(model, n=3000, seed=11)
-    if name == "best_shaped":  # the blend zones of its five regions covered densely
+    if name.startswith("best_shaped"):  # the blend zones of its five regions covered densely
         X, V = sample_states(model.clearance, n=3000, eps_max=0.93, v_max=0.1, seed=4)
     fn, params = model.force_kernel
     fast = np.array([fn(params, *x, *v) for x, v in zip(X, V)])
@@ -246,7 +260,8 @@ def test_every_plain_surrogate_shape_has_a_generated_batched_kernel():
     for name, (model, _) in _surrogates().items():
         key = batch_shape_key(model)
         fn, _ = model.batch_force_kernel("float32")
-        if model.structure == "damping":
+        if model.structure == "damping" or len({(sc.clearance, sc.omega) for sc in model.scalings}) > 1:
+            # (regions at different clearances or speeds: batch_shape_key's documented exception)
             assert key is None and fn is forces_batch, name
         else:
             assert key is not None and fn is batch_kernel(key, "float32"), name
@@ -316,3 +331,19 @@ def test_batch_params_refuses_an_unknown_dtype():
 
     with pytest.raises(ValueError, match="dtype must be 'float64' or 'float32', got 'float16'"):
         batch_params(best_shaped_surrogate(paper_bearing()), "float16")
+
+
+def test_shapes_with_one_layout_in_every_region_take_the_one_body_kernel():
+    """best's shape and the universal model's run one body for every region (``kernels._uniform``: no branch
+    per region); the paper's min-max networks and the sleeve-aware active bearing keep a branch per region.
+    That the forces are the generic kernel's is test_the_fast_kernel_equals_the_generic_one."""
+    from fluidfilm.surrogate.kernels import _uniform, kernel_source
+
+    uniform = {"best_shaped": True, "universal_gumbel": True, "best_shaped_mixed_scalings": True}
+    models = _surrogates()
+    for name, want in uniform.items():
+        key = shape_key(models[name][0])
+        assert _uniform(key) is want, name
+        assert ("elif k ==" in kernel_source(key)) is (not want), name
+    others = [name for name, (m, _) in models.items() if m.structure != "plain" or shape_key(m)[2][0][3]]
+    assert others and not any(_uniform(shape_key(models[name][0])) for name in others)

@@ -306,9 +306,17 @@ def _act_expr(act: str, x: str) -> str:
     return f"sigmoid64({x})"
 
 
-def _net_source(chain, offs, inputs, act, lay, ind, out_names):
+def _net_source(chain, offs, inputs, act, lay, ind, out_names, base=""):
     """Source lines evaluating one folded network (layer shapes ``chain``) on the named scalar inputs
-    (as many leading ones as its first layer takes: the generic kernel's rule) into ``out_names``."""
+    (as many leading ones as its first layer takes: the generic kernel's rule) into ``out_names``.
+    ``base``: an expression added to every weight offset ("off + ": the region's weights found at run time,
+    ``_uniform_kernel_source``); the scratch rows are not moved."""
+    if base:
+        offs = [(f"{base}{wo}", f"{base}{bo}") for wo, bo in offs]
+
+    def at(o, k):  # offset o (a number, or an expression with base) plus the literal k
+        return f"{o} + {k}" if isinstance(o, str) else o + k
+
     lines = []
     src = None  # offset of the previous layer's activations in the scratch rows
     h = lay.scratch
@@ -316,20 +324,20 @@ def _net_source(chain, offs, inputs, act, lay, ind, out_names):
         if k == len(chain) - 1:
             for j, name in enumerate(out_names):
                 if src is None:
-                    terms = " + ".join(f"w[{wo + j * n_in + i}] * {inputs[i]}" for i in range(n_in))
-                    lines.append(f"{ind}{name} = w[{bo + j}] + {terms}")
+                    terms = " + ".join(f"w[{at(wo, j * n_in + i)}] * {inputs[i]}" for i in range(n_in))
+                    lines.append(f"{ind}{name} = w[{at(bo, j)}] + {terms}")
                 else:
-                    lines.append(f"{ind}{name} = w[{bo + j}]")
+                    lines.append(f"{ind}{name} = w[{at(bo, j)}]")
             if src is not None:
                 lines.append(f"{ind}for i in range({n_in}):")
                 lines.append(f"{ind}    hi = w[{src} + i]")
                 for j, name in enumerate(out_names):
-                    lines.append(f"{ind}    {name} += w[{wo + j * n_in} + i] * hi")
+                    lines.append(f"{ind}    {name} += w[{at(wo, j * n_in)} + i] * hi")
             break
         dst = h if src != h else h + lay.maxw
         lines.append(f"{ind}for o in range({n_out}):")
         if src is None:
-            terms = " + ".join(f"w[{wo + i * n_out} + o] * {inputs[i]}" for i in range(n_in))
+            terms = " + ".join(f"w[{at(wo, i * n_out)} + o] * {inputs[i]}" for i in range(n_in))
             lines.append(f"{ind}    a = w[{bo} + o] + {terms}")
         else:
             # a dot product per output over the previous layer (``pack``: rows contiguous), then the
@@ -395,6 +403,69 @@ def _region_source(r, region_key, act, lay, ind):
     return L
 
 
+def _uniform(key) -> bool:
+    """Whether every region of a shape has the same layers, scaling family, frame and exponent, in a polar
+    frame, with no sleeve, extra inputs or damping network (``best``, the universal model, the paper's split):
+    then one body serves every region, its weights found at run time (``_uniform_kernel_source``)."""
+    structure, act, regions, nb, blending, n_dom = key
+    r0 = regions[0]
+    kind, frame, n_extra, sleeve, power, static, damping = r0
+    return (structure == "plain" and len(set(regions)) == 1 and kind >= 1 and frame >= 1 and not n_extra
+            and not sleeve and not damping and len(static) >= 2)
+
+
+def _uniform_kernel_source(key, lay, head) -> list[str]:
+    """The region loop of a ``_uniform`` shape: one body for every region instead of a branch per region.
+    The frame (unit vectors, inputs, drive) is computed once for the state and again for a blend zone's
+    second region only where that region's c or omega differ; the region's weights sit at ``k * stride``
+    from region 0's (``Layout``).  Region by region the expressions are ``_region_source``'s, so the forces
+    are the same to round-off; the branch per region (mispredicted for states that change region) and the
+    blend zone's second frame are gone."""
+    structure, act, regions, nb, blending, n_dom = key
+    kind, frame, n_extra, sleeve, power, static, damping = regions[0]
+    offs0 = lay.layers[0][0]
+    stride = (lay.layers[1][0][0][0] - offs0[0][0]) if len(regions) > 1 else 0
+    ind, ind2 = "    ", "        "
+
+    def frame_lines(i):
+        L = [f"{i}cw = c * omega",
+             f"{i}rr = math.sqrt(x1 * x1 + x2 * x2)", f"{i}at0 = 1.0 if rr == 0.0 else 0.0",
+             f"{i}safe = rr + at0", f"{i}er1 = x1 / safe", f"{i}er2 = x2 / safe + at0",
+             f"{i}z0 = rr / c", f"{i}z1 = (v1 * er1 + v2 * er2) / cw", f"{i}z2 = (v1 * er2 - v2 * er1) / cw"]
+        if frame == 2:
+            L += [f"{i}ua = z0 - 2.0 * z2", f"{i}ub = 2.0 * z1", f"{i}drive = math.sqrt(ua * ua + ub * ub)",
+                  f"{i}zero = 1.0 if drive == 0.0 else 0.0", f"{i}safe = drive + zero",
+                  f"{i}z1 = ua / safe + zero", f"{i}z2 = ub / safe"]
+        return L
+
+    L = list(head)
+    L += [f"{ind}c = w[{lay.regions} + 4 * ra]", f"{ind}omega = w[{lay.regions} + 4 * ra + 1]"]
+    L += frame_lines(ind)
+    L += [f"{ind}d = 1.0 - e2"] + ([] if power is None else [f"{ind}dp = {_power_source('d', power)}"])
+    L += [f"{ind}fa1 = 0.0", f"{ind}fa2 = 0.0", f"{ind}fb1 = 0.0", f"{ind}fb2 = 0.0",
+          f"{ind}for j in range(n_eval):",
+          f"{ind2}k = ra if j == 0 else rb",
+          f"{ind2}rc = {lay.regions} + 4 * k",
+          f"{ind2}if j > 0 and (w[rc] != c or w[rc + 1] != omega):",
+          f"{ind2}    c = w[rc]", f"{ind2}    omega = w[rc + 1]"]
+    L += frame_lines(ind2 + "    ")
+    L += [f"{ind2}fscale = w[rc + 2]", f"{ind2}off = k * {stride}"]
+    L += _net_source(static, offs0, ["z0", "z1", "z2"], act, lay, ind2, ["y1", "y2"], base="off + ")
+    L.append(f"{ind2}g = fscale / d ** w[rc + 3]" if power is None else f"{ind2}g = fscale / (dp)")
+    if kind == 2:
+        L.append(f"{ind2}g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)")
+    if frame == 2:
+        L.append(f"{ind2}g *= drive")
+    L += [f"{ind2}y1 *= g", f"{ind2}y2 *= g",
+          f"{ind2}g1 = y1 * er1 + y2 * er2", f"{ind2}g2 = y1 * er2 - y2 * er1",
+          f"{ind2}if j == 0:", f"{ind2}    fa1 = g1", f"{ind2}    fa2 = g2",
+          f"{ind2}else:", f"{ind2}    fb1 = g1", f"{ind2}    fb2 = g2",
+          f"{ind}if n_eval == 2:",
+          f"{ind}    return (1.0 - wb) * fa1 + wb * fb1, (1.0 - wb) * fa2 + wb * fb2",
+          f"{ind}return fa1, fa2"]
+    return L
+
+
 def kernel_source(key) -> str:
     """Python source of the one-state kernel of a model shape (``shape_key``), compiled by ``fast_force_kernel``."""
     structure, act, regions, nb, blending, n_dom = key
@@ -422,6 +493,8 @@ def kernel_source(key) -> str:
                   f"        t = (eps - lo) / w[{BLEND}]",
                   f"        ra = {b}", f"        rb = {b + 1}", "        wb = t * t * (3.0 - 2.0 * t)",
                   "        n_eval = 2"]
+    if _uniform(key):
+        return "\n".join(_uniform_kernel_source(key, lay, L)) + "\n"
     L += ["    fa1 = 0.0", "    fa2 = 0.0", "    fb1 = 0.0", "    fb2 = 0.0",
           "    for j in range(n_eval):",
           "        k = ra if j == 0 else rb",
