@@ -790,8 +790,10 @@ def render_batch_speed(reports: Path) -> str:
         ratio = (sur.get("batched_per_s") or 0) / ref["batched_per_s"] if ref.get("batched_per_s") else None
         rows.append([str(n), rate(ref.get("one_by_one_per_s")), rate(ref.get("batched_per_s")),
                      rate(sur.get("one_by_one_per_s")), rate(sur.get("batched_per_s")), _num(ratio, ".1f", "x")])
+    host = (f"Measured on {b['machine']}, {b['date']}." if b.get("machine")
+            else "The host was not recorded (runs before 2026-12-04).")
     return _table(["N", "reference one by one", "reference batched", "surrogate one by one", "surrogate batched",
-                   "surrogate / reference, batched"], rows)
+                   "surrogate / reference, batched"], rows) + "\n" + host + "\n"
 
 
 def render_controller_training(reports: Path) -> str:

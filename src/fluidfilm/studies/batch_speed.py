@@ -6,12 +6,14 @@ Batched runs take ``simulate_batch``'s defaults (the library's path: the stage-b
 timing follows a warm-up run of the same batch (``trajectories_per_second``), so no compilation is timed."""
 from __future__ import annotations
 
+import datetime
 import math
 import time
 
 import numpy as np
 
 from fluidfilm import io, load_surrogate
+from fluidfilm.perf.benchmarking import machine
 from fluidfilm.perf.throughput import trajectories_per_second
 from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.workflow.config_check import ConfigError
@@ -77,7 +79,10 @@ def run(cfg) -> dict:
                        "batching_gain_surrogate": by[("surrogate", n)]["batched_per_s"]
                        / by[("surrogate", n)]["one_by_one_per_s"]}
               for n in cfg.batch_sizes}
-    out = {"rows": rows, "ratios": ratios, "config": plain(cfg),
+    # the host beside the numbers: the surrogate/reference ratios moved by 30-45 % between the hosts of two
+    # sessions (CHANGELOG 2026-12-04), more than any change of code did
+    out = {"rows": rows, "ratios": ratios, "config": plain(cfg), "machine": machine(),
+           "date": datetime.date.today().isoformat(),
            "trajectories_per_s_batch_speedup": ratios[str(n_max)]["batched"],
            "trajectories_per_s_single_speedup": by[("surrogate", n_min)]["one_by_one_per_s"] / ref1}
     # the largest batch again across threads (``threads``; null: all cores), both models the same way: one

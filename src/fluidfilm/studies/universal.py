@@ -291,6 +291,7 @@ def force_cost(cfg) -> dict:
     one-state kernel in the integrator's loop (``simulate``), and the batched kernel on ``evaluate.n_batch``
     states per call in one thread (``simulate_batch``'s per RK4 stage), its networks in float32 (its default)
     and float64."""
+    from fluidfilm.perf.benchmarking import machine
     from fluidfilm.perf.speed import (best_shaped_surrogate, sample_states, time_per_force_eval,
                                       time_per_force_eval_batched)
     from fluidfilm.surrogate.universal import universal_bearing
@@ -312,7 +313,7 @@ def force_cost(cfg) -> dict:
     return {**{f"force_eval_us_{k}": val for k, val in us.items()},
             "universal_vs_best_cost_ratio": us["universal"] / us["best_shape"],
             "universal_vs_best_cost_ratio_batched_float32": us["universal_batched_float32"] / us["best_shape_batched_float32"],
-            "n_batch": int(cfg.evaluate.n_batch), "loadavg_1min": [load0, os.getloadavg()[0]]}
+            "n_batch": int(cfg.evaluate.n_batch), "loadavg_1min": [load0, os.getloadavg()[0]], "machine": machine()}
 
 
 def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, t_universal: float,
