@@ -23,7 +23,7 @@ INPUTS = ("surrogate_dir",)
 OUTPUTS = {"out_json": [""]}
 
 
-def _threads_repeats(cfg) -> tuple[int, float, float]:
+def _repeat_rules(cfg) -> tuple[int, float, float]:
     """``threads_repeats`` (>= 1), ``threads_min_seconds`` and ``table_min_seconds`` (>= 0, finite), or a
     ConfigError naming the value."""
     reps = cfg.get("threads_repeats", 3)
@@ -52,7 +52,7 @@ def _timed(model, n: int, cfg, batched: bool, base_reps: int, min_s: float) -> d
 
 
 def run(cfg) -> dict:
-    _, _, table_s = _threads_repeats(cfg)  # refused before any timing
+    _, _, table_s = _repeat_rules(cfg)  # refused before any timing
     models = {"reference": reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference),
               "surrogate": load_surrogate(cfg.surrogate_dir)}
     rows = []
@@ -92,7 +92,7 @@ def run(cfg) -> dict:
     # each model's pair of runs is repeated at least threads_repeats times and until its runs add up to
     # threads_min_seconds: the surrogate's batch takes ~0.1 s, where three runs on this shared VM left the
     # median at the mercy of one slow run (two medians of 3 of the same code: scaling 1.46 and 1.60)
-    reps, min_s, _ = _threads_repeats(cfg)
+    reps, min_s, _ = _repeat_rules(cfg)
     walls: dict = {(name, arm): [] for name in models for arm in ("one", "all")}
     n_ok = {}
     def pending(name):

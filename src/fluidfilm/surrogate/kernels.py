@@ -353,6 +353,20 @@ def _net_source(chain, offs, inputs, act, lay, ind, out_names, base=""):
     return lines
 
 
+def _frame_source(frame, ind):
+    """Lines of the polar (frame 1) or whirl (frame 2) frame from x1, x2, v1, v2, c, omega: the unit vectors
+    er1, er2, the inputs z0, z1, z2 and, in the whirl frame, the drive |u| (``inference._region_force``)."""
+    L = [f"{ind}rr = math.sqrt(x1 * x1 + x2 * x2)", f"{ind}at0 = 1.0 if rr == 0.0 else 0.0",
+         f"{ind}safe = rr + at0", f"{ind}er1 = x1 / safe", f"{ind}er2 = x2 / safe + at0",
+         f"{ind}cw = c * omega", f"{ind}z0 = rr / c",
+         f"{ind}z1 = (v1 * er1 + v2 * er2) / cw", f"{ind}z2 = (v1 * er2 - v2 * er1) / cw"]
+    if frame == 2:
+        L += [f"{ind}ua = z0 - 2.0 * z2", f"{ind}ub = 2.0 * z1", f"{ind}drive = math.sqrt(ua * ua + ub * ub)",
+              f"{ind}zero = 1.0 if drive == 0.0 else 0.0", f"{ind}safe = drive + zero",
+              f"{ind}z1 = ua / safe + zero", f"{ind}z2 = ub / safe"]
+    return L
+
+
 def _region_source(r, region_key, act, lay, ind):
     """The body of region r: inputs from the state, the network(s), the gain and the frame back.
     Mirrors ``inference._region_force`` step by step (the generic kernel is the specification)."""
@@ -365,14 +379,7 @@ def _region_source(r, region_key, act, lay, ind):
         # sleeve-aware: normalise by the current clearance c_r; forces scale as (c/c_r)^2
         L += [f"{ind}fscale = fscale * c * c * inv_c2", f"{ind}c = 1.0 / math.sqrt(inv_c2)"]
     if polar:
-        L += [f"{ind}rr = math.sqrt(x1 * x1 + x2 * x2)", f"{ind}at0 = 1.0 if rr == 0.0 else 0.0",
-              f"{ind}safe = rr + at0", f"{ind}er1 = x1 / safe", f"{ind}er2 = x2 / safe + at0",
-              f"{ind}cw = c * omega", f"{ind}z0 = rr / c",
-              f"{ind}z1 = (v1 * er1 + v2 * er2) / cw", f"{ind}z2 = (v1 * er2 - v2 * er1) / cw"]
-        if frame == 2:
-            L += [f"{ind}ua = z0 - 2.0 * z2", f"{ind}ub = 2.0 * z1", f"{ind}drive = math.sqrt(ua * ua + ub * ub)",
-                  f"{ind}zero = 1.0 if drive == 0.0 else 0.0", f"{ind}safe = drive + zero",
-                  f"{ind}z1 = ua / safe + zero", f"{ind}z2 = ub / safe"]
+        L += _frame_source(frame, ind)
         inputs = ["z0", "z1", "z2"]
     elif physics:
         L += [f"{ind}z0 = x1 / c", f"{ind}z1 = x2 / c", f"{ind}z2 = v1 / (c * omega)", f"{ind}z3 = v2 / (c * omega)"]
@@ -405,7 +412,8 @@ def _region_source(r, region_key, act, lay, ind):
 
 def _uniform(key) -> bool:
     """Whether every region of a shape has the same layers, scaling family, frame and exponent, in a polar
-    frame, with no sleeve, extra inputs or damping network (``best``, the universal model, the paper's split):
+    frame, with no sleeve, extra inputs or damping network (``best``, the universal model; not the paper's
+    min-max networks):
     then one body serves every region, its weights found at run time (``_uniform_kernel_source``)."""
     structure, act, regions, nb, blending, n_dom = key
     r0 = regions[0]
@@ -421,26 +429,15 @@ def _uniform_kernel_source(key, lay, head) -> list[str]:
     from region 0's (``Layout``).  Region by region the expressions are ``_region_source``'s, so the forces
     are the same to round-off; the branch per region (mispredicted for states that change region) and the
     blend zone's second frame are gone."""
-    structure, act, regions, nb, blending, n_dom = key
-    kind, frame, n_extra, sleeve, power, static, damping = regions[0]
+    act, regions = key[1], key[2]
+    kind, frame, _, _, power, static, _ = regions[0]
     offs0 = lay.layers[0][0]
     stride = (lay.layers[1][0][0][0] - offs0[0][0]) if len(regions) > 1 else 0
     ind, ind2 = "    ", "        "
 
-    def frame_lines(i):
-        L = [f"{i}cw = c * omega",
-             f"{i}rr = math.sqrt(x1 * x1 + x2 * x2)", f"{i}at0 = 1.0 if rr == 0.0 else 0.0",
-             f"{i}safe = rr + at0", f"{i}er1 = x1 / safe", f"{i}er2 = x2 / safe + at0",
-             f"{i}z0 = rr / c", f"{i}z1 = (v1 * er1 + v2 * er2) / cw", f"{i}z2 = (v1 * er2 - v2 * er1) / cw"]
-        if frame == 2:
-            L += [f"{i}ua = z0 - 2.0 * z2", f"{i}ub = 2.0 * z1", f"{i}drive = math.sqrt(ua * ua + ub * ub)",
-                  f"{i}zero = 1.0 if drive == 0.0 else 0.0", f"{i}safe = drive + zero",
-                  f"{i}z1 = ua / safe + zero", f"{i}z2 = ub / safe"]
-        return L
-
     L = list(head)
     L += [f"{ind}c = w[{lay.regions} + 4 * ra]", f"{ind}omega = w[{lay.regions} + 4 * ra + 1]"]
-    L += frame_lines(ind)
+    L += _frame_source(frame, ind)
     L += [f"{ind}d = 1.0 - e2"] + ([] if power is None else [f"{ind}dp = {_power_source('d', power)}"])
     L += [f"{ind}fa1 = 0.0", f"{ind}fa2 = 0.0", f"{ind}fb1 = 0.0", f"{ind}fb2 = 0.0",
           f"{ind}for j in range(n_eval):",
@@ -448,7 +445,7 @@ def _uniform_kernel_source(key, lay, head) -> list[str]:
           f"{ind2}rc = {lay.regions} + 4 * k",
           f"{ind2}if j > 0 and (w[rc] != c or w[rc + 1] != omega):",
           f"{ind2}    c = w[rc]", f"{ind2}    omega = w[rc + 1]"]
-    L += frame_lines(ind2 + "    ")
+    L += _frame_source(frame, ind2 + "    ")
     L += [f"{ind2}fscale = w[rc + 2]", f"{ind2}off = k * {stride}"]
     L += _net_source(static, offs0, ["z0", "z1", "z2"], act, lay, ind2, ["y1", "y2"], base="off + ")
     L.append(f"{ind2}g = fscale / d ** w[rc + 3]" if power is None else f"{ind2}g = fscale / (dp)")
