@@ -216,7 +216,9 @@ def main() -> None:
             ns = []
             for n in SIZES:
                 x, v = states[n]
-                out = np.empty_like(x)
+                if dt is not None:  # the batched kernels take column-major states, as simulate_batch passes them
+                    x, v = np.asfortranarray(x), np.asfortranarray(v)
+                out = np.empty_like(x, order="K")
                 passes = max(1, int(per_sample // n))
                 if dt is None:
                     fn, params = m.force_kernel

@@ -168,9 +168,10 @@ _rk4_batch_uncached = _uncached(_rk4_batch, _rk4_step=_rk4_step_uncached)
 
 
 @njit(cache=True, nogil=True)
-def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok, xs, vs, fs, rows):
+def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok, xsb, vsb, fsb, rows):
     """One RK4 stage of the m entries ``act[:m]`` (``ident``: entries 0..m-1) at the stage states q and times
-    tq: the film forces in ONE call ``fn(bp, xs, vs, fs)`` of the states inside the clearance, then
+    tq: the film forces in ONE call ``fn(bp, xs, vs, fs)`` of the states inside the clearance (column-major
+    (r, 2) views of the flat buffers xsb, vsb, fsb), then
     ``_acceleration``'s arithmetic per entry (the same expressions, so the same bits for the same forces).
     ``C[k, j]``: entry j's constants (``simulate_batch``'s ``consts`` per column).  cos/sin(omega t) are
     computed once per distinct phase: every entry without substeps shares its time."""
@@ -179,6 +180,12 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
     for i in range(m):
         j = i if ident else act[i]
         inside += 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
+    # the kernel's (inside, 2) states and forces as column-major views of flat buffers (component k of entry
+    # r at k * inside + r): its per-state loops then read and write each component contiguously, which a
+    # surrogate's frame pass needs to run as a vector loop (interleaved rows: 10 ns per state, against 2.5)
+    xs = xsb[:2 * inside].reshape((2, inside)).T
+    vs = vsb[:2 * inside].reshape((2, inside)).T
+    fs = fsb[:2 * inside].reshape((2, inside)).T
     if inside == m:
         # every state inside the clearance (the rule): gathered without a branch
         for i in range(m):
@@ -199,7 +206,7 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
             rows[i] = r
             r += 1
     if r > 0:
-        fn(bp, xs[:r], vs[:r], fs[:r])
+        fn(bp, xs, vs, fs)
     if ident and inside == m:
         # the common stage: every entry inside, one phase for all, no ramp (checked): without branches
         t = tq[0]
@@ -340,9 +347,9 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
     ok3 = np.empty(n, dtype=np.bool_)
     ok4 = np.empty(n, dtype=np.bool_)
     rows = np.empty(n, dtype=np.int64)
-    xs = np.empty((n, 2))
-    vs = np.empty((n, 2))
-    fs = np.empty((n, 2))
+    xs = np.empty(2 * n)  # flat buffers of the kernel's column-major states and forces (_accelerations)
+    vs = np.empty(2 * n)
+    fs = np.empty(2 * n)
     es2 = eps_substep * eps_substep
     n_run = n
     for step in range(n_steps):

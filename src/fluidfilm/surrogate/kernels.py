@@ -1098,6 +1098,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
     else:
         L += [f"{ind1}inv_c = 1.0 / c", f"{ind1}inv_cw = 1.0 / cw"]
     L += [f"{ind1}sc2 = math.sqrt(inv_c2)"]
+    passes = [[len(L)]]  # [first line, end] of each pass's loops (_outline_passes)
     L += [f"{ind1}for p in range(n):",
           f"{ind2}x1 = x[p, 0]", f"{ind2}x2 = x[p, 1]", f"{ind2}v1 = v[p, 0]", f"{ind2}v2 = v[p, 1]",
           f"{ind2}r2 = x1 * x1 + x2 * x2", f"{ind2}e2 = r2 * inv_c2", f"{ind2}rr = math.sqrt(r2)", f"{ind2}EPS[p] = rr * sc2",
@@ -1129,6 +1130,8 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
         if uniform_gain and any_kind2:
             L.append(f"{ind2}G[p] *= KV[p]")
     # 1b. the domain count and the region(s) of every state, as selects (vectorises)
+    passes[-1].append(len(L))
+    passes.append([len(L)])
     L += [f"{ind1}outside = 0", f"{ind1}for p in range(n):", f"{ind2}eps = EPS[p]", f"{ind2}vmax = 0.0", f"{ind2}hit = False"]
     for s in range(n_dom):  # the first row holding eps (the last one also beyond its top) bounds the velocities
         cond = f"(eps >= dl{s}) & (eps < dh{s})" + (f" | (eps >= dh{s})" if s == n_dom - 1 else "")
@@ -1143,13 +1146,15 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
                   f"{ind2}wb = t * t * (3.0 - 2.0 * t) if inz else wb"]
     L += [f"{ind2}RA[p] = ra", f"{ind2}RB[p] = rb", f"{ind2}WB[p] = wb"]
     L.append(f"{ind1}bp.counter[0] += outside")
+    passes[-1].append(len(L))
     # 2. each region's entries (state, weight), in state order; PA[p], PB[p]: where state p's results go
     # (every state has two entries, its second region's possibly the bucket nr that is never evaluated: 2 n)
     L += [f"{ind1}start = si[6 * n:6 * n + {nr + 2}]", f"{ind1}fill = si[6 * n + {nr + 2}:6 * n + {2 * nr + 3}]",
           f"{ind1}ent = si[4 * n:6 * n]", f"{ind1}went = s64[3 * n:5 * n]",
           f"{ind1}YE1 = s64[5 * n:7 * n + 1]", f"{ind1}YE2 = s64[7 * n + 1:9 * n + 2]",
-          f"{ind1}YE1[2 * n] = 0.0", f"{ind1}YE2[2 * n] = 0.0",
-          f"{ind1}for r in range({nr + 2}):", f"{ind1}    start[r] = 0",
+          f"{ind1}YE1[2 * n] = 0.0", f"{ind1}YE2[2 * n] = 0.0"]
+    passes.append([len(L)])
+    L += [f"{ind1}for r in range({nr + 2}):", f"{ind1}    start[r] = 0",
           f"{ind1}for p in range(n):",
           f"{ind2}start[RA[p] + 1] += 1", f"{ind2}start[RB[p] + 1] += 1",
           f"{ind1}for r in range({nr + 1}):", f"{ind1}    start[r + 1] += start[r]",
@@ -1160,6 +1165,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
           f"{ind2}k = fill[RB[p]]", f"{ind2}ent[k] = p", f"{ind2}went[k] = WB[p]", f"{ind2}fill[RB[p]] = k + 1",
           # the second region's result; none (the extra bucket, not evaluated): the zero after the last entry
           f"{ind2}PB[p] = k if RB[p] < {nr} else start[{nr + 1}]"]
+    passes[-1].append(len(L))
     # 3. each region's network on tiles of its states
     o0 = f"{n_in + 5} * n"
     offs = np.cumsum([0, n_in * TILE, TILE, TILE, TILE, width * TILE, width * TILE, width])
@@ -1171,6 +1177,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
     if n_extra:
         L.append(f"{ind1}wx = sw[{o0} + {offs[6]}:{o0} + {offs[7]}]")
     for r, region in enumerate(regions):
+        passes.append([len(L)])
         kind, _, _, _, power = region[:5]
         layers = list(layout[r])
         ind3 = ind1 + "    "
@@ -1205,7 +1212,9 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
             L.append(f"{ind3}    p = ent[t0 + j]")
         L += [f"{ind3}    gw = {gain}",
               f"{ind3}    YE1[t0 + j] = gw * (Y1t[j] + ob1)", f"{ind3}    YE2[t0 + j] = gw * (Y2t[j] + ob2)"]
+        passes[-1].append(len(L))
     # 4. per state in order: its one or two regions' results, the gain and the frame back
+    passes.append([len(L)])
     L += [f"{ind1}for p in range(n):", f"{ind2}y1 = YE1[PA[p]] + YE1[PB[p]]", f"{ind2}y2 = YE2[PA[p]] + YE2[PB[p]]"]
     if physics:
         L += [f"{ind2}f1 = y1 * G[p]", f"{ind2}f2 = y2 * G[p]"]
@@ -1215,7 +1224,48 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
         L += [f"{ind2}out[p, 0] = f1 * E1[p] + f2 * E2[p]", f"{ind2}out[p, 1] = f1 * E2[p] - f2 * E1[p]"]
     else:
         L += [f"{ind2}out[p, 0] = f1", f"{ind2}out[p, 1] = f2"]
-    return "\n".join(L) + "\n"
+    passes[-1].append(len(L))
+    return _outline_passes(L, passes)
+
+
+def _outline_passes(L: list[str], passes: list[list[int]]) -> str:
+    """The kernel's lines ``L`` with each pass (``L[a:b]`` for ``[a, b]`` in ``passes``, in order) moved
+    into a function of its own, ``_pass{i}``, which the kernel calls with the names the pass reads from it.
+
+    Why: in one function holding every pass, LLVM vectorised the passes' loops worse (the route pass took
+    8.5 ns per state inside the kernel against 1.5 ns on its own, the frame pass 10 against 2.5 with
+    column-major states); the same loops as separate functions ran the best-shaped float32 kernel in 44 ns
+    per force against 52 (1024 states, project machine 2026-12-04), with the same results to the bit.
+    A pass's arguments are the names it loads that the kernel assigned before it (or the kernel's own
+    arguments), less the names it assigns itself: no pass writes a name a later one reads (they
+    communicate through the arrays), which ``test_surrogate_kernels`` checks by comparing every shape's
+    kernel with the generic one."""
+    import ast
+    import textwrap
+
+    def names(lines: list[str]) -> tuple[set[str], set[str]]:
+        tree = ast.parse(textwrap.dedent("\n".join(lines)))
+        loaded, stored = set(), set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Name):
+                (stored if isinstance(node.ctx, ast.Store) else loaded).add(node.id)
+        return loaded, stored
+
+    head = L[0]
+    kernel_args = [a.strip() for a in head[head.index("(") + 1:head.index(")")].split(",")]
+    helpers: list[str] = []
+    body: list[str] = []
+    pos = 0
+    for i, (a, b) in enumerate(passes):
+        body += L[pos:a]
+        _, before = names(body[1:])  # what the kernel itself assigned so far (not the earlier passes' locals)
+        loaded, stored = names(L[a:b])
+        args = sorted((loaded & (before | set(kernel_args))) - stored)
+        helpers += [f"def _pass{i}({', '.join(args)}):"] + L[a:b] + ["    return 0", ""]
+        body.append(f"    _pass{i}({', '.join(args)})")
+        pos = b
+    body += L[pos:]
+    return "\n".join(helpers + body) + "\n"
 
 
 @njit(inline="always", error_model="numpy")
@@ -1251,6 +1301,8 @@ def batch_kernel(key, dtype: str = "float64"):
                                      "silu_n": silu32 if f32 else silu64,
                                      "sigmoid_n": sigmoid32 if f32 else sigmoid64}
         exec(compile(source, f"<surrogate batch kernel {len(_COMPILED_BATCH)}>", "exec"), namespace)
+        for name in [k for k in namespace if k.startswith("_pass")]:  # the passes, each compiled on its own
+            namespace[name] = njit(error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)(namespace[name])
         fn = njit(error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)(namespace["batch_kernel"])
         _COMPILED_BATCH[(key, dtype)] = fn
     return fn
