@@ -35,3 +35,28 @@ def test_calls_per_sample_are_averaged_and_warm_up_can_be_left_out(monkeypatch):
 def test_bad_counts_are_refused(repeats, calls):
     with pytest.raises(ValueError, match="repeats and calls"):
         benchmarking.median_seconds(lambda: None, repeats, calls)
+
+
+# ---------------------------------------------------------------------------- perf.cores: the core probe
+@pytest.mark.parametrize("kw, text", [({"threads": 1}, "threads must be an integer >= 2, got 1"),
+                                      ({"seconds": 0.0}, "seconds must be a positive finite number, got 0.0"),
+                                      ({"seconds": float("nan")}, "got nan"),
+                                      ({"repeats": 0}, "repeats must be a positive integer, got 0")])
+def test_core_probe_refuses_bad_arguments_naming_them(kw, text):
+    from fluidfilm.perf.cores import core_scaling
+    with pytest.raises(ValueError, match=text):
+        core_scaling(**kw)
+
+
+def test_core_probe_vector_loop_is_packed_fma_and_the_scalings_are_bounded_by_the_threads():
+    # the premise of the probe: its vector loop runs packed (ymm/zmm) single-precision arithmetic, so it
+    # loads the vector units; and a scaling is a throughput ratio, positive and (noise aside) at most the
+    # number of threads
+    import re
+
+    from fluidfilm.perf.cores import _vector_fma, core_scaling
+    r = core_scaling(threads=2, seconds=0.02, repeats=1)
+    asm = next(iter(_vector_fma.inspect_asm().values()))
+    assert re.search(r"v(fmadd|fmul|add)[0-9a-z]*ps\s+%[yz]mm", asm), "the FMA probe did not vectorise"
+    for kind in ("vector_fma", "scalar_chain"):
+        assert 0.3 < r[kind] < 3.0, (kind, r[kind])

@@ -792,6 +792,16 @@ def render_batch_speed(reports: Path) -> str:
                      rate(sur.get("one_by_one_per_s")), rate(sur.get("batched_per_s")), _num(ratio, ".1f", "x")])
     host = (f"Measured on {b['machine']}, {b['date']}." if b.get("machine")
             else "The host was not recorded (runs before 2026-12-04).")
+    th = b.get("threads")
+    if th:
+        n_max = max(by)
+        host += (f" Across threads (wall time, N = {n_max}): surrogate {th['surrogate']['batched_per_s']:,.0f}/s "
+                 f"(x{th['surrogate']['scaling']:.2f} over one thread), reference {th['reference']['batched_per_s']:,.1f}/s "
+                 f"(x{th['reference']['scaling']:.2f}): **{b['trajectories_per_s_batch_speedup_threads']:.1f}x**.")
+    cs = b.get("core_scaling")
+    if cs:
+        host += (f" What a second thread adds on this machine at all (`fluidfilm.perf.cores`, same run): a vectorised "
+                 f"FMA loop x{cs['vector_fma']:.2f}, a scalar latency chain x{cs['scalar_chain']:.2f}.")
     return _table(["N", "reference one by one", "reference batched", "surrogate one by one", "surrogate batched",
                    "surrogate / reference, batched"], rows) + "\n" + host + "\n"
 

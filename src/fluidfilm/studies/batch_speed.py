@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import datetime
 import math
+import os
 import time
 
 import numpy as np
 
 from fluidfilm import io, load_surrogate
 from fluidfilm.perf.benchmarking import machine
+from fluidfilm.perf.cores import core_scaling
 from fluidfilm.perf.throughput import trajectories_per_second
 from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
 from fluidfilm.workflow.config_check import ConfigError
@@ -25,7 +27,7 @@ OUTPUTS = {"out_json": [""]}
 
 def _repeat_rules(cfg) -> tuple[int, float, float]:
     """``threads_repeats`` (>= 1), ``threads_min_seconds`` and ``table_min_seconds`` (>= 0, finite), or a
-    ConfigError naming the value."""
+    ConfigError naming the value (``core_probe_seconds``, > 0, is checked here too)."""
     reps = cfg.get("threads_repeats", 3)
     if isinstance(reps, bool) or not isinstance(reps, int) or reps < 1:
         raise ConfigError(f"threads_repeats={reps}: one thread and all threads need at least one run each")
@@ -35,6 +37,9 @@ def _repeat_rules(cfg) -> tuple[int, float, float]:
         if isinstance(val, bool) or not isinstance(val, (int, float)) or not 0.0 <= float(val) < math.inf:
             raise ConfigError(f"{key}={val}: must be a finite number of seconds >= 0")
         seconds.append(float(val))
+    probe = cfg.get("core_probe_seconds", 0.5)
+    if isinstance(probe, bool) or not isinstance(probe, (int, float)) or not 0.0 < float(probe) < math.inf:
+        raise ConfigError(f"core_probe_seconds={probe}: must be a finite number of seconds > 0")
     return reps, seconds[0], seconds[1]
 
 
@@ -120,6 +125,12 @@ def run(cfg) -> dict:
                     "(N = 1, and the surrogate at every N) and of table_min_seconds of runs; threads section: wall time of one "
                     "thread and of all threads alternately, medians of at least threads_repeats runs each and "
                     "of threads_min_seconds of runs per model")
+    # what a second thread can add on this machine at all (perf/cores.py): a vector FMA loop and a scalar
+    # latency chain, alone and in every thread, right after the runs above (the same machine state)
+    n_thr = cfg.get("threads") or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                                   else (os.cpu_count() or 1))
+    if n_thr >= 2:
+        out["core_scaling"] = core_scaling(threads=int(n_thr), seconds=float(cfg.get("core_probe_seconds", 0.5)))
     out["trajectories_per_s_batch_speedup_threads"] = (threaded["surrogate"]["batched_per_s"]
                                                        / threaded["reference"]["batched_per_s"])
     out["batch_thread_scaling"] = min(t["scaling"] for t in threaded.values())
@@ -128,4 +139,7 @@ def run(cfg) -> dict:
           f"thread, {out['trajectories_per_s_batch_speedup_threads']:.1f}x across threads (scaling surrogate "
           f"{threaded['surrogate']['scaling']:.2f}x, reference {threaded['reference']['scaling']:.2f}x); "
           f"one trajectory alone: {out['trajectories_per_s_single_speedup']:.1f}x")
+    if "core_scaling" in out:
+        print(f"this machine's cores (perf/cores.py): a vector FMA loop scales {out['core_scaling']['vector_fma']:.2f}x, "
+              f"a scalar latency chain {out['core_scaling']['scalar_chain']:.2f}x on {n_thr} threads")
     return out

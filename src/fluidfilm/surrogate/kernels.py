@@ -1149,22 +1149,34 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
     passes[-1].append(len(L))
     # 2. each region's entries (state, weight), in state order; PA[p], PB[p]: where state p's results go
     # (every state has two entries, its second region's possibly the bucket nr that is never evaluated: 2 n)
-    L += [f"{ind1}start = si[6 * n:6 * n + {nr + 2}]", f"{ind1}fill = si[6 * n + {nr + 2}:6 * n + {2 * nr + 3}]",
+    L += [f"{ind1}start = si[6 * n:6 * n + {nr + 2}]",
           f"{ind1}ent = si[4 * n:6 * n]", f"{ind1}went = s64[3 * n:5 * n]",
           f"{ind1}YE1 = s64[5 * n:7 * n + 1]", f"{ind1}YE2 = s64[7 * n + 1:9 * n + 2]",
           f"{ind1}YE1[2 * n] = 0.0", f"{ind1}YE2[2 * n] = 0.0"]
     passes.append([len(L)])
-    L += [f"{ind1}for r in range({nr + 2}):", f"{ind1}    start[r] = 0",
-          f"{ind1}for p in range(n):",
-          f"{ind2}start[RA[p] + 1] += 1", f"{ind2}start[RB[p] + 1] += 1",
-          f"{ind1}for r in range({nr + 1}):", f"{ind1}    start[r + 1] += start[r]",
-          f"{ind1}for r in range({nr + 1}):", f"{ind1}    fill[r] = start[r]",
-          f"{ind1}for p in range(n):",
-          f"{ind2}k = fill[RA[p]]", f"{ind2}ent[k] = p", f"{ind2}went[k] = 1.0 - WB[p]", f"{ind2}fill[RA[p]] = k + 1",
-          f"{ind2}PA[p] = k",
-          f"{ind2}k = fill[RB[p]]", f"{ind2}ent[k] = p", f"{ind2}went[k] = WB[p]", f"{ind2}fill[RB[p]] = k + 1",
+    # a counting sort whose per-bucket counters are local variables (registers), one per bucket 0..nr
+    # (known here), chosen by selects: counters in an array (fill[RA[p]] += 1) chained every state through
+    # a store and a reload, 7.5 ns per state of the best-shaped kernel's ~45 ns per force
+    buckets = range(nr + 1)
+    L += [f"{ind1}c{b} = 0" for b in buckets]
+    L += [f"{ind1}for p in range(n):", f"{ind2}ra = RA[p]", f"{ind2}rb = RB[p]"]
+    L += [f"{ind2}c{b} += (1 if ra == {b} else 0) + (1 if rb == {b} else 0)" for b in buckets]
+    L += [f"{ind1}start[0] = 0"] + [f"{ind1}start[{b + 1}] = start[{b}] + c{b}" for b in buckets]
+    L += [f"{ind1}k{b} = start[{b}]" for b in buckets]
+
+    def pick(var: str, last: int) -> str:  # the counter of bucket var's value, of buckets 0..last
+        expr = f"k{last}"
+        for b in reversed(range(last)):
+            expr = f"k{b} if {var} == {b} else ({expr})"
+        return expr
+
+    L += [f"{ind1}for p in range(n):", f"{ind2}ra = RA[p]", f"{ind2}k = {pick('ra', nr - 1)}",
+          f"{ind2}ent[k] = p", f"{ind2}went[k] = 1.0 - WB[p]", f"{ind2}PA[p] = k"]
+    L += [f"{ind2}k{b} += 1 if ra == {b} else 0" for b in range(nr)]
+    L += [f"{ind2}rb = RB[p]", f"{ind2}k = {pick('rb', nr)}", f"{ind2}ent[k] = p", f"{ind2}went[k] = WB[p]",
           # the second region's result; none (the extra bucket, not evaluated): the zero after the last entry
-          f"{ind2}PB[p] = k if RB[p] < {nr} else start[{nr + 1}]"]
+          f"{ind2}PB[p] = k if rb < {nr} else start[{nr + 1}]"]
+    L += [f"{ind2}k{b} += 1 if rb == {b} else 0" for b in buckets]
     passes[-1].append(len(L))
     # 3. each region's network on tiles of its states
     o0 = f"{n_in + 5} * n"
