@@ -305,7 +305,7 @@ def force_cost(cfg) -> dict:
             "_batched_float64": lambda m: time_per_force_eval_batched(m, xb, vb, "float64")}
     load0 = os.getloadavg()[0]
     t: dict[str, list] = {f"{name}{arm}": [] for arm in arms for name in models}
-    for _ in range(3):  # interleaved: both see the same machine load
+    for _ in range(5):  # interleaved: both see the same machine load
         for arm, timed in arms.items():
             for name, model in models.items():
                 t[f"{name}{arm}"].append(timed(model))
