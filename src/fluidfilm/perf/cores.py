@@ -47,7 +47,7 @@ def _scalar_chain(x, reps):
 
 def _probe(kind: str, reps: int):
     if kind == "vector_fma":
-        arrays = {}
+        arrays: dict[int, np.ndarray] = {}
 
         def run(k: int) -> None:
             a = arrays.setdefault(k, np.ones(4096, dtype=np.float32))

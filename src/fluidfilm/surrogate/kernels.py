@@ -1257,7 +1257,8 @@ def _outline_passes(L: list[str], passes: list[list[int]]) -> str:
 
     def names(lines: list[str]) -> tuple[set[str], set[str]]:
         tree = ast.parse(textwrap.dedent("\n".join(lines)))
-        loaded, stored = set(), set()
+        loaded: set[str] = set()
+        stored: set[str] = set()
         for node in ast.walk(tree):
             if isinstance(node, ast.Name):
                 (stored if isinstance(node.ctx, ast.Store) else loaded).add(node.id)
