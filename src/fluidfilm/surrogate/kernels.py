@@ -863,7 +863,7 @@ def _workspace_terms(key) -> tuple[tuple[int, int], tuple[int, int], tuple[int, 
     n_in = 3 if key[2][0][1] >= 1 else 4
     nr = len(key[2])
     width = max([k for r in layout for (_, _, k, _) in r] + [1])
-    return (9, 2), (6, 2 * nr + 3), (n_in + 5, n_in * TILE + 3 * TILE + 2 * width * TILE + width)
+    return (9, 2), (6, nr + 2), (n_in + 5, n_in * TILE + 3 * TILE + 2 * width * TILE + width)
 
 
 def _workspace_sizes(key, n: int) -> tuple[int, int, int]:
@@ -1314,8 +1314,9 @@ def batch_kernel(key, dtype: str = "float64"):
                                      "silu_n": silu32 if f32 else silu64,
                                      "sigmoid_n": sigmoid32 if f32 else sigmoid64}
         exec(compile(source, f"<surrogate batch kernel {len(_COMPILED_BATCH)}>", "exec"), namespace)
+        jit = njit(error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)
         for name in [k for k in namespace if k.startswith("_pass")]:  # the passes, each compiled on its own
-            namespace[name] = njit(error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)(namespace[name])
-        fn = njit(error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)(namespace["batch_kernel"])
+            namespace[name] = jit(namespace[name])
+        fn = jit(namespace["batch_kernel"])
         _COMPILED_BATCH[(key, dtype)] = fn
     return fn
