@@ -77,6 +77,7 @@ bench: setup
 	$(PY) benchmarks/bench_conical.py
 	$(PY) benchmarks/bench_training_step.py
 	$(PY) benchmarks/bench_surrogate_kernels.py
+	$(PY) benchmarks/probe_thread_spread.py
 	$(PY) benchmarks/bench_universal_cost.py
 
 .PHONY: time-tests

@@ -206,7 +206,8 @@ def test_every_stage_may_write_what_its_study_writes(monkeypatch):
                                            ("threads_min_seconds=-1", "threads_min_seconds=-1"),
                                            ("threads_min_seconds=inf", "threads_min_seconds=inf"),
                                            ("table_min_seconds=-0.5", "table_min_seconds=-0.5"),
-                                           ("core_probe_seconds=0", "core_probe_seconds=0")])
+                                           ("core_probe_seconds=0", "core_probe_seconds=0"),
+                                           ("core_probe_interleaved_seconds=-1", "core_probe_interleaved_seconds=-1")])
 def test_batch_speed_refuses_bad_repeat_rules_before_any_timing(tmp_path, override, key):
     # surrogate_dir exists (an empty folder): the rule is refused before a model is loaded or a run timed
     proc = run_entry("batch_speed", override, f"surrogate_dir={tmp_path}", f"out_json={tmp_path / 'b.json'}")

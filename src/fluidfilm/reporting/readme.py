@@ -802,6 +802,12 @@ def render_batch_speed(reports: Path) -> str:
     if cs:
         host += (f" What a second thread adds on this machine at all (`fluidfilm.perf.cores`, same run): a vectorised "
                  f"FMA loop x{cs['vector_fma']:.2f}, a scalar latency chain x{cs['scalar_chain']:.2f}.")
+    during = b.get("core_scaling_during_runs")
+    if during:
+        lo, hi = during["vector_fma_range"]
+        host += (f" The same probes, short, before each pair of threads runs: vector FMA x{during['vector_fma_median']:.2f}"
+                 f" (median; x{lo:.2f} to x{hi:.2f}), scalar chain x{during['scalar_chain_median']:.2f}: the surrogate's"
+                 f" vector-bound networks can scale no better than the vector loop the host allows at the time.")
     return _table(["N", "reference one by one", "reference batched", "surrogate one by one", "surrogate batched",
                    "surrogate / reference, batched"], rows) + "\n" + host + "\n"
 
