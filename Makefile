@@ -148,10 +148,14 @@ train-time-full-scale: setup
 #   CURVE_BUDGET_S        per size of the curve, e.g. '{640000: 1800, 2560000: 1800}' (null: to the validation rule)
 #   FULL_SCALE_BUDGET_S   the full scale's single network and the split's eps < 0.7 networks (null: the rule)
 #   LM_BUDGET_S           the split's eps > 0.7 network by LM;  ADAM_BUDGET_S  the same network by Adam
+#   LM_DEVICE             null: J^T J in NumPy on every core; a torch device (cuda): float64 on it, equal to
+#                         round-off, continuing the same checkpoints (an epoch of the full scale: ~17 s on the
+#                         project's two cores)
+LM_DEVICE ?= null
 CURVE_BUDGET_S ?= null
 paper-scale-curve: setup
 	$(PY) experiments/paper_scale.py 'sizes=[160000,640000,2560000]' ablation.enabled=false \
-	    'size_budget_s=$(CURVE_BUDGET_S)' \
+	    'size_budget_s=$(CURVE_BUDGET_S)' protocol.device=$(LM_DEVICE) \
 	    cache_dir=models/paper_scale_curve out=reports/paper_scale_curve.json \
 	    figure=reports/figures/paper_scale_curve.png \
 	    'include_reports=[reports/paper_scale.json,reports/paper_full_scale.json]'
@@ -165,7 +169,8 @@ paper-full-scale: setup
 	    'full_scale.single.network_protocol={0: {max_time_s: $(FULL_SCALE_BUDGET_S)}}' \
 	    'full_scale.split.network_protocol={0: {max_time_s: $(FULL_SCALE_BUDGET_S)}, 1: {max_time_s: $(FULL_SCALE_BUDGET_S)}, 2: {max_time_s: $(LM_BUDGET_S)}}' \
 	    'full_scale.split_adam.network_protocol={0: {max_time_s: $(FULL_SCALE_BUDGET_S)}, 1: {max_time_s: $(FULL_SCALE_BUDGET_S)}, 2: {name: adam, batch_size: 4096, lr: 3.0e-3, threads: 2, max_time_s: $(ADAM_BUDGET_S)}}' \
-	    protocol.progress_every_s=0 cache_dir=models/paper_full_scale out=reports/paper_full_scale.json \
+	    protocol.progress_every_s=0 protocol.device=$(LM_DEVICE) cache_dir=models/paper_full_scale \
+	    out=reports/paper_full_scale.json \
 	    figure=reports/figures/paper_full_scale.png \
 	    'include_reports=[reports/paper_scale.json,reports/paper_scale_curve.json]'
 

@@ -230,23 +230,30 @@ class _Interrupt(Exception):
     pass
 
 
+def _die_at_call(monkeypatch, n_call: int):
+    """Make the NumPy normal equations raise (as Ctrl-C would) at their ``n_call``-th call, i.e. in the
+    middle of that epoch after the previous epoch's checkpoint; returns the real function."""
+    calls = {"n": 0}
+    real = protocol_module.normal_equations
+
+    def dies(*a, **k):
+        calls["n"] += 1
+        if calls["n"] == n_call:
+            raise _Interrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(protocol_module, "normal_equations", dies)
+    return real
+
+
 def test_an_interrupted_lm_run_resumes_from_its_checkpoint_to_the_uninterrupted_weights(tmp_path, monkeypatch,
                                                                                          capsys):
     data = _toy_data(1500, seed=4)
     whole = train_network_lm(data, n_hidden=10, seed=1, workers=1)
     assert whole["stop_reason"] == "validation" and whole["epochs"] > 12
     # the same run, two threads, stopped (as by Ctrl-C) in the middle of epoch 9 after its checkpoints
-    calls = {"n": 0}
-    real = protocol_module.normal_equations
-
-    def dies_at_epoch_9(*a, **k):
-        calls["n"] += 1
-        if calls["n"] == 9:
-            raise _Interrupt
-        return real(*a, **k)
-
+    real = _die_at_call(monkeypatch, 9)
     ck = tmp_path / "net.npz"
-    monkeypatch.setattr(protocol_module, "normal_equations", dies_at_epoch_9)
     with pytest.raises(_Interrupt):
         train_network_lm(data, n_hidden=10, seed=1, workers=2, checkpoint=ck)
     state = load_lm_checkpoint(ck)
@@ -274,6 +281,65 @@ def test_an_interrupted_lm_run_resumes_from_its_checkpoint_to_the_uninterrupted_
     other = train_network_lm(_toy_data(1500, seed=5), n_hidden=10, seed=1, checkpoint=ck)
     assert "belongs to other data" in capsys.readouterr().out
     assert not np.array_equal(other["layers"][0][0], whole["layers"][0][0])
+
+
+def test_the_torch_normal_equations_equal_the_numpy_ones_and_name_a_bad_device():
+    import torch
+
+    from fluidfilm.surrogate.levenberg_marquardt import TorchNormalEquations
+
+    rng = np.random.default_rng(11)
+    Z = rng.uniform(-1, 1, (3001, 4))
+    Y = rng.uniform(-1, 1, (3001, 2))
+    th = init_nguyen_widrow(4, 50, 2, rng)
+    want = normal_equations_dense(th, Z, Y, 50, chunk=1000)  # the plain J^T J from the whole Jacobian
+    got = TorchNormalEquations(Z, Y, 50, "cpu", chunk=700).normal_equations(th)  # uneven blocks on purpose
+    for a, b in zip(got, want):
+        np.testing.assert_allclose(a, b, rtol=1e-11, atol=1e-11 * np.abs(b).max())
+    assert TorchNormalEquations(Z, Y, 50, "cpu", chunk=999).sse(th) == pytest.approx(mlp_sse(th, Z, Y, 50), rel=1e-12)
+    with pytest.raises(ValueError, match="'gpu'"):
+        TorchNormalEquations(Z, Y, 50, "gpu")
+    if not torch.cuda.is_available():
+        with pytest.raises(ValueError, match="'cuda'.*no CUDA device"):
+            TorchNormalEquations(Z, Y, 50, "cuda")
+    with pytest.raises(ValueError, match="chunk"):
+        TorchNormalEquations(Z, Y, 50, "cpu", chunk=0)
+
+
+def test_lm_on_a_torch_device_takes_the_numpy_paths_steps_and_continues_its_checkpoint(tmp_path, monkeypatch):
+    data = _toy_data(1500, seed=4)
+    cpu = train_network_lm(data, n_hidden=10, seed=1, workers=1)
+    dev = train_network_lm(data, n_hidden=10, seed=1, device="cpu")
+    assert dev["device"] == "cpu" and cpu["device"] is None
+    for k in ("epochs", "best_epoch", "stop_reason"):
+        assert dev[k] == cpu[k], k
+    for (wa, ba), (wb, bb) in zip(cpu["layers"], dev["layers"]):
+        np.testing.assert_allclose(wb, wa, rtol=1e-7, atol=1e-9)
+        np.testing.assert_allclose(bb, ba, rtol=1e-7, atol=1e-9)
+    # a NumPy run stopped at epoch 9 continues on the device to the same end
+    real = _die_at_call(monkeypatch, 9)
+    ck = tmp_path / "net.npz"
+    with pytest.raises(_Interrupt):
+        train_network_lm(data, n_hidden=10, seed=1, checkpoint=ck)
+    monkeypatch.setattr(protocol_module, "normal_equations", real)
+    moved = train_network_lm(data, n_hidden=10, seed=1, checkpoint=ck, device="cpu")
+    assert moved["epochs"] == cpu["epochs"] and moved["best_epoch"] == cpu["best_epoch"]
+    np.testing.assert_allclose(moved["layers"][0][0], cpu["layers"][0][0], rtol=1e-7, atol=1e-9)
+
+
+def test_the_recipe_version_still_describes_the_code_that_trains():
+    # The records and LM checkpoints of studies.paper_scale (hours of training, committed) are keyed by
+    # RECIPE_VERSION, not by the code's bytes. These are the results of this whole run made with the code of
+    # 2026-12-04 (commit 4208c0e, the version's value): if the code now ends elsewhere, the weights a cached
+    # record stands for are not what this code would train, and RECIPE_VERSION needs a new value (and this
+    # test the new numbers).
+    res = train_network_lm(_toy_data(1500, seed=4), n_hidden=10, seed=1, workers=1)
+    assert (res["epochs"], res["best_epoch"]) == (302, 296)
+    assert res["val_mse"] == pytest.approx(2.5582256552756333e-06, rel=1e-6)
+    assert res["test_mse"] == pytest.approx(3.0911112339401146e-06, rel=1e-6)
+    W1 = res["layers"][0][0]
+    assert float(W1.sum()) == pytest.approx(-2.1643408021509445, rel=1e-6)
+    assert float(np.abs(W1).sum()) == pytest.approx(15.756477940901302, rel=1e-6)
 
 
 def test_min_max_map_after_a_constant_force_factor_is_the_papers_map():

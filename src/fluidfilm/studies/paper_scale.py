@@ -138,18 +138,16 @@ def verdicts(rows: list[dict], structure: str) -> dict:
 
 # --------------------------------------------------------------------------- one model
 def point_key(point: Mapping, protocol: Mapping, meta: Mapping, seed: int) -> str:
-    """What one model's record depends on (the data's content, the point, the protocol, the code)."""
-    from fluidfilm.surrogate import levenberg_marquardt, protocol as protocol_module, scaling
-
-    code = hashlib.sha256()
-    for module in (levenberg_marquardt, protocol_module, scaling):
-        code.update(Path(str(module.__file__)).read_bytes())
-    # the threads and the progress lines do not change the weights
-    proto = {k: v for k, v in protocol.items() if k not in ("workers", "progress_every_s", "threads")}
+    """What one model's record depends on (the data's content, the point, the protocol, the code: the
+    training recipe's version, ``surrogate.protocol.RECIPE_VERSION``)."""
+    from fluidfilm.surrogate.protocol import RECIPE_VERSION
+    # the threads and the progress lines do not change the weights; the device changes them by round-off
+    # only, and a run continues on another device from the same checkpoint (the record says which device)
+    proto = {k: v for k, v in protocol.items() if k not in ("workers", "progress_every_s", "threads", "device")}
     # the label names the record, the key what it is: the same model under two labels is trained once
     pt = {k: v for k, v in point.items() if k != "label"}
     what = {"parts": meta.get("parts"), "config_hash": meta.get("config_hash"), "point": pt,
-            "protocol": proto, "seed": int(seed), "code": code.hexdigest()}
+            "protocol": proto, "seed": int(seed), "code": RECIPE_VERSION}
     return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -205,7 +203,7 @@ def train_point(frame, meta, point: Mapping, protocol: Mapping, seed: int, ckpt_
 
 def _net_summary(n: Mapping) -> dict:
     keys = ("eps_low", "eps_high", "n_train", "epochs", "best_epoch", "stop_reason", "train_time_s", "val_mse",
-            "test_mse", "val_rel_rmse", "test_rel_rmse")
+            "test_mse", "val_rel_rmse", "test_rel_rmse", "device")
     out = {k: n.get(k) for k in keys}
     if out["eps_high"] is not None and math.isinf(out["eps_high"]):
         out["eps_high"] = None

@@ -175,11 +175,8 @@ def normal_equations(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: 
     n_tot, n_in = Z.shape
     n_out = Y.shape[1]
     W1, b1, W2, b2 = unpack(theta, n_in, n_hidden, n_out)
-    P = theta.shape[0]
     m = n_in + 1
     ns = n_hidden * m
-    sidx = _shared_index(n_in, n_hidden)
-    own0 = n_hidden * n_in + n_hidden
     nv = ns + n_hidden + 1
     chunk = int(chunk)
     if chunk < 1:
@@ -214,6 +211,18 @@ def normal_equations(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: 
         Je_o += jo_b
         sse += sse_b
     V = np.triu(V) + np.triu(V, 1).T
+    return _assemble(V, Je_s, Je_o, theta, n_in, n_hidden, n_out) + (sse,)
+
+
+def _assemble(V: np.ndarray, Je_s: np.ndarray, Je_o: np.ndarray, theta: np.ndarray, n_in: int, n_hidden: int,
+              n_out: int) -> tuple[np.ndarray, np.ndarray]:
+    """J^T J and J^T e from [U, E]^T [U, E] (``V``, whole), U^T (d r) (``Je_s``) and E^T e (``Je_o``)."""
+    _, _, W2, _ = unpack(theta, n_in, n_hidden, n_out)
+    P = theta.shape[0]
+    m = n_in + 1
+    ns = n_hidden * m
+    sidx = _shared_index(n_in, n_hidden)
+    own0 = n_hidden * n_in + n_hidden
     A, UE, OO = V[:ns, :ns], V[:ns, ns:], V[ns:, ns:]
     wj = np.repeat(np.arange(n_hidden), m)  # neuron of each shared weight (j, i)
     JtJ = np.zeros((P, P))
@@ -227,7 +236,106 @@ def normal_equations(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: 
         JtJ[np.ix_(sidx, ok)] = SO
         JtJ[np.ix_(ok, sidx)] = SO.T
         Jte[ok] = Je_o[:, k]
-    return JtJ, Jte, sse
+    return JtJ, Jte
+
+
+class TorchNormalEquations:
+    """``normal_equations`` and ``mlp_sse`` in torch float64 on one device (a CUDA GPU, or "cpu").
+
+    The rows are copied to the device once; each call returns NumPy arrays, so ``levenberg_marquardt``
+    (its 352 x 352 Cholesky solves stay in NumPy) takes ``normal_equations`` and ``sse`` unchanged.  The
+    same structure as ``normal_equations`` ([U, E]^T [U, E] in one product per block of ``chunk`` rows,
+    here a general matrix product: torch has no symmetric rank-k update), summed in another order: the
+    results equal the NumPy path's to round-off, not bit for bit, so a run on a device and one on the
+    CPU take the same steps while no comparison of errors falls within round-off of a tie (the tests
+    compare both on a small problem).  Why: at the paper's full scale (3.2 M training rows) an epoch is
+    ~17 s on this project's two cores and the validation rule needs thousands of them; a GPU does an epoch
+    in well under a second.
+
+    Parameters
+    ----------
+    Z, Y : array_like
+        Inputs (n, in) and targets (n, out).
+    n_hidden : int
+        Hidden neurons.
+    device : str
+        A torch device: "cuda", "cuda:1", "cpu", ...  A CUDA device torch cannot see is refused by name.
+    chunk : int, default 262144
+        Rows per block (a block holds chunk x (n_hidden (in + 2) + 1) float64: 630 MB at the default).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> Z, Y = rng.uniform(-1, 1, (500, 4)), rng.uniform(-1, 1, (500, 2))
+    >>> th = init_nguyen_widrow(4, 8, 2, rng)
+    >>> a = normal_equations(th, Z, Y, 8)
+    >>> b = TorchNormalEquations(Z, Y, 8, "cpu").normal_equations(th)
+    >>> bool(np.allclose(a[0], b[0], rtol=1e-12, atol=1e-12 * abs(a[0]).max()))
+    True
+    """
+
+    def __init__(self, Z, Y, n_hidden: int, device: str, chunk: int = 262144):
+        import torch
+
+        try:
+            dev = torch.device(device)
+        except (RuntimeError, TypeError) as err:
+            raise ValueError(f"device={device!r} is not a torch device (e.g. 'cuda', 'cuda:0', 'cpu'): {err}") from None
+        if dev.type == "cuda" and not torch.cuda.is_available():
+            raise ValueError(f"device={device!r}: torch sees no CUDA device here (torch {torch.__version__}); "
+                             f"use device null for the NumPy path")
+        if dev.type == "cuda" and dev.index is not None and dev.index >= torch.cuda.device_count():
+            raise ValueError(f"device={device!r}: torch sees {torch.cuda.device_count()} CUDA device(s)")
+        if int(chunk) < 1:
+            raise ValueError(f"chunk must be a positive number of rows, got {chunk!r}")
+        self._torch = torch
+        self.device = dev
+        self.chunk = int(chunk)
+        self.n_hidden = int(n_hidden)
+        self.Z = torch.as_tensor(np.ascontiguousarray(Z, dtype=np.float64), device=dev)
+        self.Y = torch.as_tensor(np.ascontiguousarray(Y, dtype=np.float64), device=dev)
+        self.n_in, self.n_out = self.Z.shape[1], self.Y.shape[1]
+
+    def _weights(self, theta):
+        W1, b1, W2, b2 = unpack(np.asarray(theta, dtype=np.float64), self.n_in, self.n_hidden, self.n_out)
+        return [self._torch.as_tensor(np.ascontiguousarray(w), device=self.device) for w in (W1, b1, W2, b2)]
+
+    def normal_equations(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """(J^T J, J^T e, sum e^2), as ``normal_equations``."""
+        torch = self._torch
+        W1, b1, W2, b2 = self._weights(theta)
+        h, m = self.n_hidden, self.n_in + 1
+        nv = h * m + h + 1
+        V = torch.zeros((nv, nv), dtype=torch.float64, device=self.device)
+        Je_s = torch.zeros((h, m), dtype=torch.float64, device=self.device)
+        Je_o = torch.zeros((h + 1, self.n_out), dtype=torch.float64, device=self.device)
+        sse = torch.zeros((), dtype=torch.float64, device=self.device)
+        for s0 in range(0, self.Z.shape[0], self.chunk):
+            z = self.Z[s0:s0 + self.chunk]
+            n = z.shape[0]
+            ones = torch.ones((n, 1), dtype=torch.float64, device=self.device)
+            H = torch.tanh(z @ W1.T + b1)
+            e = H @ W2.T + b2 - self.Y[s0:s0 + self.chunk]
+            D = 1.0 - H * H
+            zt = torch.cat([z, ones], dim=1)
+            # columns (neuron j, input i) in the order of ``_shared_index``, then [h, 1]
+            UE = torch.cat([(D[:, :, None] * zt[:, None, :]).reshape(n, h * m), H, ones], dim=1)
+            V += UE.T @ UE
+            Je_s += (D * (e @ W2)).T @ zt
+            Je_o += UE[:, h * m:].T @ e
+            sse += (e * e).sum()
+        JtJ, Jte = _assemble(V.cpu().numpy(), Je_s.cpu().numpy(), Je_o.cpu().numpy(),
+                             np.asarray(theta, dtype=np.float64), self.n_in, h, self.n_out)
+        return JtJ, Jte, float(sse)
+
+    def sse(self, theta: np.ndarray) -> float:
+        """Sum of squared errors, as ``mlp_sse``."""
+        W1, b1, W2, b2 = self._weights(theta)
+        total = self._torch.zeros((), dtype=self._torch.float64, device=self.device)
+        for s0 in range(0, self.Z.shape[0], self.chunk):
+            e = self._torch.tanh(self.Z[s0:s0 + self.chunk] @ W1.T + b1) @ W2.T + b2 - self.Y[s0:s0 + self.chunk]
+            total += (e * e).sum()
+        return float(total)
 
 
 def normal_equations_dense(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: int, chunk: int = 8192):

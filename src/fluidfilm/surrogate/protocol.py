@@ -48,11 +48,21 @@ from fluidfilm.data.schema import relative_force_errors
 from fluidfilm.surrogate.fit import regions
 from fluidfilm.surrogate.inference import SurrogateForceModel
 from fluidfilm.surrogate.levenberg_marquardt import (FINAL_REASONS, LMResult, LMSettings, init_nguyen_widrow,
-                                                    levenberg_marquardt, mlp_forward, mlp_sse, normal_equations,
+                                                    TorchNormalEquations, levenberg_marquardt, mlp_forward, mlp_sse,
+                                                    normal_equations,
                                                     resolve_workers, unpack)
 from fluidfilm.surrogate.scaling import Scaling
 
 PROTOCOLS = ("paper", "adam")
+
+#: What the weights of a network trained here depend on in the code, for the caches of runs that take hours
+#: (``studies.paper_scale`` keys its records and LM checkpoints by it, with the data, the point and the
+#: protocol). Give it a new value with any change to this module, ``levenberg_marquardt`` or ``scaling``
+#: that changes the weights a run ends with; ``tests/test_protocol.py`` pins the result of a whole LM run made
+#: with the code of 2026-12-04 to catch one made without it. Its value is the SHA-256 of those three files as
+#: they were then: the key the records and checkpoints committed before it were made with (until then the
+#: key hashed the files' bytes, so a comment or a new device path would have discarded hours of training).
+RECIPE_VERSION = "2b173f1572a32c2c0a8d49bc882ea4223fa9feb2041032dcb363dccc0a3e0acc"
 INPUTS = ["X1", "X2", "V1", "V2"]
 OUTPUTS = ["F1", "F2"]
 
@@ -224,7 +234,7 @@ def load_lm_checkpoint(path) -> dict | None:
 def train_network_lm(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_fail: int = 6,
                      settings: LMSettings | None = None, chunk: int = 8192, workers: int | None = 1,
                      checkpoint: str | Path | None = None, progress_every_s: float | None = None,
-                     label: str = "lm") -> dict:
+                     label: str = "lm", device: str | None = None) -> dict:
     """Levenberg-Marquardt on the training rows, stopped by the validation rule; the best epoch's weights.
 
     ``workers`` threads accumulate J^T J (None or 0: every core; the weights do not depend on it).
@@ -234,6 +244,9 @@ def train_network_lm(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_f
     ends with (a checkpoint of other data or settings is not used: the run starts afresh).
     ``progress_every_s``: a progress line at most this often (0: every epoch; None: silent), with
     the time per epoch and bounds on the rest.
+    ``device``: None, the NumPy path (``workers`` threads); or a torch device ("cuda", "cpu", ...) on
+    which J^T J and the errors are computed in float64 (``TorchNormalEquations``: equal to the NumPy path
+    to round-off; the checkpoint is the same either way, so a run continues on another device).
     """
     z_tr, y_tr = data.z["train"], data.y["train"]
     z_va, y_va = data.z["val"], data.y["val"]
@@ -289,14 +302,22 @@ def train_network_lm(data: NetworkData, n_hidden: int = 50, seed: int = 0, max_f
         res = LMResult(start["theta"], int(start["epoch"]), start["reason"], math.nan, float(start["wall_s"]),
                        list(start["history"]))
     else:
-        res = levenberg_marquardt(theta0, lambda t: normal_equations(t, z_tr, y_tr, n_hidden, chunk, workers),
-                                  lambda t: mlp_sse(t, z_tr, y_tr, n_hidden, workers=workers), y_tr.size, s,
-                                  on_epoch, start, on_checkpoint)
+        if device is None:
+            def normal_eq(t):
+                return normal_equations(t, z_tr, y_tr, n_hidden, chunk, workers)
+
+            def sse_fn(t):
+                return mlp_sse(t, z_tr, y_tr, n_hidden, workers=workers)
+        else:
+            on_device = TorchNormalEquations(z_tr, y_tr, n_hidden, device)
+            normal_eq, sse_fn = on_device.normal_equations, on_device.sse
+        res = levenberg_marquardt(theta0, normal_eq, sse_fn, y_tr.size, s, on_epoch, start, on_checkpoint)
     hist["train_mse"] = [h["sse"] / y_tr.size for h in res.history]
     theta = stop.best_weights if stop.best_weights is not None else res.theta
     out = _finish(data, _layers(theta, n_in, n_hidden, n_out), res.epochs, stop.best_epoch, res.stop_reason,
                   res.wall_s, hist)
     out["workers"] = workers
+    out["device"] = device
     return out
 
 
@@ -424,8 +445,8 @@ def train_protocol_model(frame: pd.DataFrame, meta: dict, protocol: Mapping, bou
     """Train a single (no boundaries) or split model under ``protocol`` on one subsample and division.
 
     ``protocol``: {"name": "paper" | "adam", "fractions": [...], "max_fail", "max_epochs", "max_time_s",
-    for paper "workers" (threads accumulating J^T J, None: every core), "progress_every_s" (None:
-    silent), and for adam "lr", "batch_size"}.  ``log_network(r, result)`` is called after each network.
+    for paper "workers" (threads accumulating J^T J, None: every core), "device" (None: NumPy; a torch
+    device such as "cuda": J^T J on it, ``train_network_lm``), "progress_every_s" (None: silent), and for adam "lr", "batch_size"}.  ``log_network(r, result)`` is called after each network.
     ``scaling``: the networks' map (``network_data``; default the paper's min-max).  ``extra_rows``:
     rows (the dataset's columns) added to the subsample before the division.  ``checkpoint_dir``:
     with the paper protocol, each network checkpoints there after every epoch
@@ -481,7 +502,7 @@ def _train_protocol_model(frame, meta, protocol, boundaries, seed, n_samples, na
                                   min_grad=float(protocol.get("min_grad", 1e-7)))
             ckpt = None if checkpoint_dir is None else Path(checkpoint_dir) / f"network{r}.npz"
             res = train_network_lm(data, settings=settings, chunk=int(protocol.get("chunk", 8192)),
-                                   workers=protocol.get("workers"), checkpoint=ckpt,
+                                   workers=protocol.get("workers"), checkpoint=ckpt, device=protocol.get("device"),
                                    progress_every_s=protocol.get("progress_every_s"),
                                    label=f"{name} network {r} (eps {lo:g}-{hi:g})", **common)
         else:

@@ -159,6 +159,7 @@ class PaperProtocolSchema(_ProtocolSchema):
     min_grad: float = MISSING
     chunk: int = MISSING
     workers: Optional[int] = MISSING
+    device: Optional[str] = MISSING
     progress_every_s: Optional[float] = MISSING
 
 
