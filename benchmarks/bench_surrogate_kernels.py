@@ -44,6 +44,7 @@ from fluidfilm.perf.benchmarking import machine, median_seconds, write_benchmark
 from fluidfilm.perf.speed import best_shaped_surrogate, paper_shaped_surrogate, sample_states
 from fluidfilm.perf.throughput import trajectories_per_second
 from fluidfilm.surrogate.ensemble import EnsembleForceModel
+from fluidfilm.rotor import LinearBearing
 from fluidfilm.surrogate.kernels import tanh32, tanh64
 
 SIZES = (1, 64, 1024, 65536)
@@ -139,7 +140,9 @@ def batch_trajectories(model, reference, label: str, quick: bool) -> None:
     arms = [("reference (graded)", reference, {"stage_batched": True}),
             ("surrogate f32", model, {"precision": "float32", "stage_batched": True}),
             ("surrogate f64", model, {"precision": "float64", "stage_batched": True}),
-            ("surrogate lockstep (before)", model, {"stage_batched": False})]
+            ("surrogate lockstep (before)", model, {"stage_batched": False}),
+            # a spring and a damper: a force costing ~0.4 ns, so its time per force is the integrator's own
+            ("linear bearing (integrator)", LinearBearing(reference.bearing, 1e7, 1e3), {"stage_batched": True})]
     header = ["arm", "threads", "trajectories/s", "ns per force", "n_ok", "vs reference"]
     rows = []
     ref_rate = {}

@@ -167,19 +167,28 @@ def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_step
 _rk4_batch_uncached = _uncached(_rk4_batch, _rk4_step=_rk4_step_uncached)
 
 
-@njit(cache=True, nogil=True)
-def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok, xsb, vsb, fsb, rows):
+@njit(cache=True, nogil=True, error_model="numpy")
+def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok, xsb, vsb, fsb, rows, sx1, sx2,
+                   sv1, sv2):
     """One RK4 stage of the m entries ``act[:m]`` (``ident``: entries 0..m-1) at the stage states q and times
     tq: the film forces in ONE call ``fn(bp, xs, vs, fs)`` of the states inside the clearance (column-major
     (r, 2) views of the flat buffers xsb, vsb, fsb), then
     ``_acceleration``'s arithmetic per entry (the same expressions, so the same bits for the same forces).
     ``C[k, j]``: entry j's constants (``simulate_batch``'s ``consts`` per column).  cos/sin(omega t) are
-    computed once per distinct phase: every entry without substeps shares its time."""
+    computed once per distinct phase: every entry without substeps shares its time.
+
+    The stage states are views of the kernel's buffers (``_substep``: qx1 = xsb[:m], qx2 = xsb[m:2m], qv1,
+    qv2 likewise in vsb), so when every state lies inside the clearance (the rule) the kernel reads them where
+    the stage wrote them: no copy (copying them cost ~1.2 ns per force, a scalar loop). Otherwise they are
+    copied out to the scratch rows s* and the states inside gathered back, in order."""
     r = 0
     inside = 0
     for i in range(m):
         j = i if ident else act[i]
         inside += 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
+    if inside < m:
+        for i in range(m):
+            sx1[i], sx2[i], sv1[i], sv2[i] = qx1[i], qx2[i], qv1[i], qv2[i]
     # the kernel's (inside, 2) states and forces as column-major views of flat buffers (component k of entry
     # r at k * inside + r): its per-state loops then read and write each component contiguously, which a
     # surrogate's frame pass needs to run as a vector loop (interleaved rows: 10 ns per state, against 2.5)
@@ -187,22 +196,21 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
     vs = vsb[:2 * inside].reshape((2, inside)).T
     fs = fsb[:2 * inside].reshape((2, inside)).T
     if inside == m:
-        # every state inside the clearance (the rule): gathered without a branch
+        # every state inside the clearance: already in place
         for i in range(m):
-            xs[i, 0], xs[i, 1], vs[i, 0], vs[i, 1] = qx1[i], qx2[i], qv1[i], qv2[i]
             ok[i] = True
             rows[i] = i
         r = m
     else:
         for i in range(m):
             j = i if ident else act[i]
-            x1, x2 = qx1[i], qx2[i]
+            x1, x2 = sx1[i], sx2[i]
             if x1 * x1 + x2 * x2 >= C[6, j]:
                 ok[i] = False  # outside the clearance: no force, acceleration 0, the step fails (as _acceleration)
                 rows[i] = -1
                 continue
             ok[i] = True
-            xs[r, 0], xs[r, 1], vs[r, 0], vs[r, 1] = x1, x2, qv1[i], qv2[i]
+            xs[r, 0], xs[r, 1], vs[r, 0], vs[r, 1] = x1, x2, sv1[i], sv2[i]
             rows[i] = r
             r += 1
     if r > 0:
@@ -245,7 +253,7 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
         ay[i] = (f2 + sgn * unb * sph + g2) * inv_m
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def _late_stage(f, p1, p2, q1, q2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq):
     """Stage states 3 (f = 0.5: P = a, Q = b) and 4 (f = 1: P = b, Q = c) of RK4: position X + f h (V + h/2 P),
     velocity V + f h Q, time T + f h; ``_rk4_step``'s expressions (f h = h exactly for f = 1)."""
@@ -258,25 +266,28 @@ def _late_stage(f, p1, p2, q1, q2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1,
         qv1[i], qv2[i], tq[i] = V1[j] + f * h * q1[i], V2[j] + f * h * q2[i], T[j] + f * h
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _substep(fn, bp, C, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE, qx1, qx2, qv1, qv2, tq, a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs, rows):
     """Substep ``sub`` of the entries ``act[:m]`` (``ident``: every entry, none substepping): four stages and
-    the update, ``_rk4_step``'s arithmetic per entry."""
+    the update, ``_rk4_step``'s arithmetic per entry.  The stage states are written into the kernel's flat
+    buffers xs, vs (``_accelerations``); qx1, qx2, qv1, qv2 as passed are its scratch rows."""
+    sx1, sx2, sv1, sv2 = qx1, qx2, qv1, qv2
+    qx1, qx2, qv1, qv2 = xs[:m], xs[m:2 * m], vs[:m], vs[m:2 * m]
     # stage 1: the state itself
     for i in range(m):
         j = i if ident else act[i]
         qx1[i], qx2[i], qv1[i], qv2[i], tq[i] = X1[j], X2[j], V1[j], V2[j], T[j]
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, a1, a2, ok1, xs, vs, fs, rows)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, a1, a2, ok1, xs, vs, fs, rows, sx1, sx2, sv1, sv2)
     for i in range(m):
         j = i if ident else act[i]
         h = dt / K[j]
         qx1[i], qx2[i] = X1[j] + 0.5 * h * V1[j], X2[j] + 0.5 * h * V2[j]
         qv1[i], qv2[i], tq[i] = V1[j] + 0.5 * h * a1[i], V2[j] + 0.5 * h * a2[i], T[j] + 0.5 * h
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, b1, b2, ok2, xs, vs, fs, rows)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, b1, b2, ok2, xs, vs, fs, rows, sx1, sx2, sv1, sv2)
     _late_stage(0.5, a1, a2, b1, b2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, c1, c2, ok3, xs, vs, fs, rows)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, c1, c2, ok3, xs, vs, fs, rows, sx1, sx2, sv1, sv2)
     _late_stage(1.0, b1, b2, c1, c2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, d1, d2, ok4, xs, vs, fs, rows)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, d1, d2, ok4, xs, vs, fs, rows, sx1, sx2, sv1, sv2)
     for i in range(m):
         j = i if ident else act[i]
         k = K[j]
@@ -307,7 +318,7 @@ def _substep(fn, bp, C, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2,
         T[j] = t0 + (step + (sub + 1.0) / k) * dt if upd else T[j]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop, eps_substep, max_substeps,
                 out_x, out_v, n_rec, status, t_stop, n_evals):
     """RK4 of N trajectories with the force model evaluated once per stage for all running ones.
