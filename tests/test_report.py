@@ -303,3 +303,26 @@ def test_paper_scale_keys_join_the_runs_beyond_the_pipeline_with_the_pipelines_o
     assert m["satisfactory_cases_split_160000"] == 1 and m["converged_split_160000"] == 1.0
     assert m["equilibrium_offset_pct_c_split_full_scale"] == 40.0 and "machine" not in m
     assert paper_scale_all_metrics(None, [full]) == full and paper_scale_all_metrics(None) == {}
+
+
+def test_the_pipeline_time_says_which_stages_its_total_leaves_out(tmp_path):
+    from fluidfilm.reporting.readme import render_commands, render_reproduce_timing
+
+    (tmp_path / "dvc.yaml").write_text("stages:\n  dataset:\n    cmd: a\n  train_best_seeds:\n    cmd: b\n"
+                                       "  universal_train:\n    cmd: c\n")
+    reports = tmp_path / "reports"
+    reports.mkdir()
+    timing = {"full": {"date": "2026-12-01", "machine": "m", "stages_total_s": 600.0,
+                       "stages": {"dataset": 300.0, "train_best_seeds@1": 300.0}}}
+    (reports / "reproduce_timing.json").write_text(json.dumps(timing))
+    (reports / "test_timing.json").write_text(json.dumps({"setup_s": 60, "suite_s": 600, "tests": 10, "skipped": 0,
+                                                          "quick_reproduce_s": 100, "commit": "abc", "date": "d"}))
+    text = render_commands(reports)
+    assert "more than 10 min" in text and "not timed" in text
+    per_stage = render_reproduce_timing(reports)
+    assert "`universal_train`" in per_stage and "`train_best_seeds`" not in per_stage.split("not timed")[1]
+    # every stage timed: the total, plainly
+    timing["full"]["stages"]["universal_train"] = 120.0
+    timing["full"]["stages_total_s"] = 720.0
+    (reports / "reproduce_timing.json").write_text(json.dumps(timing))
+    assert "| 12 min |" in render_commands(reports) and "not timed" not in render_reproduce_timing(reports)
