@@ -555,17 +555,22 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         raise ValueError(f"initial eccentricity of trajectory {int(np.argmax(eccentric))} is not below "
                          f"eps_stop={eps_stop}")
     omega = bearing.omega
-    # the per-rotor constants, once per distinct rotor (a batch of one rotor repeated is one row)
-    rows_of: dict[int, tuple] = {}
-    for rotor in rotor_list:
-        if id(rotor) not in rows_of:
-            u_final = rotor.imbalance if rotor.imbalance_final is None else rotor.imbalance_final
-            rows_of[id(rotor)] = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega,
-                                  float(rotor.imbalance_direction), rotor.external_force[0],
-                                  rotor.external_force[1] + rotor.mass * rotor.gravity, 0.0, u_final * omega**2,
-                                  rotor.ramp_time if rotor.imbalance_final is not None else 0.0)
-    consts = np.array([rows_of[id(rotor)] for rotor in rotor_list], dtype=float)
+    # the per-rotor constants, column by column (a row per trajectory: building rows of Python floats cost
+    # ~0.9 ms per 1024 rotors, ~1 % of a surrogate batch's run); the same IEEE operations as one rotor's
+    mass, imb, imb_final, direction, ext, gravity, ramp = (np.array(col, dtype=float) for col in zip(*[
+        (r.mass, r.imbalance, np.nan if r.imbalance_final is None else r.imbalance_final, r.imbalance_direction,
+         r.external_force, r.gravity, r.ramp_time) for r in rotor_list]))
+    ramped = ~np.isnan(imb_final)
+    consts = np.empty((n, 9))
+    consts[:, 0] = 1.0 / mass
+    consts[:, 1] = imb * omega**2
+    consts[:, 2] = omega
+    consts[:, 3] = direction
+    consts[:, 4] = ext[:, 0]
+    consts[:, 5] = ext[:, 1] + mass * gravity
     consts[:, 6] = c**2
+    consts[:, 7] = np.where(ramped, imb_final, imb) * omega**2
+    consts[:, 8] = np.where(ramped, ramp, 0.0)
     record_every = int(record_every)
     n_out = n_steps // record_every + 2
     # empty: the compiled loops write every row, the recorded ones and NaN past them (_fill_unrecorded)
