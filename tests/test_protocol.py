@@ -306,11 +306,20 @@ def test_the_torch_normal_equations_equal_the_numpy_ones_and_name_a_bad_device()
         TorchNormalEquations(Z, Y, 50, "cpu", chunk=0)
 
 
-def test_lm_on_a_torch_device_takes_the_numpy_paths_steps_and_continues_its_checkpoint(tmp_path, monkeypatch):
+def _torch_devices() -> list:
+    """torch's CPU, and a CUDA device where torch sees one (the route the full scale takes on a GPU)."""
+    import torch
+
+    return ["cpu"] + (["cuda"] if torch.cuda.is_available() else [])
+
+
+@pytest.mark.parametrize("device", _torch_devices())
+def test_lm_on_a_torch_device_takes_the_numpy_paths_steps_and_continues_its_checkpoint(tmp_path, monkeypatch,
+                                                                                        device):
     data = _toy_data(1500, seed=4)
     cpu = train_network_lm(data, n_hidden=10, seed=1, workers=1)
-    dev = train_network_lm(data, n_hidden=10, seed=1, device="cpu")
-    assert dev["device"] == "cpu" and cpu["device"] is None
+    dev = train_network_lm(data, n_hidden=10, seed=1, device=device)
+    assert dev["device"] == device and cpu["device"] is None
     for k in ("epochs", "best_epoch", "stop_reason"):
         assert dev[k] == cpu[k], k
     for (wa, ba), (wb, bb) in zip(cpu["layers"], dev["layers"]):
@@ -322,7 +331,7 @@ def test_lm_on_a_torch_device_takes_the_numpy_paths_steps_and_continues_its_chec
     with pytest.raises(_Interrupt):
         train_network_lm(data, n_hidden=10, seed=1, checkpoint=ck)
     monkeypatch.setattr(protocol_module, "normal_equations", real)
-    moved = train_network_lm(data, n_hidden=10, seed=1, checkpoint=ck, device="cpu")
+    moved = train_network_lm(data, n_hidden=10, seed=1, checkpoint=ck, device=device)
     assert moved["epochs"] == cpu["epochs"] and moved["best_epoch"] == cpu["best_epoch"]
     np.testing.assert_allclose(moved["layers"][0][0], cpu["layers"][0][0], rtol=1e-7, atol=1e-9)
 
