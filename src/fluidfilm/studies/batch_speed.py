@@ -109,6 +109,7 @@ def run(cfg) -> dict:
     # stayed at ~1.97 (2026-12-04, third session), so the surrogate's vector-bound scaling is judged against
     # what the host gave a vector loop during the same minutes, not at another hour
     during: dict = {"vector_fma": [], "scalar_chain": []}
+    probe_s = float(cfg.get("core_probe_interleaved_seconds", 0.03))
     def pending(name):
         return len(walls[(name, "one")]) < reps or sum(walls[(name, "one")]) + sum(walls[(name, "all")]) < min_s
 
@@ -116,8 +117,7 @@ def run(cfg) -> dict:
         for name, model in models.items():  # interleaved while both run: both see the same machine
             if pending(name):
                 if n_thr >= 2:
-                    probe = core_scaling(threads=int(n_thr), seconds=float(cfg.get("core_probe_interleaved_seconds", 0.03)),
-                                         repeats=1)
+                    probe = core_scaling(threads=int(n_thr), seconds=probe_s, repeats=1)
                     for kind in during:
                         during[kind].append(probe[kind])
                 for arm, th in (("one", 1), ("all", cfg.get("threads"))):
@@ -144,10 +144,10 @@ def run(cfg) -> dict:
     if n_thr >= 2:
         out["core_scaling"] = core_scaling(threads=int(n_thr), seconds=float(cfg.get("core_probe_seconds", 0.5)))
         out["core_scaling_during_runs"] = {
-            **{kind: vals for kind, vals in during.items()},
+            **during,
             **{f"{kind}_median": float(np.median(vals)) for kind, vals in during.items()},
             **{f"{kind}_range": [float(min(vals)), float(max(vals))] for kind, vals in during.items()},
-            "seconds": float(cfg.get("core_probe_interleaved_seconds", 0.03))}
+            "seconds": probe_s}
     out["trajectories_per_s_batch_speedup_threads"] = (threaded["surrogate"]["batched_per_s"]
                                                        / threaded["reference"]["batched_per_s"])
     out["batch_thread_scaling"] = min(t["scaling"] for t in threaded.values())
