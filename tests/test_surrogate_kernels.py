@@ -302,6 +302,61 @@ def test_the_float32_network_keeps_the_forces_within_1e_5_of_float64(name, kerne
     assert np.quantile(err / size, 0.999) < FLOAT32_REL  # and plainly relative but for a few states
 
 
+@pytest.mark.parametrize("name", sorted(_surrogates()))
+def test_the_one_state_kernel_with_float32_networks_stays_within_1e_5_of_float64_and_counts_alike(name):
+    """``force_kernel_at("float32")``: every surrogate shape (plain and damping structures, sleeve inputs,
+    relu/silu/sigmoid, one body or a branch per region), by the batched test's measure: relative to
+    max(|F|, the sample's RMS force).  The same states counted outside the domain (the prologue is shared),
+    and the parameters are the float64 kernel's (one vector, one setting, one counter)."""
+    model, sleeve = _surrogates()[name]
+    if sleeve is not None:
+        model.set_sleeve(sleeve)
+    X, V = sample_states(model.clearance, n=3000, eps_max=0.93, v_max=0.1, seed=12)
+    fn64, p64 = model.force_kernel
+    fn32, p32 = model.force_kernel_at("float32")
+    assert p32 is p64 and fn32 is not fn64 and fn32 is compiled_kernel(shape_key(model), "float32")
+    model.reset_domain_counter()
+    f64 = np.array([fn64(p64, *x, *v) for x, v in zip(X, V)])
+    n64 = model.n_outside_domain
+    model.reset_domain_counter()
+    f32 = np.array([fn32(p32, *x, *v) for x, v in zip(X, V)])
+    assert model.n_outside_domain == n64
+    size = np.linalg.norm(f64, axis=1)
+    rel = np.linalg.norm(f32 - f64, axis=1) / np.maximum(size, np.sqrt(np.mean(size**2)))
+    assert 0.0 < rel.max() < FLOAT32_REL, (name, rel.max())  # float32 indeed, and within the bound
+    assert model.force_kernel_at("float64")[0] is fn64
+    with pytest.raises(ValueError, match="precision must be 'float64' or 'float32', got 'float16'"):
+        model.force_kernel_at("float16")
+
+
+@pytest.mark.filterwarnings("ignore:.*outside the training domain:RuntimeWarning")
+def test_simulate_with_float32_networks_follows_the_float64_orbit_and_refuses_what_it_cannot_do():
+    """One trajectory through the float32 one-state kernel against float64 over a case-d start (the
+    batched path's float32 tolerance, 1e-4 c); a reference solver runs in float64 either way (same bits);
+    float32 with a speed schedule, or an unknown precision, is refused by name."""
+    from fluidfilm import ReynoldsSolver
+    from fluidfilm.rotor.model import SpeedSchedule
+
+    b = paper_bearing()
+    model = best_shaped_surrogate(b)
+    rotor = Rotor(mass=2.5, imbalance=5e-4)
+    x0 = np.array([0.2 * b.clearance, -0.3 * b.clearance])
+    a = simulate(model, rotor, t_end=0.04, x0=x0, record_every=10)
+    c = simulate(model, rotor, t_end=0.04, x0=x0, record_every=10, precision="float32")
+    assert a.status == c.status == "ok" and a.n_force_evals == c.n_force_evals
+    dx = np.abs(c.x - a.x).max() / b.clearance
+    assert 0.0 < dx < 1e-4, dx
+    solver = ReynoldsSolver(b, 16, 8)
+    r64 = simulate(solver, rotor, t_end=0.002, x0=x0)
+    r32 = simulate(solver, rotor, t_end=0.002, x0=x0, precision="float32")
+    np.testing.assert_array_equal(r32.x, r64.x)
+    with pytest.raises(ValueError, match="precision must be 'float64' or 'float32', got 'half'"):
+        simulate(model, rotor, t_end=0.001, precision="half")
+    ramp = SpeedSchedule([0.0, 0.01], [0.5 * b.omega, b.omega])
+    with pytest.raises(ValueError, match="precision='float32' runs at constant speed only"):
+        simulate(model, rotor, t_end=0.001, precision="float32", speed=ramp)
+
+
 @pytest.mark.parametrize("dtype", ["float64", "float32"])
 def test_a_thread_workspace_gives_the_same_forces_and_counts_as_per_call_scratch(dtype):
     """``with_workspace``: the kernel's scratch from the thread's workspace gives the bits of its per-call

@@ -2,7 +2,8 @@
 
 Never imported at run time; ``mypy`` (``make lint``) checks these assignments: a model that
 misses a member of ``ForceModel`` / ``AdjustableForceModel`` / ``BatchSettable`` / ``BatchForceModel`` /
-``LinearPressureModel`` or gets a signature wrong fails it.
+``LinearPressureModel`` / ``PrecisionKernelModel`` / ``SpeedScalableModel`` or gets a signature wrong
+fails it.
 """
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from fluidfilm.surrogate.ensemble import EnsembleForceModel, HybridForceModel
     from fluidfilm.core.force_model import (AdjustableForceModel, BatchForceModel, BatchSettable, ForceModel,
-                                            LinearPressureModel, SpeedScalableModel)
+                                            LinearPressureModel, PrecisionKernelModel, SpeedScalableModel)
     from fluidfilm.reynolds import ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
     from fluidfilm.reynolds.feed import GroovedReynoldsSolver
     from fluidfilm.reynolds.sparse_reference import SparseReferenceModel
@@ -39,6 +40,9 @@ if TYPE_CHECKING:
     def _speed_scalable_models(a: ReynoldsSolver, d: SurrogateForceModel, e: LinearBearing,
                                u: UniversalBearingModel) -> list[SpeedScalableModel]:
         return [a, d, e, u]
+
+    def _precision_kernel_models(d: SurrogateForceModel, u: UniversalBearingModel) -> list[PrecisionKernelModel]:
+        return [d, u]
 
     def _linear_pressure_models(a: ReynoldsSolver, c: ConicalReynoldsSolver) -> list[LinearPressureModel]:
         return [a, c]

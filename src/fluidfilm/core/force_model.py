@@ -23,8 +23,9 @@ The members:
   from now on / say how many there were (``None`` when none, or when the model is valid everywhere).
 
 Optional: ``BatchForceModel`` (a kernel of many states at once, which ``simulate_batch`` calls once
-per RK4 stage for the whole batch), ``BatchSettable`` (a per-trajectory control setting) and
-``SpeedScalableModel`` (the force at any shaft speed: run-ups).
+per RK4 stage for the whole batch), ``BatchSettable`` (a per-trajectory control setting),
+``PrecisionKernelModel`` (a one-state kernel with float32 networks) and ``SpeedScalableModel`` (the force
+at any shaft speed: run-ups).
 
 Adding a model: see docs/adding_a_model.md.
 """
@@ -216,6 +217,28 @@ class BatchForceModel(Protocol):
                            private: bool = False) -> tuple[BatchForceKernel, Any] | None: ...
 
     def merge_counts(self, bparams: Any) -> None: ...
+
+
+@runtime_checkable
+class PrecisionKernelModel(Protocol):
+    """A force model whose one-state kernel can run its networks in float32 (``simulate(precision=...)``).
+
+    ``force_kernel_at(precision)`` -> ``(fn, params)`` with ``force_kernel``'s signature: "float64" is
+    ``force_kernel`` itself, "float32" the networks in single precision (forces within 1e-5 relative of
+    float64; the frame, gains and blend stay float64), sharing the parameters, setting and counter.  A
+    model without it (a reference solver, an ensemble) computes in float64 whatever the precision asked.
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import PrecisionKernelModel
+    >>> from fluidfilm.perf.speed import best_shaped_surrogate
+    >>> b = paper_bearing()
+    >>> [isinstance(m, PrecisionKernelModel) for m in (ReynoldsSolver(b, 16, 8), best_shaped_surrogate(b))]
+    [False, True]
+    """
+
+    def force_kernel_at(self, precision: str = "float64") -> tuple[ForceKernel, Any]: ...
 
 
 @runtime_checkable

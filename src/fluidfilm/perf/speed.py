@@ -11,6 +11,7 @@ import time
 import numpy as np
 from numba import njit
 
+from fluidfilm.core.force_model import PrecisionKernelModel, check_precision
 from fluidfilm.perf.benchmarking import median_seconds
 
 __all__ = ["sample_states", "time_per_force_eval", "time_per_force_eval_batched", "best_shaped_surrogate",
@@ -66,7 +67,7 @@ def sample_states(clearance: float, n: int = 5000, eps_max: float = 0.8, v_max: 
     return x, v
 
 
-def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
+def time_per_force_eval(model, x, v, repeats: int = 7, precision: str = "float64") -> float:
     """Median seconds per force evaluation of ``model.force_kernel`` over the states (x, v).
 
     The compiled kernel runs in a compiled loop (as ``simulate`` calls it); compiling is done before
@@ -80,6 +81,9 @@ def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
         States [m], [m/s] (e.g. from ``sample_states``).
     repeats : int, default 7
         Timed samples of the whole loop (``median_seconds``).
+    precision : {"float64", "float32"}, default "float64"
+        "float32": the kernel with float32 networks (``force_kernel_at``) where the model has one
+        (``core.force_model.PrecisionKernelModel``), as ``simulate(precision="float32")`` runs it.
 
     Returns
     -------
@@ -95,7 +99,9 @@ def time_per_force_eval(model, x, v, repeats: int = 7) -> float:
     >>> 0.0 < time_per_force_eval(solver, x, v, repeats=3) < 0.01
     True
     """
-    kernel, params = model.force_kernel
+    check_precision(precision)
+    kernel, params = (model.force_kernel_at(precision) if isinstance(model, PrecisionKernelModel)
+                      else model.force_kernel)
     _kernel_loop(kernel, params, x[:2], v[:2])  # compile
     return median_seconds(lambda: _kernel_loop(kernel, params, x, v), repeats, warmup=False) / len(x)
 

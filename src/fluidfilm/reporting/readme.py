@@ -513,6 +513,11 @@ def render_universal(reports: Path) -> str:
              f"{u['force_eval_us_universal']:.3f} us", f"≤ {u['cost']['force_eval_us_best_shape']:.3f} us",
              "yes" if u["cost"]["universal_vs_best_cost_ratio"] <= 1.0 else "no"]]
     c = u["cost"]
+    if "force_eval_us_universal_float32" in c:  # evaluations before 2026-12-04 (fourth session): float64 only
+        rows.append([f"time per force, one state, float32 networks (simulate(precision=\"float32\"); best model's "
+                     f"shape {c['force_eval_us_best_shape_float32']:.3f} us)",
+                     f"{c['force_eval_us_universal_float32']:.3f} us", f"≤ {c['force_eval_us_best_shape_float32']:.3f} us",
+                     "yes" if c["universal_vs_best_cost_ratio_float32"] <= 1.0 else "no"])
     if "force_eval_us_universal_batched_float32" in c:  # evaluations before 2026-12-02 (fifth session) timed one state only
         rows.append([f"time per force, batched ({c['n_batch']} states per call, one thread, float32 networks: "
                      f"simulate_batch's stage; best model's shape {c['force_eval_us_best_shape_batched_float32']:.3f} us)",
@@ -523,7 +528,9 @@ def render_universal(reports: Path) -> str:
         same = u["reference_equal_accuracy"]
         grids = [f"{nt} x {nz}" for nt, nz in sorted({(int(r["n_theta"]), int(r["n_z"])) for r in same})]
         goal = g.get("speedup_equal_accuracy", 100)
-        for key, how in (("speedup", "one state each"), ("speedup_batched", "both batched, one thread")):
+        for key, how in (("speedup", "one state each"),
+                         ("speedup_float32", "one state each, the model's networks in float32"),
+                         ("speedup_batched", "both batched, one thread")):
             if key not in same[0]:
                 continue
             worst = min(same, key=lambda r: r[key])

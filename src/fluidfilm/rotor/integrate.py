@@ -39,7 +39,7 @@ import numpy as np
 from numba import njit
 from numba.core.registry import CPUDispatcher as Dispatcher
 
-from fluidfilm.core.force_model import ForceModel, SpeedScalableModel
+from fluidfilm.core.force_model import ForceModel, PrecisionKernelModel, SpeedScalableModel, check_precision
 from fluidfilm.rotor.model import RPM, Rotor, SpeedSchedule, ramped
 
 _ramped = njit(inline="always")(ramped)
@@ -402,7 +402,8 @@ def _speed_kernel(model: ForceModel, speed: SpeedSchedule | None):
 
 def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
              eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
-             max_substeps: int = 256, t0: float = 0.0, speed: SpeedSchedule | None = None) -> Trajectory:
+             max_substeps: int = 256, t0: float = 0.0, speed: SpeedSchedule | None = None,
+             precision: str = "float64") -> Trajectory:
     """Integrate the rotor in ``model`` (a ``fluidfilm.core.force_model.ForceModel``: its compiled ``force_kernel``).
 
     Fixed-step RK4 of m dV/dt = F_film(X, V) + imbalance + m g (along +X2) + F_ext (module doc);
@@ -438,6 +439,11 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         that instant (``core.force_model.SpeedScalableModel``: the Reynolds solver through its own speed
         parameter, a surrogate in the 'whirl' frame by its exact speed scaling); a model that gives forces
         at its bearing's speed only is refused for any other speed.
+    precision : {"float64", "float32"}, default "float64"
+        The arithmetic of a surrogate's networks (``core.force_model.PrecisionKernelModel``): "float32"
+        runs them in single precision (forces within 1e-5 relative of float64; the integrator, frame and
+        gains stay float64), at constant speed only.  A model without float32 networks (a reference
+        solver, an ensemble) computes in float64 either way.
 
     Returns
     -------
@@ -452,7 +458,8 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         times or settings that are not finite positive numbers of the right kind, an initial state
         of the wrong shape, non-finite, or not below ``eps_stop``; a ``speed`` schedule that is not a
         ``SpeedSchedule``, or that leaves the bearing's speed for a model without speed-scaled forces
-        (naming the model and the speeds).
+        (naming the model and the speeds); a ``precision`` other than "float64"/"float32", or "float32"
+        with a speed schedule.
 
     Examples
     --------
@@ -471,7 +478,10 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     if not isinstance(model, ForceModel):
         raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel: forces, "
                          "force_kernel, bearing, clearance, validity, domain report); the integrator needs one")
-    kernel, params = model.force_kernel
+    if check_precision(precision) == "float32" and speed is not None:
+        raise ValueError("precision='float32' runs at constant speed only; a speed schedule takes float64")
+    kernel, params = (model.force_kernel_at(precision) if isinstance(model, PrecisionKernelModel)
+                      else model.force_kernel)
     bearing = model.bearing
     # an active bearing reports the clearance of its current control setting
     c = float(model.clearance)
@@ -495,7 +505,7 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     consts = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega, float(rotor.imbalance_direction),
               rotor.external_force[0], rotor.external_force[1] + rotor.mass * rotor.gravity, c * c,
               u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0)
-    meta: dict = {"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every}
+    meta: dict = {"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every, "precision": precision}
     speed_kernel = _speed_kernel(model, speed)
     model.reset_domain_counter()
     t_start = time.perf_counter()

@@ -288,9 +288,9 @@ def fig4_cases(cfg) -> pd.DataFrame:
 def force_cost(cfg) -> dict:
     """Seconds per force of the shipped model and of the best model's shape (five regions, 3-64-2;
     ``perf.speed.best_shaped_surrogate``), side by side, medians of interleaved runs, with the load: the
-    one-state kernel in the integrator's loop (``simulate``), and the batched kernel on ``evaluate.n_batch``
-    states per call in one thread (``simulate_batch``'s per RK4 stage), its networks in float32 (its default)
-    and float64."""
+    one-state kernel in the integrator's loop (``simulate``), its networks in float64 (its default) and
+    float32 (``simulate(precision="float32")``), and the batched kernel on ``evaluate.n_batch`` states per call
+    in one thread (``simulate_batch``'s per RK4 stage), its networks in float32 (its default) and float64."""
     from fluidfilm.perf.benchmarking import machine
     from fluidfilm.perf.speed import (best_shaped_surrogate, sample_states, time_per_force_eval,
                                       time_per_force_eval_batched)
@@ -301,6 +301,7 @@ def force_cost(cfg) -> dict:
     xb, vb = sample_states(bearing.clearance, n=int(cfg.evaluate.n_batch), eps_max=0.9, v_max=0.05, seed=1)
     models = {"universal": universal_bearing(bearing, "gumbel"), "best_shape": best_shaped_surrogate(bearing)}
     arms = {"": lambda m: time_per_force_eval(m, x, v),
+            "_float32": lambda m: time_per_force_eval(m, x, v, precision="float32"),
             "_batched_float32": lambda m: time_per_force_eval_batched(m, xb, vb, "float32"),
             "_batched_float64": lambda m: time_per_force_eval_batched(m, xb, vb, "float64")}
     load0 = os.getloadavg()[0]
@@ -312,25 +313,28 @@ def force_cost(cfg) -> dict:
     us = {k: 1e6 * float(np.median(v)) for k, v in t.items()}
     return {**{f"force_eval_us_{k}": val for k, val in us.items()},
             "universal_vs_best_cost_ratio": us["universal"] / us["best_shape"],
+            "universal_vs_best_cost_ratio_float32": us["universal_float32"] / us["best_shape_float32"],
             "universal_vs_best_cost_ratio_batched_float32": us["universal_batched_float32"] / us["best_shape_batched_float32"],
             "n_batch": int(cfg.evaluate.n_batch), "loadavg_1min": [load0, os.getloadavg()[0]], "machine": machine()}
 
 
-def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, t_universal: float,
-                                     t_universal_batched: float | None = None) -> pd.DataFrame:
+def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, rounds: int = 3) -> pd.DataFrame:
     """Per rule and held-out L/D: the grid the reference needs to be as accurate as the shipped model there
     (the convergence check of the dataset, ``data.universal.converged_grid``, at the model's median relative
-    error for that rule and L/D, the larger of its float64 and float32 readings where both are given), the
-    reference's time per force on it and the ratio to the model's.
+    error for that rule and L/D, the larger of its float64 and float32 readings, so that every reading below
+    is at equal accuracy), and the reference's time per force on it beside the model's, timed side by side:
+    ``rounds`` interleaved rounds of each arm, medians.
 
-    Two readings, each model run the same way: the one-state kernel in the integrator's loop (``t_universal``
-    [s]), and the batched kernel as ``simulate_batch`` calls it, in one thread (``t_universal_batched`` [s],
-    the float32 networks; the reference's batched kernel is its one-state solve per row, in float64).  Rows:
-    rule, ld, tol, n_theta, n_z, reference_us, speedup, and with ``t_universal_batched`` reference_batched_us,
-    speedup_batched."""
+    Three readings, each model run the same way: the one-state kernel in the integrator's loop (the model's
+    networks in float64, and in float32 as ``simulate(precision="float32")`` runs them, against the same
+    reference time), and the batched kernel as ``simulate_batch`` calls it, in one thread (``evaluate.n_batch``
+    states per call, the model's float32 networks; the reference's batched kernel is its one-state solve per
+    row, in float64).  Rows: rule, ld, tol, n_theta, n_z, reference_us, universal_us, universal_float32_us,
+    speedup, speedup_float32, reference_batched_us, universal_batched_us, speedup_batched."""
     from fluidfilm import ReynoldsSolver
     from fluidfilm.data.universal import _n_z, converged_grid
     from fluidfilm.perf.speed import sample_states, time_per_force_eval, time_per_force_eval_batched
+    from fluidfilm.surrogate.universal import universal_bearing
 
     rows = []
     for (rule, ld), g in errors.groupby(["cavitation", "ld"]):
@@ -338,18 +342,29 @@ def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, t_universal: flo
         nt, _, _ = converged_grid(float(ld), rule, 0.8, tol)
         b = JournalBearing(length=0.05 * float(ld), diameter=0.05, clearance=75e-6, speed_rpm=5000.0, viscosity=0.02)
         ref = ReynoldsSolver(b, nt, _n_z(nt, float(ld)), cavitation=rule)
-        x, v = sample_states(b.clearance, n=40, eps_max=0.9, v_max=0.05)
-        t_ref = time_per_force_eval(ref, x, v, repeats=3)
-        row = {"cavitation": rule, "ld": float(ld), "tol": tol, "n_theta": nt, "n_z": _n_z(nt, float(ld)),
-               "reference_us": 1e6 * t_ref, "speedup": t_ref / t_universal}
-        line = (f"  {rule} L/D={ld:g}: the reference as accurate ({100 * tol:.3f} %) needs {nt} x {_n_z(nt, float(ld))}: "
-                f"{1e6 * t_ref:.0f} us per force, {t_ref / t_universal:.0f}x the universal model")
-        if t_universal_batched is not None:
-            t_ref_b = time_per_force_eval_batched(ref, x, v, repeats=3)
-            row |= {"reference_batched_us": 1e6 * t_ref_b, "speedup_batched": t_ref_b / t_universal_batched}
-            line += f" ({t_ref_b / t_universal_batched:.0f}x batched)"
+        model = universal_bearing(b, rule)
+        # the reference on a few hundred states (its solve is 10 us - 13 ms here), the model on evaluate.n_timing
+        x, v = sample_states(b.clearance, n=200, eps_max=0.9, v_max=0.05)
+        xm, vm = sample_states(b.clearance, n=int(cfg.evaluate.n_timing), eps_max=0.9, v_max=0.05)
+        xb, vb = sample_states(b.clearance, n=int(cfg.evaluate.n_batch), eps_max=0.9, v_max=0.05, seed=1)
+        arms = {"reference_us": lambda: time_per_force_eval(ref, x, v, repeats=3),
+                "universal_us": lambda: time_per_force_eval(model, xm, vm, repeats=3),
+                "universal_float32_us": lambda: time_per_force_eval(model, xm, vm, repeats=3, precision="float32"),
+                "reference_batched_us": lambda: time_per_force_eval_batched(ref, x, v, "float64", repeats=3),
+                "universal_batched_us": lambda: time_per_force_eval_batched(model, xb, vb, "float32", repeats=3)}
+        t: dict[str, list] = {k: [] for k in arms}
+        for _ in range(rounds):
+            for k, timed in arms.items():
+                t[k].append(timed())
+        us = {k: 1e6 * float(np.median(val)) for k, val in t.items()}
+        row = {"cavitation": rule, "ld": float(ld), "tol": tol, "n_theta": nt, "n_z": _n_z(nt, float(ld)), **us,
+               "speedup": us["reference_us"] / us["universal_us"],
+               "speedup_float32": us["reference_us"] / us["universal_float32_us"],
+               "speedup_batched": us["reference_batched_us"] / us["universal_batched_us"]}
         rows.append(row)
-        print(line, flush=True)
+        print(f"  {rule} L/D={ld:g}: the reference as accurate ({100 * tol:.3f} %) needs {nt} x {row['n_z']}: "
+              f"{us['reference_us']:.0f} us per force, {row['speedup']:.0f}x the universal model "
+              f"({row['speedup_float32']:.0f}x with float32 networks, {row['speedup_batched']:.0f}x batched)", flush=True)
     return pd.DataFrame(rows)
 
 
@@ -434,8 +449,7 @@ def _evaluate(cfg) -> Logged:
     cases = fig4_cases(cfg)
     cost = force_cost(cfg)
     print("the reference at equal accuracy", flush=True)
-    same = reference_cost_at_equal_accuracy(cfg, errors, 1e-6 * cost["force_eval_us_universal"],
-                                            1e-6 * cost["force_eval_us_universal_batched_float32"])
+    same = reference_cost_at_equal_accuracy(cfg, errors)
     out = {
         "universal_rel_err_median": float(errors.rel_err.median()),
         "universal_rel_err_p99": float(errors.rel_err.quantile(0.99)),
@@ -448,8 +462,10 @@ def _evaluate(cfg) -> Logged:
         "satisfactory_cases_universal": int(cases.satisfactory.sum()),
         "n_cases": int(len(cases)),
         "force_eval_us_universal": cost["force_eval_us_universal"],
+        "force_eval_us_universal_float32": cost["force_eval_us_universal_float32"],
         "cost": cost,
         "universal_speedup_vs_reference_equal_accuracy_min": float(same.speedup.min()),
+        "universal_speedup_vs_reference_equal_accuracy_float32_min": float(same.speedup_float32.min()),
         "universal_speedup_vs_reference_equal_accuracy_batched_min": float(same.speedup_batched.min()),
         "reference_equal_accuracy": same.to_dict(orient="records"),
         "by_rule": {rule: {"median": float(g.rel_err.median()), "p99": float(g.rel_err.quantile(0.99)),

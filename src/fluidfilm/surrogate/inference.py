@@ -464,6 +464,12 @@ class SurrogateForceModel:
         equal to the generic ``surrogate_force`` on ``self.params`` to round-off; compiled on first use."""
         return fast_force_kernel(self)
 
+    def force_kernel_at(self, precision: str = "float64"):
+        """``(fn, params)`` like ``force_kernel``, the networks in ``precision`` (``core.force_model.
+        PrecisionKernelModel``): "float32" runs them in single precision, forces within 1e-5 relative of
+        float64 (``surrogate.kernels.fast_force_kernel``); the parameters, setting and counter are shared."""
+        return fast_force_kernel(self, check_precision(precision))
+
     def speed_kernel(self):
         """``(speed_scaled_force, (kernel, params, omega_ref))`` for a network in the 'whirl' frame on a
         cylindrical bearing, whose force scales exactly with the shaft speed (``speed_scaled_force``); None

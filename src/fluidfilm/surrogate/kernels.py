@@ -20,6 +20,10 @@ holds what the integrator runs instead:
   arithmetic (it vectorises over a layer) and within 1e-15 relative of
   ``math.tanh`` (tests/test_surrogate_kernels.py states and checks the
   bound), so the fast kernel equals the generic one to round-off.
+  ``fast_force_kernel(model, "float32")`` is the same source with the networks in float32 (inputs rounded,
+  weights and scratch read from the parameter vector's float32 copy, ``tanh32``, outputs widened back):
+  forces within 1e-5 relative of float64 (tested), ~1.6x faster per force on the best model's shape
+  (``simulate(precision="float32")``; the float64 kernel stays the default).
 - ``forces_batch(bparams, x, v, out)``: many states at once: each state
   routed to its region (a state in a blend zone to both neighbours),
   each region's network run on tiles of states as dense products with the
@@ -61,6 +65,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit, types
+from numba.extending import intrinsic
+
+from fluidfilm.core.force_model import check_precision
 
 __all__ = ["tanh64", "tanh32", "silu64", "silu32", "sigmoid64", "sigmoid32", "fast_force_kernel", "shape_key", "pack", "kernel_source", "compiled_kernel",
            "compile_seconds", "BatchParams", "batch_params", "forces_batch", "TILE", "FastBatchParams",
@@ -271,11 +278,13 @@ def pack(model, key=None) -> np.ndarray:
     """The one-state kernel's parameter vector of ``model`` (``Layout``), scalings folded into the weights.
 
     The setting (1/c^2 of the nominal clearance, sleeve 0) and the counter (0) start fresh; the model makes
-    its setting and counter views of this vector.
+    its setting and counter views of this vector.  Behind the ``Layout.size`` float64 entries follows a
+    float32 copy of them (``float32_tail``): the weights and scratch of the float32 kernel, so that both
+    precisions run on one vector and share the model's setting and counter.
     """
     key = shape_key(model) if key is None else key
     lay = Layout(key)
-    w = np.zeros(lay.size)
+    w = np.zeros(lay.size + (lay.size + 1) // 2)
     w[SETTING] = 1.0 / model.bearing.clearance ** 2
     w[EPS_MAX] = model.eps_max
     w[BLEND] = model.blend_width
@@ -293,27 +302,57 @@ def pack(model, key=None) -> np.ndarray:
                 stored = W.T if k == 0 and len(layers) > 1 else W
                 w[wo:bo] = np.ascontiguousarray(stored).ravel()
                 w[bo:bo + b.size] = b
+    w[lay.size:].view(np.float32)[:lay.size] = w[:lay.size]
     return w
 
 
-def _act_expr(act: str, x: str) -> str:
+@intrinsic
+def float32_tail(typingctx, w, start):
+    """A float32 pointer to the bytes of ``w`` from float64 index ``start`` on (``pack``'s float32 copy).
+
+    An array view (``w[start:].view(np.float32)``) costs a reference-count increment and decrement per call
+    (~4 ns of a ~65 ns float32 force, measured); the pointer borrows ``w``'s memory, which the caller holds.
+    """
+    sig = types.CPointer(types.float32)(w, start)
+
+    def codegen(context, builder, signature, args):
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        return builder.bitcast(builder.gep(data, [args[1]]), context.get_value_type(signature.return_type))
+    return sig, codegen
+
+
+def _act_expr(act: str, x: str, f32: bool = False) -> str:
+    bits = "32" if f32 else "64"
     if act == "tanh":
-        return f"tanh64({x})"
+        return f"tanh{bits}({x})"
     if act == "relu":
-        return f"max({x}, 0.0)"
+        return f"max({x}, np.float32(0.0))" if f32 else f"max({x}, 0.0)"
     if act == "silu":
-        return f"silu64({x})"
-    return f"sigmoid64({x})"
+        return f"silu{bits}({x})"
+    return f"sigmoid{bits}({x})"
 
 
-def _net_source(chain, offs, inputs, act, lay, ind, out_names, base=""):
+def _net_source(chain, offs, inputs, act, lay, ind, out_names, base="", f32=False):
     """Source lines evaluating one folded network (layer shapes ``chain``) on the named scalar inputs
     (as many leading ones as its first layer takes: the generic kernel's rule) into ``out_names``.
     ``base``: an expression added to every weight offset ("off + ": the region's weights found at run time,
-    ``_uniform_kernel_source``); the scratch rows are not moved."""
+    ``_uniform_kernel_source``); the scratch rows are not moved.  ``f32``: the network in float32, its
+    weights and scratch read from ``v`` (the parameter vector's float32 copy, ``pack``), the inputs rounded
+    to float32 and the outputs widened back to float64 (float64 arithmetic around the network, as in the
+    batched kernel's float32 path)."""
     if base:
         offs = [(f"{base}{wo}", f"{base}{bo}") for wo, bo in offs]
+    if not f32:
+        return _net_lines(chain, offs, inputs, act, lay, ind, out_names, "w", False)
+    n_used = chain[0][1]
+    sums = [f"s_{name}" for name in out_names]
+    return ([f"{ind}s_{name} = np.float32({name})" for name in inputs[:n_used]]
+            + _net_lines(chain, offs, [f"s_{name}" for name in inputs], act, lay, ind, sums, "v", True)
+            + [f"{ind}{name} = float({total})" for name, total in zip(out_names, sums)])
 
+
+def _net_lines(chain, offs, inputs, act, lay, ind, out_names, arr, f32):
+    """``_net_source``'s body: weights and scratch in the array ``arr``."""
     def at(o, k):  # offset o (a number, or an expression with base) plus the literal k
         return f"{o} + {k}" if isinstance(o, str) else o + k
 
@@ -324,31 +363,31 @@ def _net_source(chain, offs, inputs, act, lay, ind, out_names, base=""):
         if k == len(chain) - 1:
             for j, name in enumerate(out_names):
                 if src is None:
-                    terms = " + ".join(f"w[{at(wo, j * n_in + i)}] * {inputs[i]}" for i in range(n_in))
-                    lines.append(f"{ind}{name} = w[{at(bo, j)}] + {terms}")
+                    terms = " + ".join(f"{arr}[{at(wo, j * n_in + i)}] * {inputs[i]}" for i in range(n_in))
+                    lines.append(f"{ind}{name} = {arr}[{at(bo, j)}] + {terms}")
                 else:
-                    lines.append(f"{ind}{name} = w[{at(bo, j)}]")
+                    lines.append(f"{ind}{name} = {arr}[{at(bo, j)}]")
             if src is not None:
                 lines.append(f"{ind}for i in range({n_in}):")
-                lines.append(f"{ind}    hi = w[{src} + i]")
+                lines.append(f"{ind}    hi = {arr}[{src} + i]")
                 for j, name in enumerate(out_names):
-                    lines.append(f"{ind}    {name} += w[{at(wo, j * n_in)} + i] * hi")
+                    lines.append(f"{ind}    {name} += {arr}[{at(wo, j * n_in)} + i] * hi")
             break
         dst = h if src != h else h + lay.maxw
         lines.append(f"{ind}for o in range({n_out}):")
         if src is None:
-            terms = " + ".join(f"w[{at(wo, i * n_out)} + o] * {inputs[i]}" for i in range(n_in))
-            lines.append(f"{ind}    a = w[{bo} + o] + {terms}")
+            terms = " + ".join(f"{arr}[{at(wo, i * n_out)} + o] * {inputs[i]}" for i in range(n_in))
+            lines.append(f"{ind}    a = {arr}[{bo} + o] + {terms}")
         else:
             # a dot product per output over the previous layer (``pack``: rows contiguous), then the
             # activation over the layer in a loop of its own (which vectorises)
-            lines.append(f"{ind}    a = w[{bo} + o]")
+            lines.append(f"{ind}    a = {arr}[{bo} + o]")
             lines.append(f"{ind}    for i in range({n_in}):")
-            lines.append(f"{ind}        a += w[{wo} + o * {n_in} + i] * w[{src} + i]")
-            lines.append(f"{ind}    w[{dst} + o] = a")
+            lines.append(f"{ind}        a += {arr}[{wo} + o * {n_in} + i] * {arr}[{src} + i]")
+            lines.append(f"{ind}    {arr}[{dst} + o] = a")
             lines.append(f"{ind}for o in range({n_out}):")
-            lines.append(f"{ind}    a = w[{dst} + o]")
-        lines.append(f"{ind}    w[{dst} + o] = {_act_expr(act, 'a')}")
+            lines.append(f"{ind}    a = {arr}[{dst} + o]")
+        lines.append(f"{ind}    {arr}[{dst} + o] = {_act_expr(act, 'a', f32)}")
         src = dst
     return lines
 
@@ -356,18 +395,20 @@ def _net_source(chain, offs, inputs, act, lay, ind, out_names, base=""):
 def _frame_source(frame, ind):
     """Lines of the polar (frame 1) or whirl (frame 2) frame from x1, x2, v1, v2, c, omega: the unit vectors
     er1, er2, the inputs z0, z1, z2 and, in the whirl frame, the drive |u| (``inference._region_force``)."""
+    # one reciprocal per divisor (as the batched kernel): three divisions fewer on a state's critical path,
+    # ~6 ns of a ~130 ns float64 force here; the forces move by round-off (measured 7e-16 relative)
     L = [f"{ind}rr = math.sqrt(x1 * x1 + x2 * x2)", f"{ind}at0 = 1.0 if rr == 0.0 else 0.0",
-         f"{ind}safe = rr + at0", f"{ind}er1 = x1 / safe", f"{ind}er2 = x2 / safe + at0",
-         f"{ind}cw = c * omega", f"{ind}z0 = rr / c",
-         f"{ind}z1 = (v1 * er1 + v2 * er2) / cw", f"{ind}z2 = (v1 * er2 - v2 * er1) / cw"]
+         f"{ind}inv = 1.0 / (rr + at0)", f"{ind}er1 = x1 * inv", f"{ind}er2 = x2 * inv + at0",
+         f"{ind}icw = 1.0 / (c * omega)", f"{ind}z0 = rr / c",
+         f"{ind}z1 = (v1 * er1 + v2 * er2) * icw", f"{ind}z2 = (v1 * er2 - v2 * er1) * icw"]
     if frame == 2:
         L += [f"{ind}ua = z0 - 2.0 * z2", f"{ind}ub = 2.0 * z1", f"{ind}drive = math.sqrt(ua * ua + ub * ub)",
-              f"{ind}zero = 1.0 if drive == 0.0 else 0.0", f"{ind}safe = drive + zero",
-              f"{ind}z1 = ua / safe + zero", f"{ind}z2 = ub / safe"]
+              f"{ind}zero = 1.0 if drive == 0.0 else 0.0", f"{ind}inv = 1.0 / (drive + zero)",
+              f"{ind}z1 = ua * inv + zero", f"{ind}z2 = ub * inv"]
     return L
 
 
-def _region_source(r, region_key, act, lay, ind):
+def _region_source(r, region_key, act, lay, ind, f32=False):
     """The body of region r: inputs from the state, the network(s), the gain and the frame back.
     Mirrors ``inference._region_force`` step by step (the generic kernel is the specification)."""
     kind, frame, n_extra, sleeve, power, static, damping = region_key
@@ -389,10 +430,10 @@ def _region_source(r, region_key, act, lay, ind):
     for k in range(n_extra):
         L.append(f"{ind}e{k} = w[{SETTING + 1 + k}]")  # extra inputs (the sleeve) come from the setting
         inputs.append(f"e{k}")
-    L += _net_source(static, lay.layers[r][0], inputs, act, lay, ind, ["y1", "y2"])
+    L += _net_source(static, lay.layers[r][0], inputs, act, lay, ind, ["y1", "y2"], f32=f32)
     if damping:
         # y = S(position inputs) + C(all inputs) w, w the raw velocity inputs (units of c omega)
-        L += _net_source(damping, lay.layers[r][1], inputs, act, lay, ind, ["d0", "d1", "d2", "d3"])
+        L += _net_source(damping, lay.layers[r][1], inputs, act, lay, ind, ["d0", "d1", "d2", "d3"], f32=f32)
         w1, w2 = inputs[len(inputs) - 2], inputs[len(inputs) - 1]
         L += [f"{ind}y1 += d0 * {w1} + d1 * {w2}", f"{ind}y2 += d2 * {w1} + d3 * {w2}"]
     if physics:
@@ -422,7 +463,7 @@ def _uniform(key) -> bool:
             and not sleeve and not damping and len(static) >= 2)
 
 
-def _uniform_kernel_source(key, lay, head) -> list[str]:
+def _uniform_kernel_source(key, lay, head, f32=False) -> list[str]:
     """The region loop of a ``_uniform`` shape: one body for every region instead of a branch per region.
     The frame (unit vectors, inputs, drive) is computed once for the state and again for a blend zone's
     second region only where that region's c or omega differ; the region's weights sit at ``k * stride``
@@ -447,7 +488,7 @@ def _uniform_kernel_source(key, lay, head) -> list[str]:
           f"{ind2}    c = w[rc]", f"{ind2}    omega = w[rc + 1]"]
     L += _frame_source(frame, ind2 + "    ")
     L += [f"{ind2}fscale = w[rc + 2]", f"{ind2}off = k * {stride}"]
-    L += _net_source(static, offs0, ["z0", "z1", "z2"], act, lay, ind2, ["y1", "y2"], base="off + ")
+    L += _net_source(static, offs0, ["z0", "z1", "z2"], act, lay, ind2, ["y1", "y2"], base="off + ", f32=f32)
     L.append(f"{ind2}g = fscale / d ** w[rc + 3]" if power is None else f"{ind2}g = fscale / (dp)")
     if kind == 2:
         L.append(f"{ind2}g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)")
@@ -463,11 +504,16 @@ def _uniform_kernel_source(key, lay, head) -> list[str]:
     return L
 
 
-def kernel_source(key) -> str:
-    """Python source of the one-state kernel of a model shape (``shape_key``), compiled by ``fast_force_kernel``."""
+def kernel_source(key, precision: str = "float64") -> str:
+    """Python source of the one-state kernel of a model shape (``shape_key``), compiled by ``fast_force_kernel``;
+    ``precision`` "float32": the networks in float32 (``_net_source``), everything else as in float64."""
     structure, act, regions, nb, blending, n_dom = key
+    f32 = check_precision(precision) == "float32"
     lay = Layout(key)
-    L = ["def surrogate_kernel(w, x1, x2, v1, v2):",
+    L = ["def surrogate_kernel(w, x1, x2, v1, v2):"]
+    if f32:
+        L.append(f"    v = float32_tail(w, {lay.size})")
+    L += [
          f"    inv_c2 = w[{SETTING}]",
          "    e2 = (x1 * x1 + x2 * x2) * inv_c2",
          "    eps = math.sqrt(e2)",
@@ -491,14 +537,14 @@ def kernel_source(key) -> str:
                   f"        ra = {b}", f"        rb = {b + 1}", "        wb = t * t * (3.0 - 2.0 * t)",
                   "        n_eval = 2"]
     if _uniform(key):
-        return "\n".join(_uniform_kernel_source(key, lay, L)) + "\n"
+        return "\n".join(_uniform_kernel_source(key, lay, L, f32)) + "\n"
     L += ["    fa1 = 0.0", "    fa2 = 0.0", "    fb1 = 0.0", "    fb2 = 0.0",
           "    for j in range(n_eval):",
           "        k = ra if j == 0 else rb",
           "        g1 = 0.0", "        g2 = 0.0"]
     for r in range(len(regions)):
         L.append(f"        {'if' if r == 0 else 'elif'} k == {r}:")
-        L += _region_source(r, regions[r], act, lay, " " * 12)
+        L += _region_source(r, regions[r], act, lay, " " * 12, f32)
     L += ["        if j == 0:", "            fa1 = g1", "            fa2 = g2",
           "        else:", "            fb1 = g1", "            fb2 = g2",
           "    if n_eval == 2:",
@@ -512,25 +558,29 @@ _COMPILED: dict[tuple, Any] = {}
 compile_seconds: dict[tuple, float] = {}
 
 
-def compiled_kernel(key):
-    """The one-state kernel of a model shape, compiled once per process (``kernel_source``)."""
-    fn = _COMPILED.get(key)
+def compiled_kernel(key, precision: str = "float64"):
+    """The one-state kernel of a model shape in ``precision``, compiled once per process (``kernel_source``);
+    ``compile_seconds`` records the time under ``key`` (float64) or ``(key, "float32")``."""
+    check_precision(precision)
+    name = key if precision == "float64" else (key, precision)
+    fn = _COMPILED.get(name)
     if fn is None:
-        source = kernel_source(key)
+        source = kernel_source(key, precision)
         # a module name outside the package: the integrator takes its uncached loops for this kernel
         # (numba cannot cache a function generated at run time; see rotor.integrate._library_types)
-        namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "tanh64": tanh64,
-                                     "silu64": silu64, "sigmoid64": sigmoid64}
+        namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np, "tanh64": tanh64,
+                                     "silu64": silu64, "sigmoid64": sigmoid64, "tanh32": tanh32, "silu32": silu32,
+                                     "sigmoid32": sigmoid32, "float32_tail": float32_tail}
         exec(compile(source, f"<surrogate kernel {len(_COMPILED)}>", "exec"), namespace)
         fn = njit(error_model="numpy", fastmath={"contract", "reassoc"})(namespace["surrogate_kernel"])
         t0 = time.perf_counter()
         fn.compile((types.float64[::1], types.float64, types.float64, types.float64, types.float64))
-        compile_seconds[key] = time.perf_counter() - t0
-        _COMPILED[key] = fn
+        compile_seconds[name] = time.perf_counter() - t0
+        _COMPILED[name] = fn
     return fn
 
 
-def fast_force_kernel(model):
+def fast_force_kernel(model, precision: str = "float64"):
     """``(fn, params)``: the one-state kernel of ``model``'s shape and the model's parameter vector.
 
     Parameters
@@ -538,15 +588,19 @@ def fast_force_kernel(model):
     model : SurrogateForceModel
         Its ``_fast_weights`` (``pack``) is the parameter vector; the model's domain counter and setting
         (sleeve) are views of it, so counting and moving the sleeve work as with the generic kernel.
+    precision : {"float64", "float32"}, default "float64"
+        The networks' arithmetic: float32 reads the weights from the vector's float32 copy (``pack``) and
+        runs ``tanh32``, forces within 1e-5 relative of float64 (tested); the frame, gains and blend stay
+        float64.
 
     Returns
     -------
     fn : numba dispatcher
         ``fn(params, x1, x2, v1, v2) -> (F1, F2)`` [N], compiled for the model's shape (``shape_key``).
     params : ndarray
-        The parameter vector (``Layout``).
+        The parameter vector (``Layout``), the same for both precisions.
     """
-    return compiled_kernel(model._fast_key), model._fast_weights
+    return compiled_kernel(model._fast_key, precision), model._fast_weights
 
 
 # ---------------------------------------------------------------------------------------------- batched
