@@ -8,7 +8,8 @@ Part 1 (reports/benchmarks/surrogate_kernels.json), one process, one thread, the
 - reference: the graded Reynolds model (``GradedReynoldsModel`` on the paper bearing), its one-state kernel;
 - paper single / paper split: the paper's network shapes (4 -> 50 -> 2 tanh, one region or three);
 - best: the best model's shapes (five blended regions, whirl frame, 3 -> 64 -> 2 tanh): its one-state fast
-  kernel (``surrogate.kernels.fast_force_kernel``) and its batched kernel;
+  kernel (``surrogate.kernels.fast_force_kernel``; networks in float64, and in float32 as
+  ``simulate(precision="float32")`` runs them) and its batched kernel;
 - ensemble: three members of the best model's shapes, their mean through the members' batched kernel.
 
 Each surrogate's batched kernel (what ``simulate_batch`` calls once per RK4 stage: the kernel generated for
@@ -203,19 +204,21 @@ def main() -> None:
                                  f"{v['ns_per_tanh']:.2f} ns" for dt, v in fl.items()))
     per_sample, repeats = (2e4, 3) if args.quick else (1e5, 5)
     states = {n: sample_states(bearing.clearance, n=n, eps_max=0.8, v_max=0.05, seed=1) for n in SIZES}
-    arms = [("reference (graded)", "one-state", reference, None)]
+    # (model, kernel, instance, batched networks' dtype or None, one-state networks' precision or None)
+    arms = [("reference (graded)", "one-state", reference, None, "float64")]
     for name, m in surrogates.items():
         if name == "best":
-            arms.append((name, "one-state fast", m, None))
+            arms.append((name, "one-state fast", m, None, "float64"))
+            arms.append((name, "one-state float32", m, None, "float32"))
         for dt in ("float64", "float32"):
-            arms.append((name, f"batched {dt}", m, dt))
+            arms.append((name, f"batched {dt}", m, dt, None))
     header = ["model", "kernel"] + [f"N = {n}" for n in SIZES] + ["floor", "ref/this at N = 1024"]
     rows = []
     ref_1024 = None
     print(("{:>20}{:>18}" + "{:>12}" * (len(SIZES) + 2)).format(*header[:-1], "ref/this"))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        for name, kernel, m, dt in arms:
+        for name, kernel, m, dt, one_precision in arms:
             ns = []
             for n in SIZES:
                 x, v = states[n]
@@ -224,7 +227,7 @@ def main() -> None:
                 out = np.empty_like(x, order="K")
                 passes = max(1, int(per_sample // n))
                 if dt is None:
-                    fn, params = m.force_kernel
+                    fn, params = m.force_kernel if one_precision == "float64" else m.force_kernel_at(one_precision)
                     if m is reference:
                         passes = max(1, passes // 20)  # ~30x slower: fewer forces, same sampling
                 else:
@@ -238,7 +241,7 @@ def main() -> None:
                 ref_1024 = ns[SIZES.index(1024)]
             members = m.members if isinstance(m, EnsembleForceModel) else [m]
             floor = "" if m is reference else \
-                f"{sum(network_floor_ns(mm, fl[dt or 'float64']) for mm in members):.0f}"
+                f"{sum(network_floor_ns(mm, fl[dt or one_precision]) for mm in members):.0f}"
             row = [name, kernel] + [f"{t:.0f}" for t in ns] + [floor, f"{ref_1024 / ns[SIZES.index(1024)]:.1f}x"]
             rows.append(row)
             print(("{:>20}{:>18}" + "{:>12}" * (len(SIZES) + 2)).format(*row))
@@ -248,7 +251,7 @@ def main() -> None:
                                                 for dt, v in fl.items())
             + ") plus its tanh units at the measured rational tanh ("
             + ", ".join(f"{dt} {v['ns_per_tanh']:.2f} ns" for dt, v in fl.items())
-            + "), one region's network per force (the one-state rows: float64). Every arm in a compiled loop, timed "
+            + "), one region's network per force (the one-state rows: their networks' precision). Every arm in a compiled loop, timed "
             "by this thread's CPU time (the wall time on a shared machine mostly measures the other processes). "
             f"Load average (1 min) before / after: {load0[0]:.1f} / {load1[0]:.1f} on {os.cpu_count()} cores: "
             "the machine was shared with other work, so absolute times are high bounds; the ratios are "
