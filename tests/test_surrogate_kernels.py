@@ -409,6 +409,32 @@ def test_the_batched_kernel_gives_the_same_bits_for_column_major_states(name, dt
     assert counts[0] == counts[1] == counts[2] and np.abs(results[0]).max() > 0.0
 
 
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+def test_a_call_of_more_states_than_the_workspace_runs_in_blocks_with_the_same_bits(dtype):
+    """Beyond ``WORKSPACE_STATES`` states the generated kernel runs in blocks (``batch_kernel_source``): the
+    forces and the domain count of one call equal those of calls on small pieces, column-major states as
+    ``simulate_batch`` passes them (the blocks are then strided views)."""
+    from fluidfilm.surrogate.kernels import WORKSPACE_STATES
+
+    model = best_shaped_surrogate(paper_bearing(), restoring=False)
+    n = 2 * WORKSPACE_STATES + 333
+    X, V = sample_states(model.clearance, n=n, eps_max=0.99, v_max=0.1, seed=21)  # some outside the domain
+    X, V = np.asfortranarray(X), np.asfortranarray(V)
+    fn, bp = model.batch_force_kernel(dtype, private=True)
+    whole = np.asfortranarray(np.empty_like(X))
+    fn(bp, X, V, whole)
+    n_whole = bp.counter[0]
+    bp.counter[0] = 0
+    pieces = []
+    for s0 in range(0, n, 1000):
+        x, v = np.asfortranarray(X[s0:s0 + 1000]), np.asfortranarray(V[s0:s0 + 1000])
+        out = np.asfortranarray(np.empty_like(x))
+        fn(bp, x, v, out)
+        pieces.append(out)
+    np.testing.assert_array_equal(whole, np.concatenate(pieces))
+    assert bp.counter[0] == n_whole > 0
+
+
 def test_batch_params_refuses_an_unknown_dtype():
     from fluidfilm.surrogate.kernels import batch_params
 
