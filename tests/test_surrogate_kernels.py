@@ -219,6 +219,8 @@ def test_simulate_follows_the_same_orbit_and_counts_the_same_with_the_fast_kerne
                                 model.blend_width, [[0.0, 0.95, 0.02]], 0.95)
     generic = copy.copy(model)
     generic.__class__ = _GenericKernelModel
+    # the subclass's own kernel is what simulate runs at float64 (force_kernel_at defers to force_kernel)
+    assert generic.force_kernel_at("float64")[0] is surrogate_force
     rotor = Rotor(mass=2.5, imbalance=2e-4 * 2.5)
     x0 = [0.0, 0.5 * model.clearance]
     with pytest.warns(RuntimeWarning):
@@ -329,6 +331,34 @@ def test_the_one_state_kernel_with_float32_networks_stays_within_1e_5_of_float64
         model.force_kernel_at("float16")
 
 
+def test_a_copied_or_unpickled_surrogate_keeps_its_setting_and_counter_in_its_kernels_vector():
+    """numpy copies a view as an array of its own: without ``__setstate__`` a copy's sleeve and domain
+    counter were cut off from its kernels (a moved sleeve the kernel never read, a count never reported)."""
+    import pickle
+
+    model, sleeve = gm.models()["surrogate_sleeve"]
+    X, V = gm.states(model, n=20, seed=4)
+    for other in (copy.deepcopy(model), pickle.loads(pickle.dumps(model))):
+        other.set_sleeve(sleeve)
+        model.set_sleeve(sleeve)
+        for precision in ("float64", "float32"):
+            fn, params = other.force_kernel_at(precision)
+            ref_fn, ref_params = model.force_kernel_at(precision)
+            got = np.array([fn(params, *x, *v) for x, v in zip(X, V)])
+            np.testing.assert_array_equal(got, np.array([ref_fn(ref_params, *x, *v) for x, v in zip(X, V)]))
+        other.set_sleeve(0.0)
+        fn, params = other.force_kernel
+        moved = np.array([fn(params, *x, *v) for x, v in zip(X, V)])
+        assert not np.allclose(moved, got, rtol=1e-3)  # the copy's own sleeve reached its kernel
+    split, _ = gm.models()["surrogate_split"]  # eps_max below 1: a count to make
+    for other in (copy.deepcopy(split), pickle.loads(pickle.dumps(split))):
+        other.reset_domain_counter()
+        for precision in ("float64", "float32"):
+            fn, params = other.force_kernel_at(precision)
+            fn(params, 0.999 * other.clearance, 0.0, 0.0, 0.0)  # beyond the training domain
+        assert other.n_outside_domain == 2
+
+
 @pytest.mark.filterwarnings("ignore:.*outside the training domain:RuntimeWarning")
 def test_simulate_with_float32_networks_follows_the_float64_orbit_and_refuses_what_it_cannot_do():
     """One trajectory through the float32 one-state kernel against float64 over a case-d start (the
@@ -344,12 +374,16 @@ def test_simulate_with_float32_networks_follows_the_float64_orbit_and_refuses_wh
     a = simulate(model, rotor, t_end=0.04, x0=x0, record_every=10)
     c = simulate(model, rotor, t_end=0.04, x0=x0, record_every=10, precision="float32")
     assert a.status == c.status == "ok" and a.n_force_evals == c.n_force_evals
+    assert (a.meta["precision"], c.meta["precision"]) == ("float64", "float32")
     dx = np.abs(c.x - a.x).max() / b.clearance
     assert 0.0 < dx < 1e-4, dx
     solver = ReynoldsSolver(b, 16, 8)
     r64 = simulate(solver, rotor, t_end=0.002, x0=x0)
     r32 = simulate(solver, rotor, t_end=0.002, x0=x0, precision="float32")
     np.testing.assert_array_equal(r32.x, r64.x)
+    assert r32.meta["precision"] == "float64"  # what ran: the solver has no float32 networks
+    assert simulate(solver, rotor, t_end=0.002, x0=x0, precision="float32",
+                    speed=SpeedSchedule([0.0, 0.002], [0.5 * b.omega, b.omega])).status == "ok"
     with pytest.raises(ValueError, match="precision must be 'float64' or 'float32', got 'half'"):
         simulate(model, rotor, t_end=0.001, precision="half")
     ramp = SpeedSchedule([0.0, 0.01], [0.5 * b.omega, b.omega])
@@ -414,9 +448,11 @@ def test_a_call_of_more_states_than_the_workspace_runs_in_blocks_with_the_same_b
     """Beyond ``WORKSPACE_STATES`` states the generated kernel runs in blocks (``batch_kernel_source``): the
     forces and the domain count of one call equal those of calls on small pieces, column-major states as
     ``simulate_batch`` passes them (the blocks are then strided views)."""
-    from fluidfilm.surrogate.kernels import WORKSPACE_STATES
+    from fluidfilm.surrogate.kernels import WORKSPACE_STATES, batch_kernel_source, batch_shape_key
 
     model = best_shaped_surrogate(paper_bearing(), restoring=False)
+    source = batch_kernel_source(batch_shape_key(model), dtype)
+    assert f"for s0 in range(0, n, {WORKSPACE_STATES}):" in source and "_states_block(bp, x[s0:e]" in source
     n = 2 * WORKSPACE_STATES + 333
     X, V = sample_states(model.clearance, n=n, eps_max=0.99, v_max=0.1, seed=21)  # some outside the domain
     X, V = np.asfortranarray(X), np.asfortranarray(V)

@@ -224,8 +224,8 @@ class PrecisionKernelModel(Protocol):
     """A force model whose one-state kernel can run its networks in float32 (``simulate(precision=...)``).
 
     ``force_kernel_at(precision)`` -> ``(fn, params)`` with ``force_kernel``'s signature: "float64" is
-    ``force_kernel`` itself, "float32" the networks in single precision (forces within 1e-5 relative of
-    float64; the frame, gains and blend stay float64), sharing the parameters, setting and counter.  A
+    ``force_kernel`` itself, "float32" the networks in single precision (forces within 1e-5 of
+    float64 relative to the larger of |F| and the states' RMS force; the frame, gains and blend stay float64), sharing the parameters, setting and counter.  A
     model without it (a reference solver, an ensemble) computes in float64 whatever the precision asked.
 
     Examples

@@ -441,9 +441,10 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         at its bearing's speed only is refused for any other speed.
     precision : {"float64", "float32"}, default "float64"
         The arithmetic of a surrogate's networks (``core.force_model.PrecisionKernelModel``): "float32"
-        runs them in single precision (forces within 1e-5 relative of float64; the integrator, frame and
+        runs them in single precision (forces within 1e-5 of float64 relative to the larger of |F| and the states' RMS force; the integrator, frame and
         gains stay float64), at constant speed only.  A model without float32 networks (a reference
-        solver, an ensemble) computes in float64 either way.
+        solver, an ensemble) computes in float64 either way; the trajectory's ``meta["precision"]`` says
+        which ran.
 
     Returns
     -------
@@ -459,7 +460,7 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         of the wrong shape, non-finite, or not below ``eps_stop``; a ``speed`` schedule that is not a
         ``SpeedSchedule``, or that leaves the bearing's speed for a model without speed-scaled forces
         (naming the model and the speeds); a ``precision`` other than "float64"/"float32", or "float32"
-        with a speed schedule.
+        networks with a speed schedule.
 
     Examples
     --------
@@ -478,10 +479,14 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     if not isinstance(model, ForceModel):
         raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel: forces, "
                          "force_kernel, bearing, clearance, validity, domain report); the integrator needs one")
-    if check_precision(precision) == "float32" and speed is not None:
-        raise ValueError("precision='float32' runs at constant speed only; a speed schedule takes float64")
-    kernel, params = (model.force_kernel_at(precision) if isinstance(model, PrecisionKernelModel)
-                      else model.force_kernel)
+    # the precision the networks actually run in: a model without float32 networks computes in float64
+    if check_precision(precision) == "float32" and isinstance(model, PrecisionKernelModel):
+        if speed is not None:
+            raise ValueError("precision='float32' runs at constant speed only; a speed schedule takes float64")
+        kernel, params = model.force_kernel_at("float32")
+    else:
+        precision = "float64"
+        kernel, params = model.force_kernel
     bearing = model.bearing
     # an active bearing reports the clearance of its current control setting
     c = float(model.clearance)

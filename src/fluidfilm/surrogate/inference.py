@@ -466,9 +466,25 @@ class SurrogateForceModel:
 
     def force_kernel_at(self, precision: str = "float64"):
         """``(fn, params)`` like ``force_kernel``, the networks in ``precision`` (``core.force_model.
-        PrecisionKernelModel``): "float32" runs them in single precision, forces within 1e-5 relative of
-        float64 (``surrogate.kernels.fast_force_kernel``); the parameters, setting and counter are shared."""
-        return fast_force_kernel(self, check_precision(precision))
+        PrecisionKernelModel``): "float32" runs them in single precision, forces within 1e-5 of
+        float64 relative to the larger of |F| and the states' RMS force (``surrogate.kernels.fast_force_kernel``); the parameters, setting and counter are shared.
+        "float64" is ``force_kernel`` itself (a subclass's own included)."""
+        if check_precision(precision) == "float64":
+            return self.force_kernel
+        return fast_force_kernel(self, precision)
+
+    def __setstate__(self, state: dict) -> None:
+        # a copied or unpickled model: numpy copies the setting and counter as arrays of their own, which
+        # would cut them off from the kernels' parameter vector (a moved sleeve or a count the kernel never
+        # sees); make them views of this model's vector again, and let the batch parameters be rebuilt
+        self.__dict__.update(state)
+        w = self._fast_weights
+        w[SETTING:SETTING + 2] = self._setting
+        w[COUNTER] = self._counter[0]
+        self._setting = w[SETTING:SETTING + 2]
+        self._counter = w[COUNTER:COUNTER + 1]
+        self.params = self.params._replace(counter=self._counter, setting=self._setting)
+        self._batch_params = {}
 
     def speed_kernel(self):
         """``(speed_scaled_force, (kernel, params, omega_ref))`` for a network in the 'whirl' frame on a

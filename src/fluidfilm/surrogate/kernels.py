@@ -22,8 +22,9 @@ holds what the integrator runs instead:
   bound), so the fast kernel equals the generic one to round-off.
   ``fast_force_kernel(model, "float32")`` is the same source with the networks in float32 (inputs rounded,
   weights and scratch read from the parameter vector's float32 copy, ``tanh32``, outputs widened back):
-  forces within 1e-5 relative of float64 (tested), ~1.6x faster per force on the best model's shape
-  (``simulate(precision="float32")``; the float64 kernel stays the default).
+  forces within 1e-5 of float64 relative to the larger of |F| and the RMS force of the states (tested),
+  1.7-1.9x faster per force on the best model's and the universal model's shapes (``make bench``,
+  ``universal_evaluate``; ``simulate(precision="float32")``; the float64 kernel stays the default).
 - ``forces_batch(bparams, x, v, out)``: many states at once: each state
   routed to its region (a state in a blend zone to both neighbours),
   each region's network run on tiles of states as dense products with the
@@ -53,7 +54,7 @@ The generated functions live in no importable module, so numba cannot
 cache them on disk: the integrator runs them through its uncached loops
 (``rotor.integrate._library_types`` is False for them).  Compiling the best
 model's shape (five regions, 3-64-2) took 1.5-1.9 s on the 2-core project
-machine under load (``compile_seconds`` records it per shape), and the
+machine under load (``compile_seconds`` records each one-state kernel's), and the
 integrator's uncached loop about 1 s more on the first ``simulate`` of a
 process; a model of a shape already compiled in the process costs neither.
 """
@@ -313,6 +314,9 @@ def float32_tail(typingctx, w, start):
     An array view (``w[start:].view(np.float32)``) costs a reference-count increment and decrement per call
     (~4 ns of a ~65 ns float32 force, measured); the pointer borrows ``w``'s memory, which the caller holds.
     """
+    if not (isinstance(w, types.Array) and w.dtype == types.float64 and w.ndim == 1 and w.layout == "C"
+            and isinstance(start, types.Integer)):
+        return None  # a typing error naming the arguments, not a failure in code generation
     sig = types.CPointer(types.float32)(w, start)
 
     def codegen(context, builder, signature, args):
@@ -512,7 +516,11 @@ def kernel_source(key, precision: str = "float64") -> str:
     lay = Layout(key)
     L = ["def surrogate_kernel(w, x1, x2, v1, v2):"]
     if f32:
-        L.append(f"    v = float32_tail(w, {lay.size})")
+        # the float32 copy lies behind the float64 vector (``pack``): a shorter vector would be read past
+        L += [f"    if w.shape[0] < {lay.size + (lay.size + 1) // 2}:",
+              "        raise ValueError('the float32 kernel needs the parameter vector of pack(), with its "
+              "float32 copy')",
+              f"    v = float32_tail(w, {lay.size})"]
     L += [
          f"    inv_c2 = w[{SETTING}]",
          "    e2 = (x1 * x1 + x2 * x2) * inv_c2",
@@ -560,9 +568,9 @@ compile_seconds: dict[tuple, float] = {}
 
 def compiled_kernel(key, precision: str = "float64"):
     """The one-state kernel of a model shape in ``precision``, compiled once per process (``kernel_source``);
-    ``compile_seconds`` records the time under ``key`` (float64) or ``(key, "float32")``."""
+    ``compile_seconds`` records the time under ``key`` (float64) or ``(key, "one-state float32")``."""
     check_precision(precision)
-    name = key if precision == "float64" else (key, precision)
+    name = key if precision == "float64" else (key, f"one-state {precision}")
     fn = _COMPILED.get(name)
     if fn is None:
         source = kernel_source(key, precision)
@@ -590,7 +598,7 @@ def fast_force_kernel(model, precision: str = "float64"):
         (sleeve) are views of it, so counting and moving the sleeve work as with the generic kernel.
     precision : {"float64", "float32"}, default "float64"
         The networks' arithmetic: float32 reads the weights from the vector's float32 copy (``pack``) and
-        runs ``tanh32``, forces within 1e-5 relative of float64 (tested); the frame, gains and blend stay
+        runs ``tanh32``, forces within 1e-5 of float64 relative to the larger of |F| and the states' RMS force (tested); the frame, gains and blend stay
         float64.
 
     Returns
@@ -1107,7 +1115,8 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
         without a branch; a counting sort by region; each region's network on tiles, its last hidden layer
         fused with the output layer; per state the regions' outputs blended, the gain and the frame back.
         A call of more than ``WORKSPACE_STATES`` states runs in blocks of that many (``_states_block``: the
-        four passes on one block), so that its scratch stays the thread's workspace and within the cache: at
+        four passes on one block), so that its scratch fits a default workspace (``with_workspace``; else
+        it is allocated once per block) and stays within the cache: at
         N = 16384 and 65536 one pass over all states took twice the time per force of N = 4096 (allocated
         scratch, streamed from memory; measured 92 and 123 ns against 41 ns, float32 best-shaped); blocked,
         50-57 ns, the same bits (every state's arithmetic is independent of the others').
@@ -1360,7 +1369,7 @@ _COMPILED_BATCH: dict[tuple, Any] = {}
 
 def batch_kernel(key, dtype: str = "float64"):
     """The batched kernel of a model shape (``batch_shape_key``) with its networks in ``dtype``, compiled
-    once per process (``batch_kernel_source``); ``compile_seconds[(key, dtype)]`` records the time.
+    once per process (``batch_kernel_source``); numba compiles it on its first call.
 
     Parameters
     ----------
