@@ -114,9 +114,11 @@ def render_commands(reports: Path) -> str:
             ["`make test`", f"the default suite ({t['tests']:,} tests, {t['skipped']} skipped), among them the pipeline "
              f"on its small profile ({_minutes(t['quick_reproduce_s'])})", _minutes(t["suite_s"])]]
     return (_table(["command", "what it does", "time"], rows)
-            + f"\nMeasured on {full['machine']}: the pipeline on {full['date']} (`reports/reproduce_timing.json`, "
-              f"per stage in [docs/results.md](docs/results.md#how-long-make-reproduce-takes)), the install and the "
-              f"tests from a fresh clone of {t['commit']} on {t['date']} (`reports/test_timing.json`).\n")
+            # each measurement names its own machine (the pipeline's and the tests' runs were on different hosts)
+            + f"\nMeasured: the pipeline on {full['machine']}, {full['date']} (`reports/reproduce_timing.json`, "
+              f"per stage in [docs/results.md](docs/results.md#how-long-make-reproduce-takes)); the install and the "
+              f"tests from a fresh clone of {t['commit']} on {t.get('machine', 'an unrecorded machine')}, {t['date']} "
+              f"(`reports/test_timing.json`).\n")
 
 
 def render_headline(reports: Path) -> str:
