@@ -41,6 +41,7 @@ from numba import njit
 from threadpoolctl import threadpool_limits
 
 from fluidfilm import GradedReynoldsModel, load_surrogate, paper_bearing
+from fluidfilm.core.force_model import one_state_kernel
 from fluidfilm.perf.benchmarking import machine, median_seconds, write_benchmark
 from fluidfilm.perf.speed import best_shaped_surrogate, paper_shaped_surrogate, sample_states
 from fluidfilm.perf.throughput import trajectories_per_second
@@ -227,7 +228,7 @@ def main() -> None:
                 out = np.empty_like(x, order="K")
                 passes = max(1, int(per_sample // n))
                 if dt is None:
-                    fn, params = m.force_kernel if one_precision == "float64" else m.force_kernel_at(one_precision)
+                    fn, params, _ = one_state_kernel(m, one_precision)
                     if m is reference:
                         passes = max(1, passes // 20)  # ~30x slower: fewer forces, same sampling
                 else:

@@ -264,6 +264,17 @@ class SpeedScalableModel(Protocol):
     def speed_kernel(self) -> tuple[SpeedForceKernel, Any] | None: ...
 
 
+def one_state_kernel(model: ForceModel, precision: str = "float64") -> tuple[ForceKernel, Any, str]:
+    """``(fn, params, ran)``: the model's one-state kernel with its networks in ``precision`` where it has
+    float32 networks (``PrecisionKernelModel``), else its float64 ``force_kernel``; ``ran`` is the precision
+    that runs (a ValueError naming any other ``precision``)."""
+    if check_precision(precision) == "float32" and isinstance(model, PrecisionKernelModel):
+        fn, params = model.force_kernel_at("float32")
+        return fn, params, "float32"
+    fn, params = model.force_kernel
+    return fn, params, "float64"
+
+
 def check_precision(precision: str) -> str:
     """``precision`` if it is "float64" or "float32", else a ValueError naming it."""
     if precision not in ("float64", "float32"):

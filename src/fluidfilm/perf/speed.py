@@ -11,7 +11,7 @@ import time
 import numpy as np
 from numba import njit
 
-from fluidfilm.core.force_model import PrecisionKernelModel, check_precision
+from fluidfilm.core.force_model import one_state_kernel
 from fluidfilm.perf.benchmarking import median_seconds
 
 __all__ = ["sample_states", "time_per_force_eval", "time_per_force_eval_batched", "best_shaped_surrogate",
@@ -100,10 +100,7 @@ def time_per_force_eval(model, x, v, repeats: int = 7, precision: str = "float64
     >>> 0.0 < time_per_force_eval(solver, x, v, repeats=3) < 0.01
     True
     """
-    if check_precision(precision) == "float32" and isinstance(model, PrecisionKernelModel):
-        kernel, params = model.force_kernel_at("float32")
-    else:
-        kernel, params = model.force_kernel
+    kernel, params, _ = one_state_kernel(model, precision)
     _kernel_loop(kernel, params, x[:2], v[:2])  # compile
     return median_seconds(lambda: _kernel_loop(kernel, params, x, v), repeats, warmup=False) / len(x)
 

@@ -39,7 +39,7 @@ import numpy as np
 from numba import njit
 from numba.core.registry import CPUDispatcher as Dispatcher
 
-from fluidfilm.core.force_model import ForceModel, PrecisionKernelModel, SpeedScalableModel, check_precision
+from fluidfilm.core.force_model import ForceModel, SpeedScalableModel, one_state_kernel
 from fluidfilm.rotor.model import RPM, Rotor, SpeedSchedule, ramped
 
 _ramped = njit(inline="always")(ramped)
@@ -479,14 +479,10 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     if not isinstance(model, ForceModel):
         raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel: forces, "
                          "force_kernel, bearing, clearance, validity, domain report); the integrator needs one")
-    # the precision the networks actually run in: a model without float32 networks computes in float64
-    if check_precision(precision) == "float32" and isinstance(model, PrecisionKernelModel):
-        if speed is not None:
-            raise ValueError("precision='float32' runs at constant speed only; a speed schedule takes float64")
-        kernel, params = model.force_kernel_at("float32")
-    else:
-        precision = "float64"
-        kernel, params = model.force_kernel
+    # precision: what the networks actually run in (a model without float32 networks computes in float64)
+    kernel, params, precision = one_state_kernel(model, precision)
+    if precision == "float32" and speed is not None:
+        raise ValueError("precision='float32' runs at constant speed only; a speed schedule takes float64")
     bearing = model.bearing
     # an active bearing reports the clearance of its current control setting
     c = float(model.clearance)

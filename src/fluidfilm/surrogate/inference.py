@@ -477,12 +477,10 @@ class SurrogateForceModel:
         # a copied or unpickled model: numpy copies the setting and counter as arrays of their own, which
         # would cut them off from the kernels' parameter vector (a moved sleeve or a count the kernel never
         # sees); make them views of this model's vector again, and let the batch parameters be rebuilt
+        # (the copied vector holds their values already: they were views of it when copied)
         self.__dict__.update(state)
-        w = self._fast_weights
-        w[SETTING:SETTING + 2] = self._setting
-        w[COUNTER] = self._counter[0]
-        self._setting = w[SETTING:SETTING + 2]
-        self._counter = w[COUNTER:COUNTER + 1]
+        self._setting = self._fast_weights[SETTING:SETTING + 2]
+        self._counter = self._fast_weights[COUNTER:COUNTER + 1]
         self.params = self.params._replace(counter=self._counter, setting=self._setting)
         self._batch_params = {}
 

@@ -273,6 +273,8 @@ class Layout:
                 region.append(offs)
             self.layers.append(region)
         self.size = off
+        # with the float32 copy of the first ``size`` entries behind them (``pack``, ``float32_tail``)
+        self.total = off + (off + 1) // 2
 
 
 def pack(model, key=None) -> np.ndarray:
@@ -285,7 +287,7 @@ def pack(model, key=None) -> np.ndarray:
     """
     key = shape_key(model) if key is None else key
     lay = Layout(key)
-    w = np.zeros(lay.size + (lay.size + 1) // 2)
+    w = np.zeros(lay.total)
     w[SETTING] = 1.0 / model.bearing.clearance ** 2
     w[EPS_MAX] = model.eps_max
     w[BLEND] = model.blend_width
@@ -517,7 +519,7 @@ def kernel_source(key, precision: str = "float64") -> str:
     L = ["def surrogate_kernel(w, x1, x2, v1, v2):"]
     if f32:
         # the float32 copy lies behind the float64 vector (``pack``): a shorter vector would be read past
-        L += [f"    if w.shape[0] < {lay.size + (lay.size + 1) // 2}:",
+        L += [f"    if w.shape[0] < {lay.total}:",
               "        raise ValueError('the float32 kernel needs the parameter vector of pack(), with its "
               "float32 copy')",
               f"    v = float32_tail(w, {lay.size})"]
