@@ -401,16 +401,20 @@ def _net_lines(chain, offs, inputs, act, lay, ind, out_names, arr, f32):
 def _frame_source(frame, ind):
     """Lines of the polar (frame 1) or whirl (frame 2) frame from x1, x2, v1, v2, c, omega: the unit vectors
     er1, er2, the inputs z0, z1, z2 and, in the whirl frame, the drive |u| (``inference._region_force``)."""
-    # one reciprocal per divisor (as the batched kernel): three divisions fewer on a state's critical path,
-    # ~6 ns of a ~130 ns float64 force here; the forces move by round-off (measured 7e-16 relative)
-    L = [f"{ind}rr = math.sqrt(x1 * x1 + x2 * x2)", f"{ind}at0 = 1.0 if rr == 0.0 else 0.0",
-         f"{ind}inv = 1.0 / (rr + at0)", f"{ind}er1 = x1 * inv", f"{ind}er2 = x2 * inv + at0",
-         f"{ind}icw = 1.0 / (c * omega)", f"{ind}z0 = rr / c",
-         f"{ind}z1 = (v1 * er1 + v2 * er2) * icw", f"{ind}z2 = (v1 * er2 - v2 * er1) * icw"]
+    # one reciprocal per divisor (as the batched kernel), 1/c from 1/(c omega): divisions off a state's
+    # critical path (~6 ns of a ~130 ns float64 force here); the forces move by round-off (7e-16 relative)
+    L = [f"{ind}s2 = x1 * x1 + x2 * x2", f"{ind}rr = math.sqrt(s2)", f"{ind}at0 = 1.0 if s2 == 0.0 else 0.0",
+         f"{ind}x2e = x2 + at0", f"{ind}inv = 1.0 / (rr + at0)", f"{ind}er1 = x1 * inv", f"{ind}er2 = x2e * inv",
+         f"{ind}icw = 1.0 / (c * omega)", f"{ind}ic = omega * icw", f"{ind}z0 = rr * ic"]
     if frame == 2:
-        L += [f"{ind}ua = z0 - 2.0 * z2", f"{ind}ub = 2.0 * z1", f"{ind}drive = math.sqrt(ua * ua + ub * ub)",
-              f"{ind}zero = 1.0 if drive == 0.0 else 0.0", f"{ind}inv = 1.0 / (drive + zero)",
-              f"{ind}z1 = ua * inv + zero", f"{ind}z2 = ub * inv"]
+        # the drive u = (z0 - 2 z2, 2 z1) times rr: the same direction without the division by rr on the way
+        # to the network's inputs (the critical path of a one-state force; ~3 ns of ~70 with float32 networks)
+        L += [f"{ind}ua = s2 * ic - 2.0 * (v1 * x2e - v2 * x1) * icw", f"{ind}ub = 2.0 * (v1 * x1 + v2 * x2e) * icw",
+              f"{ind}n2 = ua * ua + ub * ub", f"{ind}nd = math.sqrt(n2)", f"{ind}zero = 1.0 if n2 == 0.0 else 0.0",
+              f"{ind}invd = 1.0 / (nd + zero)", f"{ind}z1 = ua * invd + zero", f"{ind}z2 = ub * invd",
+              f"{ind}drive = nd * inv"]
+    else:
+        L += [f"{ind}z1 = (v1 * er1 + v2 * er2) * icw", f"{ind}z2 = (v1 * er2 - v2 * er1) * icw"]
     return L
 
 
@@ -471,8 +475,8 @@ def _uniform(key) -> bool:
 
 def _uniform_kernel_source(key, lay, head, f32=False) -> list[str]:
     """The region loop of a ``_uniform`` shape: one body for every region instead of a branch per region.
-    The frame (unit vectors, inputs, drive) is computed once for the state and again for a blend zone's
-    second region only where that region's c or omega differ; the region's weights sit at ``k * stride``
+    The frame (unit vectors, inputs, drive) is computed once for the state with region 0's c and omega and
+    again only for a region whose c or omega differ; the region's weights sit at ``k * stride``
     from region 0's (``Layout``).  Region by region the expressions are ``_region_source``'s, so the forces
     are the same to round-off; the branch per region (mispredicted for states that change region) and the
     blend zone's second frame are gone."""
@@ -483,14 +487,16 @@ def _uniform_kernel_source(key, lay, head, f32=False) -> list[str]:
     ind, ind2 = "    ", "        "
 
     L = list(head)
-    L += [f"{ind}c = w[{lay.regions} + 4 * ra]", f"{ind}omega = w[{lay.regions} + 4 * ra + 1]"]
+    # the frame with region 0's c and omega (the same in every region of ``best`` and the universal model), so
+    # that it need not wait for the region's choice; redone below for a region whose c or omega differ
+    L += [f"{ind}c = w[{lay.regions}]", f"{ind}omega = w[{lay.regions + 1}]"]
     L += _frame_source(frame, ind)
     L += [f"{ind}d = 1.0 - e2"] + ([] if power is None else [f"{ind}dp = {_power_source('d', power)}"])
     L += [f"{ind}fa1 = 0.0", f"{ind}fa2 = 0.0", f"{ind}fb1 = 0.0", f"{ind}fb2 = 0.0",
           f"{ind}for j in range(n_eval):",
           f"{ind2}k = ra if j == 0 else rb",
           f"{ind2}rc = {lay.regions} + 4 * k",
-          f"{ind2}if j > 0 and (w[rc] != c or w[rc + 1] != omega):",
+          f"{ind2}if w[rc] != c or w[rc + 1] != omega:",
           f"{ind2}    c = w[rc]", f"{ind2}    omega = w[rc + 1]"]
     L += _frame_source(frame, ind2 + "    ")
     L += [f"{ind2}fscale = w[rc + 2]", f"{ind2}off = k * {stride}"]
@@ -539,13 +545,15 @@ def kernel_source(key, precision: str = "float64") -> str:
         L.append(f"    r += 1 if eps >= w[{lay.bounds + b}] else 0")
     L += ["    ra = r", "    rb = r", "    wb = 0.0", "    n_eval = 1"]
     if blending:
-        L.append(f"    half = 0.5 * w[{BLEND}]")
+        # the blend zone holding eps as selects, then one division: a branch per zone made LLVM compute every
+        # zone's weight ahead of its test (five divisions per state: ~7 ns of ~72 with float32 networks)
+        L += [f"    half = 0.5 * w[{BLEND}]", "    zone = -1"]
         for b in reversed(range(nb)):  # the first boundary in order wins, as in the generic kernel
-            L += [f"    lo = w[{lay.bounds + b}] - half",
-                  f"    if lo <= eps < w[{lay.bounds + b}] + half:",
-                  f"        t = (eps - lo) / w[{BLEND}]",
-                  f"        ra = {b}", f"        rb = {b + 1}", "        wb = t * t * (3.0 - 2.0 * t)",
-                  "        n_eval = 2"]
+            L.append(f"    zone = {b} if w[{lay.bounds + b}] - half <= eps < w[{lay.bounds + b}] + half else zone")
+        L += ["    if zone >= 0:",
+              f"        t = (eps - (w[{lay.bounds} + zone] - half)) / w[{BLEND}]",
+              "        ra = zone", "        rb = zone + 1", "        wb = t * t * (3.0 - 2.0 * t)",
+              "        n_eval = 2"]
     if _uniform(key):
         return "\n".join(_uniform_kernel_source(key, lay, L, f32)) + "\n"
     L += ["    fa1 = 0.0", "    fa2 = 0.0", "    fb1 = 0.0", "    fb2 = 0.0",
