@@ -60,13 +60,7 @@ BEYOND_PAPER_STAGES = ("dataset_orbit", "train_best", "train_best_seeds", "ensem
 def _untimed_stages(reports: Path, timed) -> list[str]:
     """The pipeline's stages (``dvc.yaml`` beside ``reports/``) with no time in ``reproduce_timing.json``:
     stages added since the last full ``make reproduce``, which its total leaves out."""
-    import yaml
-
-    dvc_file = reports.resolve().parent / "dvc.yaml"
-    if not dvc_file.exists():
-        return []
-    names = {k.split("@")[0] for k in timed}
-    return [s for s in (yaml.safe_load(dvc_file.read_text()).get("stages") or {}) if s not in names]
+    return report.untimed_stages(report.pipeline_stages(reports), timed)
 
 
 def render_reproduce_timing(reports: Path) -> str:
@@ -74,24 +68,32 @@ def render_reproduce_timing(reports: Path) -> str:
     full = data.get("full")
     if not full:
         raise FileNotFoundError("reports/reproduce_timing.json has no full-profile run yet")
-    rows = [[f"`{name}`", f"{sec / 60:.1f} min" if sec >= 60 else f"{sec:.0f} s"]
+    runs = full.get("stage_runs", {})  # recorded per stage since 2026-12-04: its run's date and machine
+
+    def run_of(name: str) -> str:
+        run = runs.get(name)
+        if run is None:
+            return f"{full['date']} or before"
+        return run["date"] + ("" if run["machine"] == full["machine"] else f", {run['machine']}")
+
+    rows = [[f"`{name}`", f"{sec / 60:.1f} min" if sec >= 60 else f"{sec:.0f} s", run_of(name)]
             for name, sec in full["stages"].items()]
     beyond = [k for k in full["stages"] if k.split("@")[0] in BEYOND_PAPER_STAGES]
     beyond_s = sum(full["stages"][k] for k in beyond)
     rows.append([f"the paper's stages (all but {', '.join(f'`{k}`' for k in beyond)})",
-                 f"{(full['stages_total_s'] - beyond_s) / 60:.0f} min"])
-    rows.append(["the stages beyond the paper", f"{beyond_s / 60:.0f} min"])
+                 f"{(full['stages_total_s'] - beyond_s) / 60:.0f} min", ""])
+    rows.append(["the stages beyond the paper", f"{beyond_s / 60:.0f} min", ""])
     missing = _untimed_stages(reports, full["stages"])
     rows.append(["**total**" + (" of the stages timed" if missing else ""), f"**{full['stages_total_s'] / 60:.0f} min**"
-                 + (" (at least: some stages not timed)" if missing else "")])
+                 + (" (at least: some stages not timed)" if missing else ""), ""])
     if missing:
-        rows.append([f"not timed (added since that run; the total leaves them out): "
-                     f"{', '.join(f'`{s}`' for s in missing)}", "-"])
-    return (f"Measured on {full['date']}, {full['machine']}: the wall time of each stage's last run "
-            f"(`reports/reproduce_timing.json`, written by `make reproduce`; a stage that was not rerun keeps "
-            f"its time). A rerun reuses finished dataset parts and a finished training checkpoint of the "
-            f"same configuration, so such a stage shows the time of the resumed run, not of a run from "
-            f"scratch:\n\n" + _table(["stage", "wall time"], rows))
+        rows.append([f"not timed yet (the total leaves them out): {', '.join(f'`{s}`' for s in missing)}", "-", ""])
+    return (f"The wall time of each stage's last run in the full profile, on {full['machine']} unless the row "
+            f"names another machine (`reports/reproduce_timing.json`, written by `make reproduce` as each stage "
+            f"finishes, so a run stopped half-way keeps the times of the stages it finished; a stage that was not "
+            f"rerun keeps its time). A rerun reuses finished dataset parts and a finished training checkpoint of "
+            f"the same configuration, so such a stage shows the time of the resumed run, not of a run from "
+            f"scratch:\n\n" + _table(["stage", "wall time", "run"], rows))
 
 
 def _minutes(seconds: float) -> str:

@@ -77,14 +77,24 @@ def prepare_profile_copy(root: Path, profile: str, workdir: Path) -> Path:
     return workdir
 
 
-def run_dvc_repro(workdir: Path, extra: list[str]) -> tuple[int, dict[str, float]]:
-    """``dvc repro`` in ``workdir``, streaming its output; return its exit code and seconds per stage run."""
+def run_dvc_repro(workdir: Path, extra: list[str], on_stage_done=None) -> tuple[int, dict[str, float]]:
+    """``dvc repro`` in ``workdir``, streaming its output; return its exit code and seconds per stage run.
+
+    ``on_stage_done(name, seconds)`` is called as each stage finishes (when the next one starts, or dvc
+    exits 0): a run stopped half-way keeps the times of the stages it finished (a full run takes longer
+    than one sitting; DVC keeps their outputs, this keeps their times)."""
     cmd = [str(venv_bin() / "dvc"), "repro", *extra]
     env = dict(os.environ)
     env.setdefault("PYTHONUNBUFFERED", "1")     # stage output line by line, not in 4 kB blocks
     start = time.perf_counter()
     stage_times: dict[str, float] = {}
     current, current_start = None, start
+
+    def finished(name: str, seconds: float) -> None:
+        stage_times[name] = seconds
+        if on_stage_done is not None:
+            on_stage_done(name, seconds)
+
     proc = subprocess.Popen(cmd, cwd=workdir, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             bufsize=1)
     try:
@@ -94,7 +104,7 @@ def run_dvc_repro(workdir: Path, extra: list[str]) -> tuple[int, dict[str, float
             now = time.perf_counter()
             if m:
                 if current is not None:
-                    stage_times[current] = now - current_start
+                    finished(current, now - current_start)
                 current, current_start = m.group(1), now
                 line = line.rstrip("\n") + f"   [pipeline {now - start:,.0f} s]\n"
             sys.stdout.write(line)
@@ -107,21 +117,26 @@ def run_dvc_repro(workdir: Path, extra: list[str]) -> tuple[int, dict[str, float
               "(finished stages and finished dataset parts are kept)", file=sys.stderr)
         raise SystemExit(130) from None
     if current is not None and code == 0:
-        stage_times[current] = time.perf_counter() - current_start
+        finished(current, time.perf_counter() - current_start)
     return code, stage_times
 
 
-def record_timing(workdir: Path, profile: str, stage_times: dict[str, float], total: float) -> None:
-    """Merge the seconds of the stages that ran into reports/reproduce_timing.json (stages not rerun keep theirs)."""
+def record_timing(workdir: Path, profile: str, stage_times: dict[str, float], total: float | None = None) -> None:
+    """Merge the seconds of the stages that ran into reports/reproduce_timing.json (stages not rerun keep theirs),
+    each with the date and machine of its run; ``total``: the wall time of a whole ``dvc repro`` that ended."""
+    from fluidfilm.perf.benchmarking import machine
+
     path = workdir / TIMING_FILE
     data = json.loads(path.read_text()) if path.exists() else {}
     runs = data.setdefault(profile, {"stages": {}})
+    today, host = _dt.date.today().isoformat(), machine()
     runs["stages"].update({k: round(v, 1) for k, v in stage_times.items()})
-    runs["date"] = _dt.date.today().isoformat()
-    from fluidfilm.perf.benchmarking import machine
-
-    runs["machine"] = machine()
-    runs["last_run_total_s"] = round(total, 1)
+    when = runs.setdefault("stage_runs", {})
+    when.update({k: {"date": today, "machine": host} for k in stage_times})
+    runs["date"] = today
+    runs["machine"] = host
+    if total is not None:
+        runs["last_run_total_s"] = round(total, 1)
     runs["stages_total_s"] = round(sum(runs["stages"].values()), 1)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp")
@@ -151,13 +166,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     workdir = root if args.profile == "full" else prepare_profile_copy(root, args.profile, Path(args.workdir))
     print(f"fluidfilm pipeline: profile {args.profile}, in {workdir}", flush=True)
     start = time.perf_counter()
-    code, stage_times = run_dvc_repro(workdir, args.dvc_args)
+    code, stage_times = run_dvc_repro(workdir, args.dvc_args,
+                                      lambda name, sec: record_timing(workdir, args.profile, {name: sec}))
     total = time.perf_counter() - start
     if code != 0:
         print(f"\ndvc repro failed (exit {code}) after {total:,.0f} s", file=sys.stderr)
         return code
     if stage_times:
-        record_timing(workdir, args.profile, stage_times, total)
+        record_timing(workdir, args.profile, {}, total)
     from fluidfilm.reporting import readme
 
     readme.main(["--readme", str(workdir / "README.md"), "--reports", str(workdir / "reports")])
