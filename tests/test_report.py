@@ -372,5 +372,8 @@ def test_a_stopped_pipeline_keeps_the_times_of_the_stages_it_finished(tmp_path, 
     full = json.loads((tmp_path / "reports" / "reproduce_timing.json").read_text())["full"]
     assert 0.15 < full["stages"]["dataset"] < 5.0 and 0.05 < full["stages"]["train_best"] < 5.0
     assert full["stages"]["ablation"] == 60.0 and "universal_train" not in full["stages"]  # others keep theirs
-    assert set(full["stage_runs"]) == {"dataset", "train_best"}
+    # the record's older stages keep the run they had (its date and machine); the new ones name theirs
+    assert full["stage_runs"]["ablation"] == {"date": "2026-12-01", "machine": "m"}
+    assert full["stage_runs"]["dataset"]["date"] != "2026-12-01" and set(full["stage_runs"]) == {
+        "dataset", "train_best", "ablation"}
     assert full["stages_total_s"] == pytest.approx(sum(full["stages"].values()), abs=0.05)

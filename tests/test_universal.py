@@ -450,3 +450,22 @@ def test_each_phase_of_a_tracked_fit_is_its_own_run_and_a_rerun_adds_none(tmp_pa
                           "universal_gumbel/network1_derivatives": "1.5"}
     fit()
     assert len(children()) == 4
+
+
+def test_the_equal_accuracy_speed_up_is_the_median_of_side_by_side_rounds():
+    import pandas as pd
+    from omegaconf import OmegaConf
+
+    from fluidfilm.studies.universal import reference_cost_at_equal_accuracy
+
+    cfg = OmegaConf.create({"evaluate": {"n_timing": 200, "n_batch": 64, "timing_rounds": 3}})
+    errors = pd.DataFrame({"cavitation": ["gumbel"] * 3, "ld": [0.75] * 3, "rel_err": [0.02, 0.03, 0.01]})
+    with pytest.raises(ValueError, match="rounds=0"):
+        reference_cost_at_equal_accuracy(cfg, errors, rounds=0)
+    row = reference_cost_at_equal_accuracy(cfg, errors).iloc[0]
+    # the grid the convergence check accepts at the model's median error (2 %), and three rounds by the config
+    assert row.tol == pytest.approx(0.02) and row.rounds == 3 and row.n_theta >= 8
+    for name in ("speedup", "speedup_float32", "speedup_batched"):
+        assert 0.0 < row[f"{name}_lo"] <= row[name] <= row[f"{name}_hi"]
+    # each reading's median ratio lies within the spread of the arms' own medians (a ratio, not a lone sample)
+    assert row.speedup == pytest.approx(row.reference_us / row.universal_us, rel=0.5)

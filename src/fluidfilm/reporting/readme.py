@@ -100,6 +100,21 @@ def _minutes(seconds: float) -> str:
     return f"{seconds / 60:.0f} min" if seconds >= 60 else f"{seconds:.0f} s"
 
 
+def _stage_runs_summary(full: Mapping) -> str:
+    """Where and when the pipeline's stage times were measured: 'on M, D' or, for stages run in several
+    sittings, 'on M1 (D1: n stages), on M2 (D2, D3: m stages)'."""
+    runs = full.get("stage_runs") or {k: {"date": full["date"], "machine": full["machine"]} for k in full["stages"]}
+    by_machine: dict[str, list[str]] = {}
+    for k in full["stages"]:
+        run = runs.get(k, {"date": f"{full['date']} or before", "machine": full["machine"]})
+        by_machine.setdefault(run["machine"], []).append(run["date"])
+    if len(by_machine) == 1 and len(set(next(iter(by_machine.values())))) == 1:
+        machine, dates = next(iter(by_machine.items()))
+        return f"on {machine}, {dates[0]}"
+    return ", ".join(f"on {m} ({', '.join(sorted(set(d)))}: {len(d)} stage{'s' if len(d) > 1 else ''})"
+                     for m, d in by_machine.items())
+
+
 def render_commands(reports: Path) -> str:
     """The README's commands and how long each takes: the pipeline from ``reproduce_timing.json`` (written by
     ``make reproduce``), the install and the test suite from ``test_timing.json`` (``make time-tests``: a fresh
@@ -112,12 +127,12 @@ def render_commands(reports: Path) -> str:
              _minutes(t["setup_s"])],
             ["`make reproduce`", "the whole pipeline (`dvc repro`): datasets, models, studies, figures, report",
              _minutes(full["stages_total_s"]) if not _untimed_stages(reports, full["stages"]) else
-             f"more than {_minutes(full['stages_total_s'])} (stages added since {full['date']} not timed)"],
+             f"more than {_minutes(full['stages_total_s'])} (some stages not timed yet)"],
             ["`make test`", f"the default suite ({t['tests']:,} tests, {t['skipped']} skipped), among them the pipeline "
              f"on its small profile ({_minutes(t['quick_reproduce_s'])})", _minutes(t["suite_s"])]]
     return (_table(["command", "what it does", "time"], rows)
             # each measurement names its own machine (the pipeline's and the tests' runs were on different hosts)
-            + f"\nMeasured: the pipeline on {full['machine']}, {full['date']} (`reports/reproduce_timing.json`, "
+            + f"\nMeasured: the pipeline's stages {_stage_runs_summary(full)} (`reports/reproduce_timing.json`, "
               f"per stage in [docs/results.md](docs/results.md#how-long-make-reproduce-takes)); the install and the "
               f"tests from a fresh clone of {t['commit']} on {t.get('machine', 'an unrecorded machine')}, {t['date']} "
               f"(`reports/test_timing.json`).\n")
@@ -538,10 +553,12 @@ def render_universal(reports: Path) -> str:
             if key not in same[0]:
                 continue
             worst = min(same, key=lambda r: r[key])
-            ref_us = worst["reference_us" if key == "speedup" else "reference_batched_us"]
+            ref_us = worst["reference_batched_us" if key == "speedup_batched" else "reference_us"]
+            spread = (f" (rounds {worst[key + '_lo']:.0f}-{worst[key + '_hi']:.0f}x)" if f"{key}_lo" in worst
+                      else "")  # evaluations before 2026-12-04 (fifth session): one ratio of medians
             rows.append([f"speed-up per force over the reference on the grid as accurate as the model, {how} "
                          f"(grids {', '.join(grids)}; least: {worst['cavitation']}, L/D {worst['ld']:g}, "
-                         f"{ref_us:.0f} us)", f"{worst[key]:.0f}x", f"≥ {goal:g}x",
+                         f"{ref_us:.0f} us)", f"{worst[key]:.0f}x{spread}", f"≥ {goal:g}x",
                          "yes" if worst[key] >= goal else "no"])
     by_rule = "; ".join(f"{r}: median {100 * v['median']:.2f} %, p99 {100 * v['p99']:.1f} %"
                         for r, v in u["by_rule"].items())

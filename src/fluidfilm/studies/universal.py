@@ -287,7 +287,8 @@ def fig4_cases(cfg) -> pd.DataFrame:
 
 def force_cost(cfg) -> dict:
     """Seconds per force of the shipped model and of the best model's shape (five regions, 3-64-2;
-    ``perf.speed.best_shaped_surrogate``), side by side, medians of interleaved runs, with the load: the
+    ``perf.speed.best_shaped_surrogate``), side by side, medians of ``evaluate.timing_rounds`` interleaved
+    rounds (cost ratios: the median of the rounds' own ratios), with the load: the
     one-state kernel in the integrator's loop (``simulate``), its networks in float64 (its default) and
     float32 (``simulate(precision="float32")``), and the batched kernel on ``evaluate.n_batch`` states per call
     in one thread (``simulate_batch``'s per RK4 stage), its networks in float32 (its default) and float64."""
@@ -306,36 +307,46 @@ def force_cost(cfg) -> dict:
             "_batched_float64": lambda m: time_per_force_eval_batched(m, xb, vb, "float64")}
     load0 = os.getloadavg()[0]
     t: dict[str, list] = {f"{name}{arm}": [] for arm in arms for name in models}
-    for _ in range(5):  # interleaved: both see the same machine load
+    rounds = int(cfg.evaluate.get("timing_rounds", 7))
+    for _ in range(rounds):  # interleaved: both see the same machine load
         for arm, timed in arms.items():
             for name, model in models.items():
                 t[f"{name}{arm}"].append(timed(model))
     us = {k: 1e6 * float(np.median(v)) for k, v in t.items()}
+
+    def ratio(arm: str) -> float:  # the median of the rounds' own ratios (reference_cost_at_equal_accuracy)
+        return float(np.median(np.array(t[f"universal{arm}"]) / np.array(t[f"best_shape{arm}"])))
+
     return {**{f"force_eval_us_{k}": val for k, val in us.items()},
-            "universal_vs_best_cost_ratio": us["universal"] / us["best_shape"],
-            "universal_vs_best_cost_ratio_float32": us["universal_float32"] / us["best_shape_float32"],
-            "universal_vs_best_cost_ratio_batched_float32": us["universal_batched_float32"] / us["best_shape_batched_float32"],
+            "universal_vs_best_cost_ratio": ratio(""), "universal_vs_best_cost_ratio_float32": ratio("_float32"),
+            "universal_vs_best_cost_ratio_batched_float32": ratio("_batched_float32"), "rounds": rounds,
             "n_batch": int(cfg.evaluate.n_batch), "loadavg_1min": [load0, os.getloadavg()[0]], "machine": machine()}
 
 
-def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, rounds: int = 3) -> pd.DataFrame:
+def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, rounds: int | None = None) -> pd.DataFrame:
     """Per rule and held-out L/D: the grid the reference needs to be as accurate as the shipped model there
     (the convergence check of the dataset, ``data.universal.converged_grid``, at the model's median relative
     error for that rule and L/D, the larger of its float64 and float32 readings, so that every reading below
     is at equal accuracy), and the reference's time per force on it beside the model's, timed side by side:
-    ``rounds`` interleaved rounds of each arm, medians.
+    ``rounds`` (default ``evaluate.timing_rounds``) interleaved rounds of each arm; times are medians over
+    the rounds, speed-ups the median of the rounds' own ratios, with their least and largest (``_lo``,
+    ``_hi``).
 
     Three readings, each model run the same way: the one-state kernel in the integrator's loop (the model's
     networks in float64, and in float32 as ``simulate(precision="float32")`` runs them, against the same
     reference time), and the batched kernel as ``simulate_batch`` calls it, in one thread (``evaluate.n_batch``
     states per call, the model's float32 networks; the reference's batched kernel is its one-state solve per
     row, in float64).  Rows: rule, ld, tol, n_theta, n_z, reference_us, universal_us, universal_float32_us,
-    speedup, speedup_float32, reference_batched_us, universal_batched_us, speedup_batched."""
+    reference_batched_us, universal_batched_us, rounds, and speedup, speedup_float32, speedup_batched, each
+    with its least and largest round (_lo, _hi)."""
     from fluidfilm import ReynoldsSolver
     from fluidfilm.data.universal import _n_z, converged_grid
     from fluidfilm.perf.speed import sample_states, time_per_force_eval, time_per_force_eval_batched
     from fluidfilm.surrogate.universal import universal_bearing
 
+    rounds = int(cfg.evaluate.get("timing_rounds", 7)) if rounds is None else int(rounds)
+    if rounds < 1:
+        raise ValueError(f"reference_cost_at_equal_accuracy needs at least one round, got rounds={rounds}")
     rows = []
     for (rule, ld), g in errors.groupby(["cavitation", "ld"]):
         tol = float(max(g.rel_err.median(), g.rel_err_float32.median() if "rel_err_float32" in g else 0.0))
@@ -358,9 +369,16 @@ def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, rounds: int = 3)
                 t[k].append(timed())
         us = {k: 1e6 * float(np.median(val)) for k, val in t.items()}
         row = {"cavitation": rule, "ld": float(ld), "tol": tol, "n_theta": nt, "n_z": _n_z(nt, float(ld)), **us,
-               "speedup": us["reference_us"] / us["universal_us"],
-               "speedup_float32": us["reference_us"] / us["universal_float32_us"],
-               "speedup_batched": us["reference_batched_us"] / us["universal_batched_us"]}
+               "rounds": rounds}
+        # the ratio of each round (its arms run back to back), then the median and range over the rounds: this
+        # host's speed drifts by tens of per cent over seconds, and the reference (a sparse direct solve) and
+        # the model (vector arithmetic) are not slowed alike, so a ratio of separate medians drifted with it
+        for name, ref, mod in (("speedup", "reference_us", "universal_us"),
+                               ("speedup_float32", "reference_us", "universal_float32_us"),
+                               ("speedup_batched", "reference_batched_us", "universal_batched_us")):
+            ratios = np.array(t[ref]) / np.array(t[mod])
+            row.update({name: float(np.median(ratios)), f"{name}_lo": float(ratios.min()),
+                        f"{name}_hi": float(ratios.max())})
         rows.append(row)
         print(f"  {rule} L/D={ld:g}: the reference as accurate ({100 * tol:.3f} %) needs {nt} x {row['n_z']}: "
               f"{us['reference_us']:.0f} us per force, {row['speedup']:.0f}x the universal model "

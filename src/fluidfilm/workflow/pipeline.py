@@ -131,7 +131,9 @@ def record_timing(workdir: Path, profile: str, stage_times: dict[str, float], to
     runs = data.setdefault(profile, {"stages": {}})
     today, host = _dt.date.today().isoformat(), machine()
     runs["stages"].update({k: round(v, 1) for k, v in stage_times.items()})
-    when = runs.setdefault("stage_runs", {})
+    if "stage_runs" not in runs:  # a record from before per-stage runs: its stages ran on its date and machine
+        runs["stage_runs"] = {k: {"date": runs.get("date"), "machine": runs.get("machine")} for k in runs["stages"]}
+    when = runs["stage_runs"]
     when.update({k: {"date": today, "machine": host} for k in stage_times})
     runs["date"] = today
     runs["machine"] = host
