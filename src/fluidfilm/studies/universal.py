@@ -373,10 +373,10 @@ def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, rounds: int | No
         # the ratio of each round (its arms run back to back), then the median and range over the rounds: this
         # host's speed drifts by tens of per cent over seconds, and the reference (a sparse direct solve) and
         # the model (vector arithmetic) are not slowed alike, so a ratio of separate medians drifted with it
-        for name, ref, mod in (("speedup", "reference_us", "universal_us"),
-                               ("speedup_float32", "reference_us", "universal_float32_us"),
-                               ("speedup_batched", "reference_batched_us", "universal_batched_us")):
-            ratios = np.array(t[ref]) / np.array(t[mod])
+        for name, ref_arm, model_arm in (("speedup", "reference_us", "universal_us"),
+                                         ("speedup_float32", "reference_us", "universal_float32_us"),
+                                         ("speedup_batched", "reference_batched_us", "universal_batched_us")):
+            ratios = np.array(t[ref_arm]) / np.array(t[model_arm])
             row.update({name: float(np.median(ratios)), f"{name}_lo": float(ratios.min()),
                         f"{name}_hi": float(ratios.max())})
         rows.append(row)
