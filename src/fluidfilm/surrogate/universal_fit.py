@@ -323,6 +323,24 @@ class UniversalNet(L.LightningModule):
                 for m in self.net if isinstance(m, nn.Linear)]
 
 
+class _FullBatch(torch.utils.data.Dataset):
+    """The whole set as its one batch: a loader over it (``batch_size=None``) hands the tensors on as they are.
+    A loader over a ``TensorDataset`` with the batch as large as the set fetched the rows one by one and
+    stacked them again every epoch, that is every Levenberg-Marquardt step: ~40 % of a step's time for a
+    region of ~5,000 rows (the same tensors, so the same steps)."""
+
+    def __init__(self, tensors):
+        self.tensors = list(tensors)
+
+    def __len__(self) -> int:
+        return 1
+
+    def __getitem__(self, index: int):
+        if index != 0:
+            raise IndexError(f"a full batch has only index 0, got {index}")
+        return self.tensors
+
+
 class _EveryNCheckpoint(L.pytorch.callbacks.Callback):
     """``last.ckpt`` (written aside and renamed into place) every ``every`` steps and when the fit stops."""
 
@@ -438,7 +456,7 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
         return [torch.as_tensor(a[mask]) for a in ((z - in_mean) / in_std, (y - out_mean) / out_std, w, S, T, Wd)]
 
     def loader(mask):
-        return torch.utils.data.DataLoader(torch.utils.data.TensorDataset(*tensors(mask)), batch_size=int(mask.sum()))
+        return torch.utils.data.DataLoader(_FullBatch(tensors(mask)), batch_size=None)
 
     net = UniversalNet(width, out_mean.tolist(), out_std.tolist(), derivative_weight=float(derivative_weight))
     if init is not None:
