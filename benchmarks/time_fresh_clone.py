@@ -10,6 +10,7 @@ import datetime
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -22,13 +23,22 @@ from fluidfilm.io import write_json  # noqa: E402
 from fluidfilm.perf.benchmarking import machine  # noqa: E402
 
 
+#: where a failed run's log is kept (the clone and its logs live in a temporary folder that is removed)
+FAILED_LOG_DIR = ROOT / "build" / "time-tests"
+
+
 def _run(cmd: list[str], cwd: Path, log: Path) -> float:
     env = {"PATH": "/usr/local/bin:/usr/bin:/bin", "HOME": os.environ.get("HOME", "/root"), "LANG": "C.UTF-8"}
     t0 = time.perf_counter()
     with open(log, "w") as f:
         proc = subprocess.run(cmd, cwd=cwd, env=env, stdout=f, stderr=subprocess.STDOUT)
     if proc.returncode != 0:
-        raise SystemExit(f"{' '.join(cmd)} failed (exit {proc.returncode}); see {log}")
+        FAILED_LOG_DIR.mkdir(parents=True, exist_ok=True)
+        kept = FAILED_LOG_DIR / log.name
+        shutil.copy2(log, kept)
+        failed = [ln for ln in log.read_text(errors="replace").splitlines() if ln.startswith(("FAILED", "ERROR"))]
+        raise SystemExit(f"{' '.join(cmd)} failed (exit {proc.returncode}); log kept in {kept}"
+                         + "".join(f"\n  {ln}" for ln in failed[:20]))
     return time.perf_counter() - t0
 
 
