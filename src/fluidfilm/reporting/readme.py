@@ -68,12 +68,8 @@ def render_reproduce_timing(reports: Path) -> str:
     full = data.get("full")
     if not full:
         raise FileNotFoundError("reports/reproduce_timing.json has no full-profile run yet")
-    runs = full.get("stage_runs", {})  # recorded per stage since 2026-12-04: its run's date and machine
-
     def run_of(name: str) -> str:
-        run = runs.get(name)
-        if run is None:
-            return f"{full['date']} or before"
+        run = _stage_run(full, name)
         return run["date"] + ("" if run["machine"] == full["machine"] else f", {run['machine']}")
 
     rows = [[f"`{name}`", f"{sec / 60:.1f} min" if sec >= 60 else f"{sec:.0f} s", run_of(name)]
@@ -100,13 +96,18 @@ def _minutes(seconds: float) -> str:
     return f"{seconds / 60:.0f} min" if seconds >= 60 else f"{seconds:.0f} s"
 
 
+def _stage_run(full: Mapping, name: str) -> dict:
+    """The date and machine of a stage's last run: recorded per stage since 2026-12-04; a stage of an older
+    record ran on its machine, on its date or before (a stage not rerun keeps its time)."""
+    return full.get("stage_runs", {}).get(name, {"date": f"{full['date']} or before", "machine": full["machine"]})
+
+
 def _stage_runs_summary(full: Mapping) -> str:
     """Where and when the pipeline's stage times were measured: 'on M, D' or, for stages run in several
     sittings, 'on M1 (D1: n stages), on M2 (D2, D3: m stages)'."""
-    runs = full.get("stage_runs") or {k: {"date": full["date"], "machine": full["machine"]} for k in full["stages"]}
     by_machine: dict[str, list[str]] = {}
     for k in full["stages"]:
-        run = runs.get(k, {"date": f"{full['date']} or before", "machine": full["machine"]})
+        run = _stage_run(full, k)
         by_machine.setdefault(run["machine"], []).append(run["date"])
     if len(by_machine) == 1 and len(set(next(iter(by_machine.values())))) == 1:
         machine, dates = next(iter(by_machine.items()))

@@ -285,6 +285,12 @@ def fig4_cases(cfg) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def round_ratios(numerator, denominator) -> tuple[float, float, float]:
+    """Median, least and largest of the per-round ratios of two arms timed back to back in each round."""
+    r = np.asarray(numerator, dtype=float) / np.asarray(denominator, dtype=float)
+    return float(np.median(r)), float(r.min()), float(r.max())
+
+
 def force_cost(cfg) -> dict:
     """Seconds per force of the shipped model and of the best model's shape (five regions, 3-64-2;
     ``perf.speed.best_shaped_surrogate``), side by side, medians of ``evaluate.timing_rounds`` interleaved
@@ -314,8 +320,8 @@ def force_cost(cfg) -> dict:
                 t[f"{name}{arm}"].append(timed(model))
     us = {k: 1e6 * float(np.median(v)) for k, v in t.items()}
 
-    def ratio(arm: str) -> float:  # the median of the rounds' own ratios (reference_cost_at_equal_accuracy)
-        return float(np.median(np.array(t[f"universal{arm}"]) / np.array(t[f"best_shape{arm}"])))
+    def ratio(arm: str) -> float:
+        return round_ratios(t[f"universal{arm}"], t[f"best_shape{arm}"])[0]
 
     return {**{f"force_eval_us_{k}": val for k, val in us.items()},
             "universal_vs_best_cost_ratio": ratio(""), "universal_vs_best_cost_ratio_float32": ratio("_float32"),
@@ -376,9 +382,8 @@ def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, rounds: int | No
         for name, ref_arm, model_arm in (("speedup", "reference_us", "universal_us"),
                                          ("speedup_float32", "reference_us", "universal_float32_us"),
                                          ("speedup_batched", "reference_batched_us", "universal_batched_us")):
-            ratios = np.array(t[ref_arm]) / np.array(t[model_arm])
-            row.update({name: float(np.median(ratios)), f"{name}_lo": float(ratios.min()),
-                        f"{name}_hi": float(ratios.max())})
+            mid, lo, hi = round_ratios(t[ref_arm], t[model_arm])
+            row.update({name: mid, f"{name}_lo": lo, f"{name}_hi": hi})
         rows.append(row)
         print(f"  {rule} L/D={ld:g}: the reference as accurate ({100 * tol:.3f} %) needs {nt} x {row['n_z']}: "
               f"{us['reference_us']:.0f} us per force, {row['speedup']:.0f}x the universal model "
