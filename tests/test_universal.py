@@ -339,6 +339,52 @@ def test_a_derivative_weight_per_rule_must_name_the_rule():
         derivative_weight_for({"gumbel": 2.0}, "swift-stieber")
 
 
+def test_a_per_rule_or_per_region_setting_is_refused_naming_the_value():
+    from fluidfilm.studies.universal import for_rule
+    from fluidfilm.surrogate.universal_fit import train_universal
+    from fluidfilm.workflow.config_check import ConfigError
+
+    assert for_rule({"gumbel": [1, 2], "swift-stieber": 3}, "swift-stieber", "steps") == 3
+    assert for_rule(7, "gumbel", "steps") == 7
+    with pytest.raises(ConfigError, match=r"train.steps=.*'swift-stieber' is missing"):
+        for_rule({"gumbel": [1, 2]}, "swift-stieber", "steps")
+    frame = __import__("pandas").DataFrame({"eps": [0.1, 0.7], "alpha": 0.0, "ld": 1.0, "G_r": 1.0, "G_t": 1.0})
+    with pytest.raises(ValueError, match=r"steps=\[5, 5, 5\] needs one value or one per region \(2\)"):
+        train_universal(frame, boundaries=[0.5], steps=[5, 5, 5])
+    with pytest.raises(ValueError, match=r"refine_minutes=\[0, 1\]: every value must be > 0"):
+        train_universal(frame, boundaries=[0.5], refine_minutes=[0, 1])
+    with pytest.raises(ValueError, match="workers must be >= 1"):
+        train_universal(frame, boundaries=[0.5], workers=0)
+
+
+def test_the_weights_depend_on_the_steps_not_on_workers_or_the_clock(tmp_path):
+    # the stopping rule is a step count and every fit has one torch thread: regions fitted side by side in
+    # worker processes give the weights of a fit one after the other, bit for bit, and no wall-time cap is
+    # involved (a cap reached is reported: stopped_by_time)
+    import pandas as pd
+
+    from fluidfilm.surrogate.universal_fit import train_region, train_universal
+
+    rng = np.random.default_rng(3)
+    eps = rng.uniform(0.02, 0.9, 400)
+    alpha = rng.uniform(-np.pi, np.pi, 400)
+    frame = pd.DataFrame({"eps": eps, "alpha": alpha, "ld": rng.uniform(0.3, 1.5, 400),
+                          "G_r": np.cos(alpha) * eps, "G_t": np.sin(alpha) + eps**2})
+    kw = dict(boundaries=[0.5], width=6, steps=[20, 30], seed=4)
+    serial = train_universal(frame, workers=1, **kw)
+    side_by_side = train_universal(frame, workers=2, **kw)
+    assert side_by_side["workers"] == 2 and serial["workers"] == 1
+    assert [r["steps"] for r in serial["regions"]] == [20, 30]
+    for a, b in zip(serial["regions"], side_by_side["regions"]):
+        assert not a["stopped_by_time"]
+        for (wa, ba), (wb, bb) in zip(a["layers"], b["layers"]):
+            np.testing.assert_array_equal(wa, wb)
+            np.testing.assert_array_equal(ba, bb)
+    z, y = _teacher_data()
+    capped = train_region(z, y, width=8, steps=10**6, max_minutes=0.02, seed=1)
+    assert capped["stopped_by_time"] and 0 < capped["steps"] < 10**6
+
+
 def test_region_layout_refusals():
     from fluidfilm.surrogate.universal_fit import region_rows, train_universal
 
@@ -469,3 +515,35 @@ def test_the_equal_accuracy_speed_up_is_the_median_of_side_by_side_rounds():
         assert 0.0 < row[f"{name}_lo"] <= row[name] <= row[f"{name}_hi"]
     # each reading's median ratio lies within the spread of the arms' own medians (a ratio, not a lone sample)
     assert row.speedup == pytest.approx(row.reference_us / row.universal_us, rel=0.5)
+
+
+@pytest.mark.slow
+def test_the_configured_step_counts_refit_the_shipped_weights_bit_for_bit(tmp_path):
+    # the stopping rule is conf/universal.yaml's step counts, one torch thread per fit: the lowest Gumbel
+    # region refitted from the dataset the configuration describes is the shipped network, bit for bit (on
+    # this workspace's machine; another CPU's BLAS kernels may sum in another order, and Levenberg-Marquardt
+    # carries round-off into other weights within a few hundred steps). About 3 minutes.
+    from omegaconf import OmegaConf
+
+    from fluidfilm.data.universal import UniversalSpec, generate_universal, load_universal
+    from fluidfilm.studies.universal import derivative_weight_for, for_rule
+    from fluidfilm.surrogate.universal import load_weights
+    from fluidfilm.surrogate.universal_fit import train_universal
+
+    cfg = OmegaConf.load(ROOT / "conf" / "universal.yaml")
+    spec = UniversalSpec.from_cfg({**OmegaConf.to_container(cfg.layout), "cavitation": ["gumbel"]})
+    generate_universal(spec, tmp_path / "u", scheduler="inline", progress=False)
+    frame, _ = load_universal(tmp_path / "u", "gumbel")
+    tr = cfg.train
+    top = float(tr.boundaries[0]) + float(tr.blend_width)      # region 0's rows and its data beyond the blend
+    frame = frame[frame.eps < top + 0.1].reset_index(drop=True)
+    first = [for_rule(tr[k], "gumbel", k)[0] for k in ("steps", "refine_steps")]
+    fit = train_universal(frame, boundaries=[float(tr.boundaries[0])], blend_width=tr.blend_width,
+                          overlap=tr.overlap, power=tr.power, width=tr.width, floor_share=tr.floor_share,
+                          seed=tr.seed, derivative_weight=derivative_weight_for(tr.derivative_weight, "gumbel"),
+                          derivative_rows=tr.derivative_rows, steps=[first[0], 1], refine_steps=[first[1], 1],
+                          workers=1)
+    shipped = load_weights("gumbel")["regions"][0]
+    for (W, b), (Ws, bs) in zip(fit["regions"][0]["layers"], shipped["layers"]):
+        np.testing.assert_array_equal(W, Ws)
+        np.testing.assert_array_equal(b, bs)

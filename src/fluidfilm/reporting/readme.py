@@ -568,7 +568,26 @@ def render_universal(reports: Path) -> str:
     return (_table(["quantity", "measured", "goal", "met"], rows)
             + f"\nPer cavitation rule: {by_rule}. Against the published table (its feed at the maximum film "
               f"thickness, our plain bearing none): S within {rb['max_S_err_pct']:.1f} %, attitude within "
-              f"{rb['max_phi_err_pct']:.1f} %.\n")
+              f"{rb['max_phi_err_pct']:.1f} %.\n" + _weights_reproduced(u.get("weights_reproduced")))
+
+
+def _weights_reproduced(found: Mapping | None) -> str:
+    """Whether the pipeline's own training gave the shipped weights (``weights_reproduced``: evaluations since
+    2026-12-04, sixth session)."""
+    if not found:
+        return ""
+
+    def says(rule: str, r: Mapping) -> str:
+        if r.get("missing"):
+            return f"{rule}: no trained weights in models/universal"
+        if r["identical"]:
+            return f"{rule}: the shipped weights, bit for bit"
+        if r.get("max_rel_diff") is None:
+            return f"{rule}: networks of another shape (a smaller profile's)"
+        return f"{rule}: other weights (largest difference {100 * r['max_rel_diff']:.3g} % of an array's largest entry)"
+
+    return ("\nThe pipeline's own training (`universal_train`, `models/universal`) against the shipped weights: "
+            + "; ".join(says(rule, r) for rule, r in found.items()) + ".\n")
 
 
 def render_surrogate_goals(reports: Path) -> str:

@@ -65,6 +65,27 @@ def _dataset(cfg) -> Logged:
 
 
 # ------------------------------------------------------------------------------------------------ training
+def for_rule(value, rule: str, key: str):
+    """A ``train`` setting for one cavitation rule: one value for both rules, or a mapping rule -> value.
+
+    Examples
+    --------
+    >>> for_rule(2.0, "gumbel", "derivative_weight"), for_rule({"gumbel": [3, 4], "swift-stieber": 5}, "gumbel", "steps")
+    (2.0, [3, 4])
+    """
+    from collections.abc import Mapping
+
+    from omegaconf import DictConfig, ListConfig, OmegaConf
+
+    if isinstance(value, (DictConfig, ListConfig)):
+        value = OmegaConf.to_container(value)
+    if not isinstance(value, Mapping):
+        return value
+    if rule not in value:
+        raise ConfigError(f"train.{key}={value!r}: give one value for both rules or one per rule ({rule!r} is missing)")
+    return value[rule]
+
+
 def derivative_weight_for(value, rule: str) -> float:
     """``train.derivative_weight`` for one rule: one number for both, or a mapping rule -> number.
 
@@ -73,12 +94,10 @@ def derivative_weight_for(value, rule: str) -> float:
     >>> derivative_weight_for(2.0, "gumbel"), derivative_weight_for({"gumbel": 2, "swift-stieber": 0.5}, "swift-stieber")
     (2.0, 0.5)
     """
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return float(value)
-    try:
-        return float(value[rule])
-    except (KeyError, TypeError):
-        raise ConfigError(f"train.derivative_weight={value!r}: give one number or one per rule ({rule!r} is missing)") from None
+    weight = for_rule(value, rule, "derivative_weight")
+    if isinstance(weight, bool) or not isinstance(weight, (int, float)):
+        raise ConfigError(f"train.derivative_weight={value!r}: give one number or one per rule, not {weight!r}")
+    return float(weight)
 
 
 def _train(cfg) -> Logged:
@@ -92,24 +111,30 @@ def _train(cfg) -> Logged:
     tr = cfg.train
     for rule in tr.rules:
         frame, meta = load_universal(cfg.dataset_dir, rule)
-        logger_for = None
+        factory = None
         if parent is not None:
             factory = tracking.child_logger_factory(parent, cfg.tracking, f"universal_{rule}")
-            logger_for = lambda r, factory=factory: factory(r).logger()  # noqa: E731
+        settings = {k: for_rule(plain(tr)[k], rule, k) for k in ("steps", "max_minutes", "refine_steps", "refine_minutes")}
         # finished regions and the running fit's checkpoint: a rerun continues them.  Keyed by the data and
         # the first phase's settings (the second phase keys its own files: train_universal)
-        first = {k: plain(tr)[k] for k in ("boundaries", "blend_width", "overlap", "power", "width", "steps",
-                                           "max_minutes", "floor_share", "seed")}
+        first = {k: plain(tr)[k] for k in ("boundaries", "blend_width", "overlap", "power", "width", "floor_share",
+                                           "seed")} | {k: settings[k] for k in ("steps", "max_minutes")}
         work = Path(cfg.cache_dir) / f"{rule}-{meta['config_hash'][:12]}-{config_hash(first)[:8]}"
         weight = derivative_weight_for(tr.derivative_weight, rule)
-        fit = train_universal(frame, boundaries=list(tr.boundaries), blend_width=tr.blend_width, overlap=tr.overlap,
-                              power=tr.power, width=tr.width, steps=tr.steps, max_minutes=list(tr.max_minutes),
-                              floor_share=tr.floor_share, seed=tr.seed, work_dir=work, logger_for=logger_for,
-                              what=f"{rule} ", derivative_weight=weight,
-                              derivative_rows=str(tr.derivative_rows), refine_minutes=list(tr.refine_minutes),
-                              refine_steps=int(tr.refine_steps))
+        try:
+            fit = train_universal(frame, boundaries=list(tr.boundaries), blend_width=tr.blend_width,
+                                  overlap=tr.overlap, power=tr.power, width=tr.width, floor_share=tr.floor_share,
+                                  seed=tr.seed, work_dir=work, what=f"{rule} ", derivative_weight=weight,
+                                  logger_for=None if factory is None else factory.logger_for,
+                                  derivative_rows=str(tr.derivative_rows), workers=tr.workers, **settings)
+        except BaseException as exc:
+            # a stopped worker could not end the MLflow run of the phase it was training
+            if factory is not None:
+                factory.end_open_runs("KILLED" if isinstance(exc, KeyboardInterrupt) else "FAILED")
+            raise
         info = {"dataset_hash": meta["config_hash"], "n_rows": int(len(frame)),
-                **{k: v for k, v in fit.items() if k.startswith("val_") or k == "train_seconds"},
+                **{k: v for k, v in fit.items() if k.startswith("val_") or k in ("train_seconds", "train_wall_s", "workers")},
+                "threads_per_fit": 1,
                 "width": int(tr.width), "depth": 1, "optimizer": "levenberg-marquardt",
                 "derivative_weight": weight, "derivative_rows": str(tr.derivative_rows),
                 "regions": [{k: v for k, v in reg.items() if isinstance(v, (int, float))} for reg in fit["regions"]]}
@@ -119,7 +144,8 @@ def _train(cfg) -> Logged:
         metrics |= {f"{key}_val_rel_median": fit["val_rel_median"], f"{key}_val_rel_p99": fit["val_rel_p99"],
                     f"{key}_train_seconds": fit["train_seconds"]}
         print(f"{rule}: validation relative error of G (worst region) median {100 * fit['val_rel_median']:.3f} %, "
-              f"p99 {100 * fit['val_rel_p99']:.2f} %, {fit['train_seconds']:.0f} s")
+              f"p99 {100 * fit['val_rel_p99']:.2f} %, {fit['train_seconds']:.0f} s of one core each, "
+              f"{fit['train_wall_s']:.0f} s on {fit['workers']} workers")
     return Logged(metrics, [out])
 
 
@@ -510,6 +536,8 @@ def _evaluate(cfg) -> Logged:
         "cases": cases.to_dict(orient="records"),
         "error_map": [{**r, "eps_bin": str(r["eps_bin"])} for r in emap.to_dict(orient="records")],
         "weights": {rule: load_weights(rule)["info"] for rule in ("gumbel", "swift-stieber")},
+        # does the pipeline's own training (models_dir) give the weights the package ships?
+        "weights_reproduced": compare_weights(cfg.models_dir),
         "goals": {"rel_err_median": 0.005, "rel_err_p99": 0.05, "kc_direct": 0.02, "kc_cross": 0.05,
                   "whirl_threshold": 0.01, "raimondi_boyd_pct": 2.0, "cases": 7, "speedup_equal_accuracy": 100.0},
     }
@@ -529,6 +557,42 @@ def run(cfg) -> Logged:
     if cfg.part == "train":
         return _train(cfg)
     return _evaluate(cfg)
+
+
+def compare_weights(models_dir, shipped=None) -> dict:
+    """For each rule, the weights trained in ``models_dir`` against the package's (``shipped``; None: the
+    package's own folder): ``identical`` (every array equal, bit for bit), ``max_rel_diff`` (each array's
+    largest difference over its largest entry, the largest over the arrays; None where the shapes differ,
+    e.g. the small profile's networks), or ``missing``.
+
+    Examples
+    --------
+    >>> compare_weights("no/such/folder")["gumbel"]
+    {'missing': True}
+    """
+    from fluidfilm.surrogate.universal import WEIGHTS_DIR
+
+    shipped = Path(shipped) if shipped is not None else WEIGHTS_DIR
+    out: dict[str, Any] = {}
+    for rule in ("gumbel", "swift-stieber"):
+        trained, ours = Path(models_dir) / f"{rule}.npz", shipped / f"{rule}.npz"
+        if not (trained.exists() and ours.exists()):
+            out[rule] = {"missing": True}
+            continue
+        with np.load(trained, allow_pickle=False) as a, np.load(ours, allow_pickle=False) as b:
+            keys = sorted(k for k in a.files if k != "info")
+            same_layout = keys == sorted(k for k in b.files if k != "info") and all(
+                a[k].shape == b[k].shape and a[k].dtype == b[k].dtype for k in keys)
+            if not same_layout:
+                out[rule] = {"identical": False, "max_rel_diff": None}
+                continue
+            # each array's largest difference relative to its largest entry (the arrays' scales differ)
+            diffs = [float(np.max(np.abs(a[k].astype(float) - b[k].astype(float)), initial=0.0)
+                           / max(float(np.max(np.abs(b[k].astype(float)), initial=0.0)), 1e-300))
+                     for k in keys if a[k].dtype.kind in "fi"]
+            equal = all(np.array_equal(a[k], b[k]) for k in keys)
+        out[rule] = {"identical": bool(equal), "max_rel_diff": max(diffs, default=0.0)}
+    return out
 
 
 def install_weights(models_dir, target) -> None:

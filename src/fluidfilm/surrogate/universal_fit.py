@@ -23,6 +23,7 @@ from typing import Any
 
 import hashlib
 import json
+import os
 import time
 from pathlib import Path
 
@@ -378,7 +379,7 @@ class _EpochLog(L.Callback):
                   f"{time.perf_counter() - self.t0:.0f} s", flush=True)
 
 
-def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 3000, max_minutes: float = 5.0,
+def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 3000, max_minutes: float | None = None,
                  floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0, ckpt_dir=None, logger=None,
                  what: str = "region", derivatives: np.ndarray | None = None, derivative_weight: float = 0.0,
                  init: dict | None = None) -> dict:
@@ -400,9 +401,11 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
     width : int, default 64
         Hidden units.
     steps : int, default 3000
-        Most Levenberg-Marquardt steps (Lightning epochs).
-    max_minutes : float, default 5.0
-        Most wall time of the fit (Lightning's ``max_time``; its clock is part of the checkpoint).
+        Levenberg-Marquardt steps (Lightning epochs): the fit's stopping rule, the same on any machine.
+    max_minutes : float or None, default None
+        A wall-time cap on the fit (Lightning's ``max_time``; its clock is part of the checkpoint); None: none.
+        A fit stopped by it has taken fewer than ``steps`` steps, a number that depends on the machine
+        (``stopped_by_time`` in the result).
     floor_share : float, default 0.01
         The relative loss's floor as a share of the median |target|: rows weigh 1 / sqrt(|y|^2 + floor^2).
     val_fraction : float, default 0.1
@@ -419,8 +422,8 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
     Returns
     -------
     dict
-        ``layers``, ``in_mean``, ``in_std``, ``out_mean``, ``out_std``, ``steps``, ``train_seconds`` and the
-        validation relative errors of the raw targets (``val_rel_median``, ``val_rel_p99``, ``val_rel_max``).
+        ``layers``, ``in_mean``, ``in_std``, ``out_mean``, ``out_std``, ``steps``, ``stopped_by_time``,
+        ``train_seconds`` and the validation relative errors of the raw targets (``val_rel_median``, ``val_rel_p99``, ``val_rel_max``).
     """
     from datetime import timedelta
 
@@ -476,7 +479,12 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
         callbacks.append(_EveryNCheckpoint(ckpt_dir / "last.ckpt", 25))
         if (ckpt_dir / "last.ckpt").exists():
             ckpt_path = str(ckpt_dir / "last.ckpt")
-    trainer = L.Trainer(max_epochs=int(steps), max_time=timedelta(minutes=float(max_minutes)), accelerator="cpu",
+    if int(steps) < 1:
+        raise ValueError(f"steps={steps!r}: a fit needs at least one Levenberg-Marquardt step")
+    if max_minutes is not None and not float(max_minutes) > 0.0:
+        raise ValueError(f"max_minutes={max_minutes!r} must be > 0 (or None: no wall-time cap)")
+    cap = timedelta(minutes=float(max_minutes)) if max_minutes is not None else None
+    trainer = L.Trainer(max_epochs=int(steps), max_time=cap, accelerator="cpu",
                         devices=1, logger=logger if logger is not None else False, callbacks=callbacks,
                         enable_progress_bar=False, enable_model_summary=False, num_sanity_val_steps=0,
                         check_val_every_n_epoch=100, enable_checkpointing=False)
@@ -487,7 +495,8 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
         pred = net(torch.as_tensor((z[val] - in_mean) / in_std)).numpy() * out_std + out_mean
     rel = np.linalg.norm(pred - y[val], axis=-1) / np.linalg.norm(y[val], axis=-1)
     out = {"layers": net.layers(), "in_mean": in_mean, "in_std": in_std, "out_mean": out_mean,
-           "out_std": out_std, "steps": int(trainer.current_epoch), "train_seconds": seconds,
+           "out_std": out_std, "steps": int(trainer.current_epoch),
+           "stopped_by_time": bool(trainer.current_epoch < int(steps)), "train_seconds": seconds,
            "val_rel_median": float(np.median(rel)), "val_rel_p99": float(np.quantile(rel, 0.99)),
            "val_rel_max": float(rel.max())}
     if derivatives is not None and derivative_weight > 0.0:
@@ -500,10 +509,11 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
 
 
 def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.87), blend_width: float = 0.04,
-                    overlap: int = 1, power: float = 2.0, width: int = 64, steps: int = 3000,
-                    max_minutes=5.0, floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0,
+                    overlap: int = 1, power: float = 2.0, width: int = 64, steps=3000,
+                    max_minutes=None, floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0,
                     work_dir=None, logger_for=None, what: str = "", derivative_weight: float = 0.0,
-                    derivative_rows: str = "static", refine_minutes=5.0, refine_steps: int = 3000) -> dict:
+                    derivative_rows: str = "static", refine_minutes=None, refine_steps=3000,
+                    workers: int | None = None) -> dict:
     """Fit the universal networks of one cavitation rule, one per eccentricity region.
 
     Two phases per region: a fit to the values G (Levenberg-Marquardt from a random start), then, if
@@ -525,10 +535,12 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         Exponent p of the (1 - eps^2)^p factor of the targets.
     width : int, default 64
         Hidden units of each network (one hidden layer).
-    steps : int, default 3000
-        Most Levenberg-Marquardt steps per region.
-    max_minutes : float or sequence of float, default 5.0
-        Most wall time per region, or one value per region (the high eccentricities converge slowest).
+    steps : int or sequence of int, default 3000
+        Levenberg-Marquardt steps per region, or one count per region (the high eccentricities converge
+        slowest): the stopping rule, so the same data and settings give the same weights on any machine.
+    max_minutes : float, sequence of float or None, default None
+        A wall-time cap per region, or one per region (None: none). A cap reached makes the step count, and
+        so the weights, depend on the machine's speed (``train_region``).
     floor_share : float, default 0.01
         The relative loss's floor (``train_region``).
     val_fraction : float, default 0.1
@@ -540,73 +552,126 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         skips finished regions and resumes the running one.
     logger_for : callable or None, default None
         ``key -> Lightning logger`` (MLflow child runs from the workflow layer); called, when a phase trains,
-        with the region ``r`` (first phase) or ``f"{r}_derivatives"`` (second phase).
+        with the region ``r`` (first phase) or ``f"{r}_derivatives"`` (second phase), in the process that
+        fits the region: picklable when ``workers`` > 1 (``workflow.tracking.ChildRunFactory.logger_for``).
     what : str, default ""
         Prefix of the progress lines.
     derivative_weight : float, default 0.0
         Weight of the derivative residuals in the second phase (``train_region``); 0: no second phase.
     derivative_rows : {"static", "all"}, default "static"
         The rows with derivative targets (``derivative_targets``).
-    refine_minutes : float or sequence of float, default 5.0
-        Most wall time of the second phase per region, or one value per region.
-    refine_steps : int, default 3000
-        Most Levenberg-Marquardt steps of the second phase per region.
+    refine_minutes : float, sequence of float or None, default None
+        A wall-time cap on the second phase per region, or one per region (None: none).
+    refine_steps : int or sequence of int, default 3000
+        Levenberg-Marquardt steps of the second phase per region, or one count per region.
+    workers : int or None, default None
+        Regions fitted side by side in worker processes (None: one per core; 1: one after the other in this
+        process). Each fit uses one torch thread whatever ``workers`` is: BLAS sums in another order with
+        another thread count, and Levenberg-Marquardt carries round-off into other weights within a few
+        hundred steps, so one thread per fit is what makes the weights the same on any machine.
 
     Returns
     -------
     dict
         ``regions`` (per region what ``train_region`` returns), ``boundaries``, ``blend_width``, ``power``,
-        ``train_seconds`` (all regions) and the validation errors over all regions (``val_rel_median``,
+        ``train_seconds`` (all regions, one core each), ``train_wall_s``, ``workers`` and the validation errors over all regions (``val_rel_median``,
         ``val_rel_p99``, ``val_rel_max``: each the worst region's).
     """
     bounds = [float(b) for b in boundaries]
     if any(b1 - b0 <= blend_width for b0, b1 in zip(bounds, bounds[1:])) or not all(0 < b < 1 for b in bounds):
         raise ValueError(f"boundaries {bounds} must increase inside (0, 1) by more than blend_width={blend_width!r}")
-    minutes = np.atleast_1d(np.asarray(max_minutes, dtype=float))
-    if minutes.size not in (1, len(bounds) + 1):
-        raise ValueError(f"max_minutes={list(minutes)} needs one value or one per region ({len(bounds) + 1})")
-    minutes = np.broadcast_to(minutes, (len(bounds) + 1,))
-    refine = np.atleast_1d(np.asarray(refine_minutes, dtype=float))
-    if refine.size not in (1, len(bounds) + 1):
-        raise ValueError(f"refine_minutes={list(refine)} needs one value or one per region ({len(bounds) + 1})")
-    refine = np.broadcast_to(refine, (len(bounds) + 1,))
+    n_regions = len(bounds) + 1
+    steps_r = _per_region("steps", steps, n_regions, int)
+    minutes = _per_region("max_minutes", max_minutes, n_regions, float)
+    refine_steps_r = _per_region("refine_steps", refine_steps, n_regions, int)
+    refine = _per_region("refine_minutes", refine_minutes, n_regions, float)
     if derivative_weight < 0.0:
         raise ValueError(f"derivative_weight must be >= 0, got {derivative_weight!r}")
     z, y = features(frame, power)
     dy = derivative_targets(frame, power, derivative_rows) if derivative_weight > 0.0 else None
     eps = frame["eps"].to_numpy()
     work = Path(work_dir) if work_dir is not None else None
-    regions = []
-    for r in range(len(bounds) + 1):
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1 or null (one per core), got {workers!r}")
+    if workers is None:
+        from joblib import cpu_count  # the cores this process may use (affinity, container limits)
+
+        workers = cpu_count(only_physical_cores=False)
+    n_workers = min(n_regions, int(workers))
+    jobs = []
+    for r in range(n_regions):
         rows = region_rows(eps, bounds, blend_width, r, overlap)
+        # the second phase's file is keyed by its own settings: another weight or budget is another fit
+        key = config_hash(float(derivative_weight), derivative_rows, refine[r], refine_steps_r[r])[:8]
         # what both phases share: the region's rows, the network, the loss floor and the validation split.
         # Not the logger: each phase is its own tracked run (its hyperparameters differ, and MLflow refuses
         # to change a logged parameter), created only when that phase actually trains
-        common = dict(width=width, floor_share=floor_share, val_fraction=val_fraction, seed=seed + r)
-        res = _finished_or_fit(work, f"region{r}", f"{what}region {r}", lambda ckpt, r=r, rows=rows, common=common: {
-            **train_region(z[rows], y[rows], steps=steps, max_minutes=float(minutes[r]), ckpt_dir=ckpt,
-                           what=f"{what}region {r}", logger=logger_for(r) if logger_for is not None else None,
-                           **common),
-            "n_rows": int(rows.sum())})
-        if dy is not None:
-            first = res
-            # the second phase's file is keyed by its own settings: another weight or budget is another fit
-            key = config_hash(float(derivative_weight), derivative_rows, float(refine[r]), int(refine_steps))[:8]
-            res = _finished_or_fit(work, f"region{r}_derivatives-{key}", f"{what}region {r} (values and derivatives)",
-                                   lambda ckpt, r=r, rows=rows, first=first, common=common: {
-                **train_region(z[rows], y[rows], steps=refine_steps, max_minutes=float(refine[r]), ckpt_dir=ckpt,
-                               what=f"{what}region {r} (values and derivatives)", derivatives=dy[rows],
-                               derivative_weight=derivative_weight, init=first,
-                               logger=logger_for(f"{r}_derivatives") if logger_for is not None else None, **common),
-                "n_rows": int(rows.sum()), "n_derivative_rows": int(np.isfinite(dy[rows]).all(-1).any(-1).sum())})
-            res["train_seconds"] = float(first["train_seconds"] + res["train_seconds"])
-            res["steps_values"], res["steps_derivatives"] = int(first["steps"]), int(res["steps"])
-            res["steps"] = int(first["steps"] + res["steps"])
-            res["val_rel_median_values_only"] = float(first["val_rel_median"])
-        regions.append(res)
+        jobs.append({"r": r, "z": z[rows], "y": y[rows], "dy": None if dy is None else dy[rows], "work": work,
+                     "what": f"{what}region {r}", "logger_for": logger_for, "derivative_key": key,
+                     "steps": steps_r[r], "max_minutes": minutes[r], "refine_steps": refine_steps_r[r],
+                     "refine_minutes": refine[r], "derivative_weight": float(derivative_weight),
+                     "common": dict(width=width, floor_share=floor_share, val_fraction=val_fraction, seed=seed + r),
+                     "parent_pid": os.getpid()})
+    t0 = time.perf_counter()
+    if n_workers == 1:
+        regions = [_fit_region(job) for job in jobs]
+    else:
+        from joblib import Parallel, delayed
+
+        # most steps first (steps x rows: the cost of a fit), so the workers finish together
+        order = sorted(range(n_regions), key=lambda r: -(steps_r[r] + refine_steps_r[r]) * len(jobs[r]["z"]))
+        done = Parallel(n_jobs=n_workers, backend="loky")(delayed(_fit_region)(jobs[r]) for r in order)
+        by_region = dict(zip(order, done))
+        regions = [by_region[r] for r in range(n_regions)]
     return {"regions": regions, "boundaries": bounds, "blend_width": float(blend_width), "power": float(power),
             "train_seconds": float(sum(r["train_seconds"] for r in regions)),
+            "train_wall_s": time.perf_counter() - t0, "workers": n_workers,
             **{k: float(max(r[k] for r in regions)) for k in ("val_rel_median", "val_rel_p99", "val_rel_max")}}
+
+
+def _fit_region(job: dict) -> dict:
+    """Both phases of one region's fit (each kept in ``job["work"]`` when finished), here or in a worker
+    process, with one torch thread: the weights do not depend on ``workers`` nor on the machine's cores."""
+    from fluidfilm.surrogate.fit import _exit_with_parent
+
+    if job["parent_pid"] != os.getpid():
+        _exit_with_parent(job["parent_pid"])
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        r, z, y, dy, work, what, logger_for = (job[k] for k in ("r", "z", "y", "dy", "work", "what", "logger_for"))
+        res = _finished_or_fit(work, f"region{r}", what, lambda ckpt: {
+            **train_region(z, y, steps=job["steps"], max_minutes=job["max_minutes"], ckpt_dir=ckpt, what=what,
+                           logger=logger_for(r) if logger_for is not None else None, **job["common"]),
+            "n_rows": len(z)})
+        if dy is None:
+            return res
+        first = res
+        res = _finished_or_fit(work, f"region{r}_derivatives-{job['derivative_key']}", f"{what} (values and derivatives)",
+                               lambda ckpt: {
+            **train_region(z, y, steps=job["refine_steps"], max_minutes=job["refine_minutes"], ckpt_dir=ckpt,
+                           what=f"{what} (values and derivatives)", derivatives=dy,
+                           derivative_weight=job["derivative_weight"], init=first,
+                           logger=logger_for(f"{r}_derivatives") if logger_for is not None else None, **job["common"]),
+            "n_rows": len(z), "n_derivative_rows": int(np.isfinite(dy).all(-1).any(-1).sum())})
+    finally:
+        torch.set_num_threads(threads)
+    res["train_seconds"] = float(first["train_seconds"] + res["train_seconds"])
+    res["steps_values"], res["steps_derivatives"] = int(first["steps"]), int(res["steps"])
+    res["steps"] = int(first["steps"] + res["steps"])
+    res["val_rel_median_values_only"] = float(first["val_rel_median"])
+    return res
+
+
+def _per_region(name: str, value, n: int, kind) -> list:
+    """``value`` for each of ``n`` regions: one value for all, or a sequence of ``n`` (None: no value)."""
+    values = [value] * n if value is None or np.ndim(value) == 0 else list(value)
+    if len(values) != n:
+        raise ValueError(f"{name}={list(values)} needs one value or one per region ({n})")
+    out = [None if v is None else kind(v) for v in values]
+    if any(v is not None and not v > 0 for v in out):
+        raise ValueError(f"{name}={list(values)}: every value must be > 0")
+    return out
 
 
 def _finished_or_fit(work, name: str, what: str, fit) -> dict:

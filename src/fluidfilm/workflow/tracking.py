@@ -324,19 +324,46 @@ class ChildRun:
             client.set_terminated(self.run_id, status)
 
 
-def child_logger_factory(parent, tracking: Mapping, name: str):
+@dataclasses.dataclass(frozen=True)
+class ChildRunFactory:
+    """``r -> ChildRun``: a child run "<name>/network<r>" under the run ``parent_run_id``.  A plain,
+    picklable record, so a worker process can make its network's run when (and only if) that network
+    trains; ``logger_for(r)`` is Lightning's logger of a new such run."""
+
+    uri: str
+    experiment: str
+    experiment_id: str
+    parent_run_id: str
+    name: str
+
+    def __call__(self, r) -> ChildRun:
+        import mlflow
+
+        child = mlflow.tracking.MlflowClient(self.uri).create_run(
+            self.experiment_id, run_name=f"{self.name}/network{r}", tags={"mlflow.parentRunId": self.parent_run_id})
+        return ChildRun(self.uri, self.experiment, child.info.run_id)
+
+    def logger_for(self, r):
+        """Lightning's MLflow logger of a new child run for network ``r``."""
+        return self(r).logger()
+
+    def end_open_runs(self, status: str = "KILLED") -> None:
+        """End this factory's child runs still marked running (their worker was stopped before Lightning
+        could end them)."""
+        import mlflow
+
+        client = mlflow.tracking.MlflowClient(self.uri)
+        query = f"tags.mlflow.parentRunId = '{self.parent_run_id}' and attributes.status = 'RUNNING'"
+        for run in client.search_runs([self.experiment_id], query):
+            if (run.info.run_name or "").startswith(f"{self.name}/"):
+                client.set_terminated(run.info.run_id, status)
+
+
+def child_logger_factory(parent, tracking: Mapping, name: str) -> ChildRunFactory:
     """``r -> ChildRun``: a child run "<name>/network<r>" under the run ``parent``; its ``logger()`` is
-    Lightning's logger of it."""
-    import mlflow
-
-    client = mlflow.tracking.MlflowClient(tracking["uri"])
-
-    def logger_for(r) -> ChildRun:
-        child = client.create_run(parent.info.experiment_id, run_name=f"{name}/network{r}",
-                                  tags={"mlflow.parentRunId": parent.info.run_id})
-        return ChildRun(tracking["uri"], tracking["experiment"], child.info.run_id)
-
-    return logger_for
+    Lightning's logger of it (``ChildRunFactory``)."""
+    return ChildRunFactory(tracking["uri"], tracking["experiment"], parent.info.experiment_id, parent.info.run_id,
+                           name)
 
 
 def learning_curve_hooks() -> dict:
