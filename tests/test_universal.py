@@ -547,3 +547,23 @@ def test_the_configured_step_counts_refit_the_shipped_weights_bit_for_bit(tmp_pa
     for (W, b), (Ws, bs) in zip(fit["regions"][0]["layers"], shipped["layers"]):
         np.testing.assert_array_equal(W, Ws)
         np.testing.assert_array_equal(b, bs)
+
+
+def test_the_evaluation_says_whether_the_pipelines_training_gave_the_shipped_weights(tmp_path):
+    from fluidfilm.reporting.readme import _weights_reproduced
+    from fluidfilm.studies.universal import compare_weights
+    from fluidfilm.surrogate.universal import WEIGHTS_DIR
+
+    shutil.copytree(WEIGHTS_DIR, tmp_path / "models")
+    with np.load(WEIGHTS_DIR / "swift-stieber.npz", allow_pickle=False) as f:
+        arrays = {k: f[k] for k in f.files}
+    W = arrays["r2_W0"]
+    arrays["r2_W0"] = W + np.where(np.arange(W.size).reshape(W.shape) == 7, 1e-3 * np.abs(W).max(), 0.0)
+    np.savez(tmp_path / "models" / "swift-stieber.npz", **arrays)
+    found = compare_weights(tmp_path / "models")
+    assert found["gumbel"] == {"identical": True, "max_rel_diff": 0.0}
+    assert not found["swift-stieber"]["identical"]
+    assert found["swift-stieber"]["max_rel_diff"] == pytest.approx(1e-3, rel=1e-9)
+    text = _weights_reproduced(found)
+    assert "gumbel: the shipped weights, bit for bit" in text and "swift-stieber: other weights" in text
+    assert compare_weights(tmp_path / "nothing")["gumbel"] == {"missing": True}

@@ -584,7 +584,7 @@ def _weights_reproduced(found: Mapping | None) -> str:
             return f"{rule}: the shipped weights, bit for bit"
         if r.get("max_rel_diff") is None:
             return f"{rule}: networks of another shape (a smaller profile's)"
-        return f"{rule}: other weights (largest difference {100 * r['max_rel_diff']:.3g} % of an array's largest entry)"
+        return f"{rule}: other weights (differences up to {r['max_rel_diff']:.3g} x an array's largest entry)"
 
     return ("\nThe pipeline's own training (`universal_train`, `models/universal`) against the shipped weights: "
             + "; ".join(says(rule, r) for rule, r in found.items()) + ".\n")

@@ -75,11 +75,7 @@ def for_rule(value, rule: str, key: str):
     """
     from collections.abc import Mapping
 
-    from omegaconf import DictConfig, ListConfig, OmegaConf
-
-    if isinstance(value, (DictConfig, ListConfig)):
-        value = OmegaConf.to_container(value)
-    if not isinstance(value, Mapping):
+    if not isinstance(value, Mapping):  # a config node is a Mapping too
         return value
     if rule not in value:
         raise ConfigError(f"train.{key}={value!r}: give one value for both rules or one per rule ({rule!r} is missing)")
