@@ -401,7 +401,8 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
     width : int, default 64
         Hidden units.
     steps : int, default 3000
-        Levenberg-Marquardt steps (Lightning epochs): the fit's stopping rule, the same on any machine.
+        Levenberg-Marquardt steps (Lightning epochs): the fit's stopping rule, the same on any machine (of
+        the same arithmetic: another CPU's BLAS kernels may sum in another order).
     max_minutes : float or None, default None
         A wall-time cap on the fit (Lightning's ``max_time``; its clock is part of the checkpoint); None: none.
         A fit stopped by it has taken fewer than ``steps`` steps, a number that depends on the machine
@@ -537,7 +538,7 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         Hidden units of each network (one hidden layer).
     steps : int or sequence of int, default 3000
         Levenberg-Marquardt steps per region, or one count per region (the high eccentricities converge
-        slowest): the stopping rule, so the same data and settings give the same weights on any machine.
+        slowest): the stopping rule, so the same data and settings give the same weights whatever the clock.
     max_minutes : float, sequence of float or None, default None
         A wall-time cap per region, or one per region (None: none). A cap reached makes the step count, and
         so the weights, depend on the machine's speed (``train_region``).
@@ -568,7 +569,8 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         Regions fitted side by side in worker processes (None: one per core; 1: one after the other in this
         process). Each fit uses one torch thread whatever ``workers`` is: BLAS sums in another order with
         another thread count, and Levenberg-Marquardt carries round-off into other weights within a few
-        hundred steps, so one thread per fit is what makes the weights the same on any machine.
+        hundred steps, so one thread per fit is what makes the weights the same on any machine of the same
+        arithmetic (another CPU's BLAS kernels may sum in another order).
 
     Returns
     -------
