@@ -53,24 +53,55 @@ def _exit_with_parent(parent_pid: int) -> None:
     _WATCHING_PARENT = True
 
 
+def worker_count(workers: int | None, n_jobs: int) -> int:
+    """How many processes train ``n_jobs`` networks side by side: ``workers`` (None: one per core this
+    process may use), at most one per network."""
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1 or null (one per core), got {workers!r}")
+    if workers is None:
+        from joblib import cpu_count  # the cores this process may use (affinity, container limits)
+
+        workers = cpu_count(only_physical_cores=False)
+    return min(n_jobs, int(workers))
+
+
+def side_by_side(func: Callable[[dict], dict], jobs: list[dict], n_workers: int, cost=None) -> list[dict]:
+    """``func(job)`` for every job, in the jobs' order: here one after the other (``n_workers`` 1), or in
+    ``n_workers`` loky worker processes, the largest ``cost(job)`` first so that the workers finish together."""
+    if n_workers == 1:
+        return [func(job) for job in jobs]
+    from joblib import Parallel, delayed
+
+    order = sorted(range(len(jobs)), key=lambda r: -cost(jobs[r])) if cost is not None else list(range(len(jobs)))
+    done = Parallel(n_jobs=n_workers, backend="loky")(delayed(func)(jobs[r]) for r in order)
+    by_job = dict(zip(order, done))
+    return [by_job[r] for r in range(len(jobs))]
+
+
+@contextlib.contextmanager
+def torch_threads(n: int | None):
+    """Torch's intra-op threads set to ``n`` (None: left as they are) inside the block, restored after."""
+    import torch
+
+    threads = torch.get_num_threads()
+    if n:
+        torch.set_num_threads(n)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+
+
 def _train_region(job: dict) -> dict:
     """Fit one region's network, here or in a worker process; returns what the model needs (the Lightning
     module stays in the process that trained it)."""
-    import torch
-
     if job["parent_pid"] != os.getpid():
         _exit_with_parent(job["parent_pid"])
-
-    threads = torch.get_num_threads()
-    if job["threads"]:
-        torch.set_num_threads(job["threads"])
-    try:
+    with torch_threads(job["threads"]):
         dm = ForceDataModule(job["dataset_dir"], table=job["table"], meta=job["meta"], **job["data"])
         run = job["run"]
         res = train_network(dm, job["model_cfg"], job["trainer_cfg"], job["target"], ckpt_dir=job["ckpt_dir"],
                             logger=None if run is None else run.logger(), seed=job["seed"], what=job["what"])
-    finally:
-        torch.set_num_threads(threads)
     return {k: res[k] for k in ("layers", "scaling", "time_to_target_s", "train_time_s", "epochs", "epoch_at_target",
                                 "val_rel_rmse", "n_train", "n_val")}
 
@@ -91,18 +122,12 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
     Returns the force model and a report with per-network and total
     training times (to the target validation error, and in all) and the wall time of the training.
     """
-    if workers is not None and int(workers) < 1:
-        raise ValueError(f"workers must be >= 1 or null (one per core), got {workers!r}")
     frame, meta = load_dataset(dataset_dir)
     bearing = dataset_bearing(meta)
     boundaries = list(split_cfg.get("boundaries", []))
     blend = float(split_cfg.get("blend_width", 0.0))
     bounds = regions(boundaries, blend)
-    if workers is None:
-        from joblib import cpu_count  # the cores this process may use (affinity, container limits)
-
-        workers = cpu_count(only_physical_cores=False)
-    n_workers = min(len(bounds), int(workers))
+    n_workers = worker_count(workers, len(bounds))
     jobs = []
     for r, (lo, hi) in enumerate(bounds):
         # a worker gets only its region's rows (the data module selects the same rows from the whole table)
@@ -119,15 +144,7 @@ def fit_surrogate(dataset_dir, model_cfg: Mapping, split_cfg: Mapping, scaling_c
                      f"network {r} (eps {lo:.2f}-{hi:.2f})" if math.isfinite(hi) else f"network {r} (eps >= {lo:.2f})"})
     t0 = time.perf_counter()
     try:
-        if n_workers == 1:
-            results = [_train_region(job) for job in jobs]
-        else:
-            from joblib import Parallel, delayed
-
-            order = sorted(range(len(jobs)), key=lambda r: -len(jobs[r]["table"]))  # largest first: a short tail
-            done = Parallel(n_jobs=n_workers, backend="loky")(delayed(_train_region)(jobs[r]) for r in order)
-            by_region = dict(zip(order, done))
-            results = [by_region[r] for r in range(len(jobs))]
+        results = side_by_side(_train_region, jobs, n_workers, cost=lambda job: len(job["table"]))
     except BaseException as exc:
         # every network's run was made up front; those a stopped worker or a network not yet started left
         # open end here, as Lightning ends the run of the network it was training (joblib stops the workers)

@@ -35,6 +35,7 @@ from torch import nn
 
 from fluidfilm import io
 from fluidfilm.data.spec import config_hash
+from fluidfilm.surrogate.fit import _exit_with_parent, side_by_side, torch_threads, worker_count
 from fluidfilm.surrogate.universal import WEIGHTS_DIR, slenderness_gain
 
 __all__ = ["UniversalNet", "features", "derivative_targets", "region_rows", "train_region", "train_universal",
@@ -593,13 +594,7 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
     dy = derivative_targets(frame, power, derivative_rows) if derivative_weight > 0.0 else None
     eps = frame["eps"].to_numpy()
     work = Path(work_dir) if work_dir is not None else None
-    if workers is not None and int(workers) < 1:
-        raise ValueError(f"workers must be >= 1 or null (one per core), got {workers!r}")
-    if workers is None:
-        from joblib import cpu_count  # the cores this process may use (affinity, container limits)
-
-        workers = cpu_count(only_physical_cores=False)
-    n_workers = min(n_regions, int(workers))
+    n_workers = worker_count(workers, n_regions)
     jobs = []
     for r in range(n_regions):
         rows = region_rows(eps, bounds, blend_width, r, overlap)
@@ -615,16 +610,9 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
                      "common": dict(width=width, floor_share=floor_share, val_fraction=val_fraction, seed=seed + r),
                      "parent_pid": os.getpid()})
     t0 = time.perf_counter()
-    if n_workers == 1:
-        regions = [_fit_region(job) for job in jobs]
-    else:
-        from joblib import Parallel, delayed
-
-        # most steps first (steps x rows: the cost of a fit), so the workers finish together
-        order = sorted(range(n_regions), key=lambda r: -(steps_r[r] + refine_steps_r[r]) * len(jobs[r]["z"]))
-        done = Parallel(n_jobs=n_workers, backend="loky")(delayed(_fit_region)(jobs[r]) for r in order)
-        by_region = dict(zip(order, done))
-        regions = [by_region[r] for r in range(n_regions)]
+    # most steps first (steps x rows: the cost of a fit), so the workers finish together
+    regions = side_by_side(_fit_region, jobs, n_workers,
+                           cost=lambda job: (job["steps"] + job["refine_steps"]) * len(job["z"]))
     return {"regions": regions, "boundaries": bounds, "blend_width": float(blend_width), "power": float(power),
             "train_seconds": float(sum(r["train_seconds"] for r in regions)),
             "train_wall_s": time.perf_counter() - t0, "workers": n_workers,
@@ -634,13 +622,9 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
 def _fit_region(job: dict) -> dict:
     """Both phases of one region's fit (each kept in ``job["work"]`` when finished), here or in a worker
     process, with one torch thread: the weights do not depend on ``workers`` nor on the machine's cores."""
-    from fluidfilm.surrogate.fit import _exit_with_parent
-
     if job["parent_pid"] != os.getpid():
         _exit_with_parent(job["parent_pid"])
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
+    with torch_threads(1):
         r, z, y, dy, work, what, logger_for = (job[k] for k in ("r", "z", "y", "dy", "work", "what", "logger_for"))
         res = _finished_or_fit(work, f"region{r}", what, lambda ckpt: {
             **train_region(z, y, steps=job["steps"], max_minutes=job["max_minutes"], ckpt_dir=ckpt, what=what,
@@ -656,8 +640,6 @@ def _fit_region(job: dict) -> dict:
                            derivative_weight=job["derivative_weight"], init=first,
                            logger=logger_for(f"{r}_derivatives") if logger_for is not None else None, **job["common"]),
             "n_rows": len(z), "n_derivative_rows": int(np.isfinite(dy).all(-1).any(-1).sum())})
-    finally:
-        torch.set_num_threads(threads)
     res["train_seconds"] = float(first["train_seconds"] + res["train_seconds"])
     res["steps_values"], res["steps_derivatives"] = int(first["steps"]), int(res["steps"])
     res["steps"] = int(first["steps"] + res["steps"])
