@@ -292,15 +292,46 @@ def test_the_derivative_residuals_jacobian_is_autograds():
     torch.testing.assert_close(d, torch.einsum("mki,mai->mak", grads, S), rtol=1e-12, atol=1e-13)
 
 
+def test_the_normal_equations_by_output_are_those_of_the_whole_jacobian():
+    # the fit's J^T J and J^T r, formed per output with dsyrk in a reordered weight space, are the products of
+    # the plain Jacobian (values and derivative rows stacked), and the sums of squares are the residuals'
+    import torch
+
+    from fluidfilm.surrogate.universal_fit import UniversalNet
+
+    torch.manual_seed(5)
+    net = UniversalNet(width=7, derivative_weight=1.0)
+    theta = net._theta().clone()
+    n, m = 13, 5
+    z, y, w = torch.randn(n, 4, dtype=torch.float64), torch.randn(n, 2, dtype=torch.float64), torch.rand(n, 2, dtype=torch.float64)
+    deriv = (torch.randn(m, 4, dtype=torch.float64), torch.randn(m, 2, 4, dtype=torch.float64),
+             torch.randn(m, 2, 2, dtype=torch.float64), torch.rand(m, 2, 2, dtype=torch.float64))
+    H, r = net._residuals(theta, z, y, w)
+    Hd, Dd, Qd, rd = net._derivative_residuals(theta, *deriv)
+    J = torch.cat([net._jacobian(theta, z, H, w), net._derivative_jacobian(theta, deriv[0], deriv[1], deriv[3], Hd, Dd, Qd)])
+    res = torch.cat([r.reshape(-1), rd.reshape(-1)])
+    A, g, sse, sse_values = net._normal_equations(theta, z, y, w, deriv)
+    torch.testing.assert_close(A, J.T @ J, rtol=1e-12, atol=1e-12)
+    torch.testing.assert_close(g, J.T @ res, rtol=1e-12, atol=1e-12)
+    assert sse == pytest.approx(float(res @ res), rel=1e-13) and sse_values == pytest.approx(float((r * r).sum()), rel=1e-13)
+    A0, g0, sse0, _ = net._normal_equations(theta, z, y, w, None)        # values only (the first phase)
+    J0 = net._jacobian(theta, z, H, w)
+    torch.testing.assert_close(A0, J0.T @ J0, rtol=1e-12, atol=1e-12)
+    torch.testing.assert_close(g0, J0.T @ r.reshape(-1), rtol=1e-12, atol=1e-12)
+    assert sse0 == pytest.approx(sse_values, rel=1e-15)
+
+
 def test_a_sobolev_fit_learns_a_teachers_derivatives_and_resumes_to_the_same_weights(tmp_path):
-    # values of a known network on few rows, and its input derivatives there: fitted on values alone the
-    # student's derivatives are loose; fitted on both from the values-only start, they match the teacher's
+    # values of a known network on few rows, and its input derivatives there: 22 training rows give 44 value
+    # residuals for the student's 58 weights, so values alone leave the derivatives (and the held-out values)
+    # loose; fitted on both from the values-only start, the student's derivatives come close to the teacher's.
+    # (On 120 rows values alone recover the teacher to round-off, and a comparison there compares round-off.)
     import torch
 
     from fluidfilm.surrogate.universal_fit import train_region
 
     rng = np.random.default_rng(8)
-    n = 120
+    n = 30
     raw = np.stack([rng.uniform(0.1, 0.9, n), *(lambda a: (np.cos(a), np.sin(a)))(rng.uniform(0, 2 * np.pi, n)),
                     rng.uniform(-1.0, 0.5, n)], axis=-1)
     W1, b1, W2 = rng.normal(0, 1, (6, 4)), rng.normal(0, 0.3, 6), rng.normal(0, 1, (2, 6))
@@ -320,7 +351,8 @@ def test_a_sobolev_fit_learns_a_teachers_derivatives_and_resumes_to_the_same_wei
     both = train_region(raw, y, steps=80, ckpt_dir=tmp_path / "a", **kw, **sob)
     values_only = train_region(raw, y, steps=80, **kw, derivatives=deriv, derivative_weight=1e-9, init=first)
     assert both["val_deriv_rel_median"] < 0.2 * values_only["val_deriv_rel_median"], (both, values_only)
-    assert both["val_rel_median"] < 1e-3
+    assert values_only["val_deriv_rel_median"] > 0.01         # the premise: values alone leave them loose
+    assert both["val_rel_median"] < values_only["val_rel_median"]
     train_region(raw, y, steps=40, ckpt_dir=tmp_path / "b", **kw, **sob)
     resumed = train_region(raw, y, steps=80, ckpt_dir=tmp_path / "b", **kw, **sob)
     for (wa, ba), (wb, bb) in zip(both["layers"], resumed["layers"]):
@@ -522,7 +554,7 @@ def test_the_configured_step_counts_refit_the_shipped_weights_bit_for_bit(tmp_pa
     # the stopping rule is conf/universal.yaml's step counts, one torch thread per fit: the lowest Gumbel
     # region refitted from the dataset the configuration describes is the shipped network, bit for bit (on
     # this workspace's machine; another CPU's BLAS kernels may sum in another order, and Levenberg-Marquardt
-    # carries round-off into other weights within a few hundred steps). About 3 minutes.
+    # carries round-off into other weights within a few hundred steps). About a minute.
     from omegaconf import OmegaConf
 
     from fluidfilm.data.universal import UniversalSpec, generate_universal, load_universal
