@@ -297,7 +297,7 @@ class UniversalNet(L.LightningModule):
         p, q = th.size, 6 * h + 1                      # all weights; those one output's rows depend on
         bufs = getattr(self, "_jbufs", None)
         if bufs is None or bufs[0].shape != (n + 2 * m, q):
-            bufs = self._jbufs = [np.empty((n + 2 * m, q)) for _ in range(2)]
+            bufs = self._jbufs = [np.zeros((n + 2 * m, q)) for _ in range(2)]   # derivative rows' b2 column: 0
         H = np.tanh(zn @ W1.T + b1)
         D = 1.0 - H * H
         r = (H @ W2.T + th[7 * h:] - yn) * wn                                     # (n, 2)
@@ -337,7 +337,6 @@ class UniversalNet(L.LightningModule):
                 blk[...] = zd[:, :, None] * g1[:, None, :] + Sd[:, a, :, None] * g2[:, None, :]
                 Jk[rows, 4 * h:5 * h] = g1
                 Jk[rows, 5 * h:6 * h] = Wdd[:, a, k:k + 1] * Dd * Q[:, a, :]
-                Jk[rows, 6 * h] = 0.0
                 rk.append(rd[:, a, k])
             U = dsyrk(1.0, Jk.T, trans=0, lower=0)                                # upper triangle of Jk^T Jk
             o = 5 * h + k * (h + 1)
@@ -566,27 +565,27 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
                         devices=1, logger=logger if logger is not None else False, callbacks=callbacks,
                         enable_progress_bar=False, enable_model_summary=False, num_sanity_val_steps=0,
                         check_val_every_n_epoch=100, enable_checkpointing=False)
-    t0 = time.perf_counter()
-    # one BLAS thread (numpy's dsyrk; torch's threads are the caller's, one in ``_fit_region``): another count
-    # sums J^T J in another order, and Levenberg-Marquardt carries round-off into other weights
-    with threadpool_limits(limits=1, user_api="blas"):
+    # one thread, torch's and numpy's BLAS (dsyrk), for the fit and its validation errors: another count sums
+    # J^T J in another order, and Levenberg-Marquardt carries round-off into other weights
+    with torch_threads(1), threadpool_limits(limits=1, user_api="blas"):
+        t0 = time.perf_counter()
         trainer.fit(net, loader(~val), loader(val), ckpt_path=ckpt_path)
-    seconds = time.perf_counter() - t0
-    with torch.no_grad():
-        pred = net(torch.as_tensor((z[val] - in_mean) / in_std)).numpy() * out_std + out_mean
-    rel = np.linalg.norm(pred - y[val], axis=-1) / np.linalg.norm(y[val], axis=-1)
-    out = {"layers": net.layers(), "in_mean": in_mean, "in_std": in_std, "out_mean": out_mean,
-           "out_std": out_std, "steps": int(trainer.current_epoch),
-           "stopped_by_time": bool(trainer.current_epoch < int(steps)), "train_seconds": seconds,
-           "val_rel_median": float(np.median(rel)), "val_rel_p99": float(np.quantile(rel, 0.99)),
-           "val_rel_max": float(rel.max())}
-    if derivatives is not None and derivative_weight > 0.0:
-        rows = val & (Wd.reshape(len(z), -1) != 0).any(-1)
-        if rows.any():
-            v = [torch.as_tensor(a[rows]) for a in ((z - in_mean) / in_std, S, T, Wd)]
-            rd = net._derivative_residuals(net._theta(), *v)[3].detach().numpy()
-            out["val_deriv_rel_median"] = float(np.median(np.linalg.norm(rd, axis=-1)) / derivative_weight)
-    return out
+        seconds = time.perf_counter() - t0
+        with torch.no_grad():
+            pred = net(torch.as_tensor((z[val] - in_mean) / in_std)).numpy() * out_std + out_mean
+        rel = np.linalg.norm(pred - y[val], axis=-1) / np.linalg.norm(y[val], axis=-1)
+        out = {"layers": net.layers(), "in_mean": in_mean, "in_std": in_std, "out_mean": out_mean,
+               "out_std": out_std, "steps": int(trainer.current_epoch),
+               "stopped_by_time": bool(trainer.current_epoch < int(steps)), "train_seconds": seconds,
+               "val_rel_median": float(np.median(rel)), "val_rel_p99": float(np.quantile(rel, 0.99)),
+               "val_rel_max": float(rel.max())}
+        if derivatives is not None and derivative_weight > 0.0:
+            rows = val & (Wd.reshape(len(z), -1) != 0).any(-1)
+            if rows.any():
+                v = [torch.as_tensor(a[rows]) for a in ((z - in_mean) / in_std, S, T, Wd)]
+                rd = net._derivative_residuals(net._theta(), *v)[3].detach().numpy()
+                out["val_deriv_rel_median"] = float(np.median(np.linalg.norm(rd, axis=-1)) / derivative_weight)
+        return out
 
 
 def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.87), blend_width: float = 0.04,
@@ -700,25 +699,25 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
 
 def _fit_region(job: dict) -> dict:
     """Both phases of one region's fit (each kept in ``job["work"]`` when finished), here or in a worker
-    process, with one torch thread: the weights do not depend on ``workers`` nor on the machine's cores."""
+    process; each fit runs on one thread (``train_region``), so the weights do not depend on ``workers`` nor on
+    the machine's cores."""
     if job["parent_pid"] != os.getpid():
         _exit_with_parent(job["parent_pid"])
-    with torch_threads(1):
-        r, z, y, dy, work, what, logger_for = (job[k] for k in ("r", "z", "y", "dy", "work", "what", "logger_for"))
-        res = _finished_or_fit(work, f"region{r}", what, lambda ckpt: {
-            **train_region(z, y, steps=job["steps"], max_minutes=job["max_minutes"], ckpt_dir=ckpt, what=what,
-                           logger=logger_for(r) if logger_for is not None else None, **job["common"]),
-            "n_rows": len(z)})
-        if dy is None:
-            return res
-        first = res
-        res = _finished_or_fit(work, f"region{r}_derivatives-{job['derivative_key']}", f"{what} (values and derivatives)",
-                               lambda ckpt: {
-            **train_region(z, y, steps=job["refine_steps"], max_minutes=job["refine_minutes"], ckpt_dir=ckpt,
-                           what=f"{what} (values and derivatives)", derivatives=dy,
-                           derivative_weight=job["derivative_weight"], init=first,
-                           logger=logger_for(f"{r}_derivatives") if logger_for is not None else None, **job["common"]),
-            "n_rows": len(z), "n_derivative_rows": int(np.isfinite(dy).all(-1).any(-1).sum())})
+    r, z, y, dy, work, what, logger_for = (job[k] for k in ("r", "z", "y", "dy", "work", "what", "logger_for"))
+    res = _finished_or_fit(work, f"region{r}", what, lambda ckpt: {
+        **train_region(z, y, steps=job["steps"], max_minutes=job["max_minutes"], ckpt_dir=ckpt, what=what,
+                       logger=logger_for(r) if logger_for is not None else None, **job["common"]),
+        "n_rows": len(z)})
+    if dy is None:
+        return res
+    first = res
+    res = _finished_or_fit(work, f"region{r}_derivatives-{job['derivative_key']}", f"{what} (values and derivatives)",
+                           lambda ckpt: {
+        **train_region(z, y, steps=job["refine_steps"], max_minutes=job["refine_minutes"], ckpt_dir=ckpt,
+                       what=f"{what} (values and derivatives)", derivatives=dy,
+                       derivative_weight=job["derivative_weight"], init=first,
+                       logger=logger_for(f"{r}_derivatives") if logger_for is not None else None, **job["common"]),
+        "n_rows": len(z), "n_derivative_rows": int(np.isfinite(dy).all(-1).any(-1).sum())})
     res["train_seconds"] = float(first["train_seconds"] + res["train_seconds"])
     res["steps_values"], res["steps_derivatives"] = int(first["steps"]), int(res["steps"])
     res["steps"] = int(first["steps"] + res["steps"])
