@@ -4,13 +4,16 @@
 
 The network is the one `train_best` fits per eccentricity region (4 inputs, one hidden layer of 64 tanh
 units, 2 outputs, Adam, batches of 4096 rows sliced from in-memory tensors and reshuffled each epoch).
-Three arms on the same synthetic rows, side by side, at 1 and 2 torch threads:
+Four arms on the same synthetic rows, side by side, at 1 and 2 torch threads:
 
-- ``bare torch``: forward, loss, backward, Adam step in a Python loop (the floor);
+- ``bare torch``: forward, loss, backward, Adam step in a Python loop with the workspace's layers
+  (``training.Tanh``, ``training.NarrowInputLinear``, fused Adam, ``index_select`` batches): the floor;
 - ``Lightning``: ``ForceMLP`` under ``lightning.Trainer`` with the workspace's data module's batches,
   validation every epoch (as ``train_network`` runs it, without logger and checkpoints);
 - ``Lightning, per-step log``: the same with ``self.log(on_epoch=True)`` at every step and Lightning's
-  generic batch transfer, as the module was before 2026-11-26.
+  generic batch transfer, as the module was before 2026-11-26;
+- ``Lightning, stock torch layers``: ``nn.Tanh``, ``nn.Linear`` and foreach Adam, as the module was
+  before 2026-12-05 (torch's CPU tanh is not vectorised; its first-layer weight gradient is a slow product).
 
 Prints the median milliseconds per step over the repeats and the ratios to the bare loop; writes
 ``reports/benchmarks/training_step.json``.  The rows are synthetic: the cost of a step does not depend
@@ -29,7 +32,7 @@ from torch import nn
 
 from fluidfilm.perf.benchmarking import write_benchmark
 from fluidfilm.progress import quiet_third_party
-from fluidfilm.surrogate.training import ForceMLP, _Batches
+from fluidfilm.surrogate.training import ForceMLP, _Batches, _mlp
 
 BATCH = 4096
 
@@ -41,6 +44,20 @@ class _PerStepLog(ForceMLP):
         loss = nn.functional.mse_loss(self(batch[0]), batch[1])
         self.log("train_loss", loss, on_step=False, on_epoch=True, prog_bar=True)
         return loss
+
+
+class _StockLayers(ForceMLP):
+    """The module with torch's stock layers and optimiser, as it was before 2026-12-05: ``nn.Tanh`` (not
+    vectorised on the CPU), ``nn.Linear`` first (weight gradient g^T x), foreach Adam."""
+
+    def __init__(self, **kw):
+        super().__init__(**kw)
+        self.net = nn.Sequential(nn.Linear(4, 64), nn.Tanh(), nn.Linear(64, 2))
+
+    def configure_optimizers(self):
+        opt = torch.optim.Adam(self.parameters(), lr=self.hparams.lr)
+        sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=max(1, self.hparams.max_epochs))
+        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "epoch"}}
 
 
 class _Data(L.LightningDataModule):
@@ -71,16 +88,18 @@ def lightning_ms(module_cls, fast: bool, train, val, epochs: int) -> float:
 
 
 def bare_ms(train, epochs: int) -> float:
+    """The workspace's layers (``training._mlp``) and fused Adam in a plain loop: the same arithmetic as
+    ``ForceMLP`` without Lightning."""
     z, y = train
-    net = nn.Sequential(nn.Linear(4, 64), nn.Tanh(), nn.Linear(64, 2))
-    opt = torch.optim.Adam(net.parameters(), lr=3e-3)
+    net = _mlp(4, 2, 64, 1, "tanh")
+    opt = torch.optim.Adam(net.parameters(), lr=3e-3, fused=True)
     g = torch.Generator().manual_seed(0)
     t0 = time.perf_counter()
     for _ in range(epochs):
         order = torch.randperm(len(z), generator=g)
         for start in range(0, len(z), BATCH):
             idx = order[start:start + BATCH]
-            loss = nn.functional.mse_loss(net(z[idx]), y[idx])
+            loss = nn.functional.mse_loss(net(z.index_select(0, idx)), y.index_select(0, idx))
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -105,7 +124,8 @@ def main() -> None:
     val = (t(Z[v]), t(Y[v]), t(Y[v]), torch.ones(len(Z[v])))  # z, y, force, gain: the module's validation
     arms = {"bare torch": lambda: bare_ms(train, a.epochs),
             "Lightning": lambda: lightning_ms(ForceMLP, True, train, val, a.epochs),
-            "Lightning, per-step log": lambda: lightning_ms(_PerStepLog, False, train, val, a.epochs)}
+            "Lightning, per-step log": lambda: lightning_ms(_PerStepLog, False, train, val, a.epochs),
+            "Lightning, stock torch layers": lambda: lightning_ms(_StockLayers, True, train, val, a.epochs)}
     print(f"{rows:,} rows, batch {BATCH}, {a.epochs} epochs per run, median of {repeats} runs (ms per step)")
     out = []
     for threads in (1, 2):

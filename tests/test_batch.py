@@ -245,3 +245,52 @@ def test_bad_batch_input_raises(kwargs, match):
     args = {"rotors": [Rotor(mass=1.0), Rotor(mass=2.0)], "t_end": 0.001, "dt": 1e-5} | kwargs
     with pytest.raises(ValueError, match=match):
         simulate_batch(lin, **args)
+
+
+def test_run_cases_equals_run_case_one_by_one_to_the_last_bit():
+    """``run_cases`` (one stage-batched, threaded batch, dealt round-robin to the threads) returns each run's
+    trajectory, in the order given, exactly as ``run_case`` integrates it alone (the reference model)."""
+    from fluidfilm.rotor.cases import run_case, run_cases
+
+    model = GradedReynoldsModel(paper_bearing())
+    integ = {"t_end": 0.004, "dt": 1e-5, "eps_stop": 0.98, "eps_substep": 0.8, "record_every": 1}
+    runs = [({"mass": m, "load_share": s}, {"imbalance": u, "external_force": [0.0, 0.0]})
+            for m, s, u in ((2.5, 1.0, 1e-4), (10.0, 1.0, 1e-3), (0.5, 0.5, 5e-5))]
+    together = run_cases(model, runs, integ, threads=2)
+    assert len(together) == len(runs)
+    for traj, (rotor, case) in zip(together, runs):
+        alone = run_case(model, rotor, case, integ)
+        assert traj.status == alone.status and traj.n_force_evals == alone.n_force_evals
+        np.testing.assert_array_equal(traj.x, alone.x)
+        np.testing.assert_array_equal(traj.v, alone.v)
+    assert run_cases(model, [], integ) == []
+
+
+_CACHE_PROBE = """
+import numpy as np
+from fluidfilm import GradedReynoldsModel, Rotor, paper_bearing
+from fluidfilm.rotor.batch import _rk4_stages, simulate_batch
+simulate_batch(GradedReynoldsModel(paper_bearing()), [Rotor(mass=2.5)] * 2, t_end=2e-4, threads=1, stage_batched=True)
+print(len(_rk4_stages.stats.cache_hits), len(_rk4_stages.stats.cache_misses))
+"""
+
+
+def test_the_stage_batched_loop_is_compiled_once_and_then_loaded_from_numbas_cache(tmp_path):
+    """A new process finds the stage-batched loop in numba's on-disk cache (numba's own hit and miss
+    counts): the kernel is typed by its signature, not by the function object, whose type numba compares
+    by identity (so that every process compiled the loop again, ~20 s per kernel)."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))  # an empty cache: the first run must compile
+
+    def probe():
+        out = subprocess.run([sys.executable, "-c", _CACHE_PROBE], env=env, capture_output=True, text=True,
+                             cwd=ROOT, check=True).stdout.split()
+        return int(out[-2]), int(out[-1])
+
+    hits, misses = probe()
+    assert (hits, misses) == (0, 1)
+    hits, misses = probe()
+    assert (hits, misses) == (1, 0)

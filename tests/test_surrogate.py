@@ -236,3 +236,33 @@ def test_polar_frame_makes_the_surrogate_exactly_rotation_equivariant(quick_data
     with torch.no_grad():
         y = module(torch.as_tensor(sc.inputs(X[rows], V[rows]))).numpy()
     np.testing.assert_allclose(F[rows], sc.forces(X[rows], V[rows], y), rtol=1e-9, atol=1e-9)
+
+
+def test_training_layers_equal_torchs_own_in_value_and_gradient():
+    """The training network's tanh (2 sigmoid(2x) - 1) and first layer (weight gradient as (x^T g)^T) are
+    torch's nn.Tanh and nn.Linear to float32 round-off, values and every gradient, checked in float64
+    against torch's own layers (a second method) on random inputs spanning the saturated tails."""
+    from fluidfilm.surrogate.training import NarrowInputLinear, Tanh, _mlp
+
+    torch.manual_seed(0)
+    x = torch.cat([torch.linspace(-12.0, 12.0, 2001), 1e-3 * torch.randn(500)])
+    for dtype, tol in ((torch.float32, 2e-7), (torch.float64, 4e-16)):
+        xd = x.to(dtype).requires_grad_()
+        y = Tanh()(xd)
+        assert torch.max(torch.abs(y - torch.tanh(xd.detach()))) <= tol
+        (g,) = torch.autograd.grad(y.sum(), xd)
+        assert torch.allclose(g, 1.0 - y.detach() ** 2, rtol=0, atol=tol)  # tanh's derivative at its value
+    # a whole network: the workspace's layers vs torch's stock ones with the same weights, float64
+    net = _mlp(4, 2, 16, 2, "tanh").double()
+    assert isinstance(net[0], NarrowInputLinear) and not isinstance(net[2], NarrowInputLinear)
+    stock = torch.nn.Sequential(torch.nn.Linear(4, 16), torch.nn.Tanh(), torch.nn.Linear(16, 16), torch.nn.Tanh(),
+                                torch.nn.Linear(16, 2)).double()
+    stock.load_state_dict(net.state_dict())  # same parameter names: checkpoints load either way
+    z = torch.randn(300, 4, dtype=torch.float64, requires_grad=True)
+    out, out_stock = net(z), stock(z)
+    assert torch.allclose(out, out_stock, rtol=0, atol=1e-14)
+    w = torch.randn(300, 2, dtype=torch.float64)
+    grads = torch.autograd.grad((out * w).sum(), [z, *net.parameters()])
+    grads_stock = torch.autograd.grad((out_stock * w).sum(), [z, *stock.parameters()])
+    for a, b in zip(grads, grads_stock):
+        assert a.shape == b.shape and torch.allclose(a, b, rtol=1e-12, atol=1e-13)

@@ -53,11 +53,12 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
+from numba import njit, typeof
+from numba.core import types as nb_types
 
 from fluidfilm.core.force_model import BatchForceModel, BatchSettable, ForceModel, check_precision
-from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, Trajectory, _ramped, _rk4_step,
-                                       _rk4_step_uncached, _uncached, check_run_args, run_loop)
+from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, Trajectory, _holds_functions, _ramped,
+                                       _rk4_step, _rk4_step_uncached, _uncached, check_run_args, run_loop)
 from fluidfilm.rotor.model import Rotor
 
 
@@ -439,6 +440,48 @@ def _thread_count(threads, n: int) -> int:
     return max(1, min(int(threads), n))
 
 
+#: the (inside, 2) state and force views ``_accelerations`` hands the batched kernel (column-major, float64)
+_STAGE_VIEW = nb_types.Array(nb_types.float64, 2, "F")
+
+
+def _first_class_kernel(fn, bp) -> bool:
+    """Whether ``_stages_loop`` may type ``fn`` by its signature and cache the loop: a compiled function of
+    the library (its module ``fluidfilm...`` or ``fluidfilm_generated``) with library-typed parameters."""
+    from numba.core.registry import CPUDispatcher
+
+    module = getattr(getattr(fn, "py_func", None), "__module__", "") or ""
+    return isinstance(fn, CPUDispatcher) and module.split(".")[0] in ("fluidfilm", "fluidfilm_generated") and \
+        type(bp).__module__.split(".")[0] in ("fluidfilm", "builtins") and not _holds_functions(bp)
+
+
+def _stages_loop(fn, bp, loop_args):
+    """``_rk4_stages`` compiled for this kernel, as a callable ``loop(fn, bp, *loop_args)``.
+
+    Why: numba types a compiled function passed as an argument by the function object itself (its type's
+    equality is identity), so the on-disk cache never matched in a new process and every process compiled
+    the loop afresh, ~20 s per kernel (the stage-batched reference, each surrogate precision).  Typed instead
+    as a first-class function of its signature (``FunctionType``: equal across processes), the loop is
+    compiled once per kernel signature and then loaded from the cache in ~0.3 s.  The kernel is called
+    through a function pointer once per RK4 stage for the whole batch: no cost to measure.
+    The kernel may be any compiled function of the library, generated ones included (a surrogate's
+    ``fluidfilm_generated`` kernel for its shape: every shape with the same parameter types shares the one
+    compiled loop, since the kernel is now a value, not part of the loop's type); parameters must be the
+    library's types without compiled functions inside (``integrate._holds_functions``: an ensemble's), else
+    the uncached twin runs, as it does for kernels from outside the library."""
+    if not _first_class_kernel(fn, bp):
+        return lambda fn, bp, *rest: run_loop(_rk4_stages, _rk4_stages_uncached, fn, bp, *rest)
+    kernel_args = (typeof(bp), _STAGE_VIEW, _STAGE_VIEW, _STAGE_VIEW)
+    fn.compile(kernel_args)
+    signature = fn.overloads[kernel_args].signature
+    loop_types = (nb_types.FunctionType(signature.return_type(*kernel_args)), kernel_args[0]) + \
+        tuple(typeof(a) for a in loop_args)
+    try:
+        _rk4_stages.compile(loop_types)
+        return _rk4_stages.overloads[loop_types].entry_point
+    except ReferenceError:  # the cache index held a key it cannot rebuild (``run_loop``): compile uncached
+        return lambda fn, bp, *rest: run_loop(_rk4_stages, _rk4_stages_uncached, fn, bp, *rest)
+
+
 def _run_stages(model, precision, n_threads, consts, x0, v0, *args) -> None:
     """``_rk4_stages`` over ``n_threads`` contiguous chunks of the batch, each chunk in its own thread with
     its own private batched-kernel parameters (their own counters: nothing mutable is shared), the counts
@@ -453,12 +496,17 @@ def _run_stages(model, precision, n_threads, consts, x0, v0, *args) -> None:
         assert kernel is not None  # checked by the caller
         kernels.append(kernel)
 
-    def chunk(c: int) -> None:
+    def chunk_args(c: int) -> tuple:
         lo, hi = int(edges[c]), int(edges[c + 1])
+        return (consts[lo:hi], x0[lo:hi], v0[lo:hi], t0, dt, n_steps, record_every, eps_stop, eps_substep,
+                max_substeps, out_x[lo:hi], out_v[lo:hi], n_rec[lo:hi], status[lo:hi], t_stop[lo:hi], n_evals[lo:hi])
+
+    # compiled (or loaded from the cache) here, before any thread starts; every chunk has the same types
+    loop = _stages_loop(kernels[0][0], kernels[0][1], chunk_args(0))
+
+    def chunk(c: int) -> None:
         fn, bp = kernels[c]
-        run_loop(_rk4_stages, _rk4_stages_uncached, fn, bp, consts[lo:hi], x0[lo:hi], v0[lo:hi], t0, dt, n_steps,
-                 record_every, eps_stop, eps_substep, max_substeps, out_x[lo:hi], out_v[lo:hi], n_rec[lo:hi],
-                 status[lo:hi], t_stop[lo:hi], n_evals[lo:hi])
+        loop(fn, bp, *chunk_args(c))
 
     if n_threads == 1:
         chunk(0)

@@ -98,36 +98,42 @@ def derivative_weight_for(value, rule: str) -> float:
 
 def _train(cfg) -> Logged:
     from fluidfilm.data.universal import load_universal
-    from fluidfilm.surrogate.universal_fit import train_universal, write_weights
+    from fluidfilm.surrogate.universal_fit import train_universals, write_weights
     from fluidfilm.workflow import tracking
 
     out = Path(cfg.models_dir)
     metrics: dict[str, Any] = {}
     parent = tracking.active_run()
     tr = cfg.train
+    fits, metas, factories = {}, {}, {}
     for rule in tr.rules:
         frame, meta = load_universal(cfg.dataset_dir, rule)
-        factory = None
+        metas[rule] = (frame, meta)
         if parent is not None:
-            factory = tracking.child_logger_factory(parent, cfg.tracking, f"universal_{rule}")
+            factories[rule] = tracking.child_logger_factory(parent, cfg.tracking, f"universal_{rule}")
         settings = {k: for_rule(plain(tr)[k], rule, k) for k in ("steps", "max_minutes", "refine_steps", "refine_minutes")}
         # finished regions and the running fit's checkpoint: a rerun continues them.  Keyed by the data and
         # the first phase's settings (the second phase keys its own files: train_universal)
         first = {k: plain(tr)[k] for k in ("boundaries", "blend_width", "overlap", "power", "width", "floor_share",
                                            "seed")} | {k: settings[k] for k in ("steps", "max_minutes")}
         work = Path(cfg.cache_dir) / f"{rule}-{meta['config_hash'][:12]}-{config_hash(first)[:8]}"
-        weight = derivative_weight_for(tr.derivative_weight, rule)
-        try:
-            fit = train_universal(frame, boundaries=list(tr.boundaries), blend_width=tr.blend_width,
-                                  overlap=tr.overlap, power=tr.power, width=tr.width, floor_share=tr.floor_share,
-                                  seed=tr.seed, work_dir=work, what=f"{rule} ", derivative_weight=weight,
-                                  logger_for=None if factory is None else factory.logger_for,
-                                  derivative_rows=str(tr.derivative_rows), workers=tr.workers, **settings)
-        except BaseException as exc:
-            # a stopped worker could not end the MLflow run of the phase it was training
-            if factory is not None:
-                factory.end_open_runs("KILLED" if isinstance(exc, KeyboardInterrupt) else "FAILED")
-            raise
+        fits[rule] = dict(frame=frame, boundaries=list(tr.boundaries), blend_width=tr.blend_width,
+                          overlap=tr.overlap, power=tr.power, width=tr.width, floor_share=tr.floor_share,
+                          seed=tr.seed, work_dir=work, what=f"{rule} ",
+                          derivative_weight=derivative_weight_for(tr.derivative_weight, rule),
+                          logger_for=factories[rule].logger_for if rule in factories else None,
+                          derivative_rows=str(tr.derivative_rows), **settings)
+    try:
+        # both rules' regions in one pool of workers, the largest first (weights as fitted one rule at a time)
+        results = train_universals(fits, workers=tr.workers)
+    except BaseException as exc:
+        # a stopped worker could not end the MLflow run of the phase it was training
+        for factory in factories.values():
+            factory.end_open_runs("KILLED" if isinstance(exc, KeyboardInterrupt) else "FAILED")
+        raise
+    for rule, fit in results.items():
+        frame, meta = metas[rule]
+        weight = fits[rule]["derivative_weight"]
         info = {"dataset_hash": meta["config_hash"], "n_rows": int(len(frame)),
                 **{k: v for k, v in fit.items() if k.startswith("val_") or k in ("train_seconds", "train_wall_s", "workers")},
                 "threads_per_fit": 1,
@@ -140,8 +146,8 @@ def _train(cfg) -> Logged:
         metrics |= {f"{key}_val_rel_median": fit["val_rel_median"], f"{key}_val_rel_p99": fit["val_rel_p99"],
                     f"{key}_train_seconds": fit["train_seconds"]}
         print(f"{rule}: validation relative error of G (worst region) median {100 * fit['val_rel_median']:.3f} %, "
-              f"p99 {100 * fit['val_rel_p99']:.2f} %, {fit['train_seconds']:.0f} s of one core each, "
-              f"{fit['train_wall_s']:.0f} s on {fit['workers']} workers")
+              f"p99 {100 * fit['val_rel_p99']:.2f} %, {fit['train_seconds']:.0f} s of one core each; "
+              f"both rules' regions {fit['train_wall_s']:.0f} s on {fit['workers']} workers")
     return Logged(metrics, [out])
 
 

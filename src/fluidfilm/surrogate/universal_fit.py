@@ -39,7 +39,7 @@ from fluidfilm.surrogate.fit import _exit_with_parent, side_by_side, torch_threa
 from fluidfilm.surrogate.universal import WEIGHTS_DIR, slenderness_gain
 
 __all__ = ["UniversalNet", "features", "derivative_targets", "region_rows", "train_region", "train_universal",
-           "save_fit", "write_weights"]
+           "train_universals", "save_fit", "write_weights"]
 
 
 def features(frame: pd.DataFrame, power: float) -> tuple[np.ndarray, np.ndarray]:
@@ -658,6 +658,53 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         ``train_seconds`` (all regions, one core each), ``train_wall_s``, ``workers`` and the validation errors over all regions (``val_rel_median``,
         ``val_rel_p99``, ``val_rel_max``: each the worst region's).
     """
+    return train_universals({"": dict(frame=frame, boundaries=boundaries, blend_width=blend_width, overlap=overlap,
+                                      power=power, width=width, steps=steps, max_minutes=max_minutes,
+                                      floor_share=floor_share, val_fraction=val_fraction, seed=seed,
+                                      work_dir=work_dir, logger_for=logger_for, what=what,
+                                      derivative_weight=derivative_weight, derivative_rows=derivative_rows,
+                                      refine_minutes=refine_minutes, refine_steps=refine_steps)},
+                            workers=workers)[""]
+
+
+def train_universals(fits: dict, workers: int | None = None) -> dict:
+    """Several ``train_universal`` fits (e.g. one per cavitation rule) with all their regions in one pool.
+
+    ``fits`` maps a name to ``train_universal``'s keyword arguments (``frame`` included, ``workers`` not).
+    Why one pool: a rule's regions differ fivefold in cost, so a pool per rule idles a worker while its
+    largest region finishes; the regions of both rules, largest first, keep both busy (about a minute of
+    ``universal_train`` here).  Each region is fitted alone on one thread, so the weights are those of
+    separate calls.  Returns {name: what ``train_universal`` returns}; ``train_wall_s`` is the pool's.
+    """
+    jobs: list[dict] = []
+    summaries = {}
+    for name, kwargs in fits.items():
+        job_list, summary = _region_jobs(**kwargs)
+        summaries[name] = (len(jobs), len(job_list), summary)
+        jobs += job_list
+    n_workers = worker_count(workers, len(jobs))
+    t0 = time.perf_counter()
+    # most steps first (steps x rows: the cost of a fit), so the workers finish together
+    done = side_by_side(_fit_region, jobs, n_workers,
+                        cost=lambda job: (job["steps"] + job["refine_steps"]) * len(job["z"]))
+    wall = time.perf_counter() - t0
+    out = {}
+    for name, (first, count, summary) in summaries.items():
+        regions = done[first:first + count]
+        out[name] = {"regions": regions, **summary,
+                     "train_seconds": float(sum(r["train_seconds"] for r in regions)),
+                     "train_wall_s": wall, "workers": n_workers,
+                     **{k: float(max(r[k] for r in regions)) for k in ("val_rel_median", "val_rel_p99", "val_rel_max")}}
+    return out
+
+
+def _region_jobs(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.87), blend_width: float = 0.04,
+                 overlap: int = 1, power: float = 2.0, width: int = 64, steps=3000, max_minutes=None,
+                 floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0, work_dir=None,
+                 logger_for=None, what: str = "", derivative_weight: float = 0.0, derivative_rows: str = "static",
+                 refine_minutes=None, refine_steps=3000) -> tuple[list[dict], dict]:
+    """``train_universal``'s settings checked and cut into one job per region (``_fit_region``), with the
+    model's settings that the result carries."""
     bounds = [float(b) for b in boundaries]
     if any(b1 - b0 <= blend_width for b0, b1 in zip(bounds, bounds[1:])) or not all(0 < b < 1 for b in bounds):
         raise ValueError(f"boundaries {bounds} must increase inside (0, 1) by more than blend_width={blend_width!r}")
@@ -672,7 +719,6 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
     dy = derivative_targets(frame, power, derivative_rows) if derivative_weight > 0.0 else None
     eps = frame["eps"].to_numpy()
     work = Path(work_dir) if work_dir is not None else None
-    n_workers = worker_count(workers, n_regions)
     jobs = []
     for r in range(n_regions):
         rows = region_rows(eps, bounds, blend_width, r, overlap)
@@ -687,14 +733,7 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
                      "refine_minutes": refine[r], "derivative_weight": float(derivative_weight),
                      "common": dict(width=width, floor_share=floor_share, val_fraction=val_fraction, seed=seed + r),
                      "parent_pid": os.getpid()})
-    t0 = time.perf_counter()
-    # most steps first (steps x rows: the cost of a fit), so the workers finish together
-    regions = side_by_side(_fit_region, jobs, n_workers,
-                           cost=lambda job: (job["steps"] + job["refine_steps"]) * len(job["z"]))
-    return {"regions": regions, "boundaries": bounds, "blend_width": float(blend_width), "power": float(power),
-            "train_seconds": float(sum(r["train_seconds"] for r in regions)),
-            "train_wall_s": time.perf_counter() - t0, "workers": n_workers,
-            **{k: float(max(r[k] for r in regions)) for k in ("val_rel_median", "val_rel_p99", "val_rel_max")}}
+    return jobs, {"boundaries": bounds, "blend_width": float(blend_width), "power": float(power)}
 
 
 def _fit_region(job: dict) -> dict:
