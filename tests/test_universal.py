@@ -395,7 +395,7 @@ def test_the_weights_depend_on_the_steps_not_on_workers_or_the_clock(tmp_path):
     # involved (a cap reached is reported: stopped_by_time)
     import pandas as pd
 
-    from fluidfilm.surrogate.universal_fit import train_region, train_universal
+    from fluidfilm.surrogate.universal_fit import train_region, train_universal, train_universals
 
     rng = np.random.default_rng(3)
     eps = rng.uniform(0.02, 0.9, 400)
@@ -412,6 +412,18 @@ def test_the_weights_depend_on_the_steps_not_on_workers_or_the_clock(tmp_path):
         for (wa, ba), (wb, bb) in zip(a["layers"], b["layers"]):
             np.testing.assert_array_equal(wa, wb)
             np.testing.assert_array_equal(ba, bb)
+    # two fits in one pool (train_universals, as universal_train runs both rules) come back each to its own
+    # name with the weights of its own call
+    other = frame.assign(G_t=np.sin(2 * alpha) * eps)
+    pooled = train_universals({"a": dict(frame=frame, **kw), "b": dict(frame=other, **kw)}, workers=2)
+    alone_b = train_universal(other, workers=1, **kw)
+    for name, ref in (("a", serial), ("b", alone_b)):
+        assert len(pooled[name]["regions"]) == 2
+        for a, b in zip(ref["regions"], pooled[name]["regions"]):
+            for (wa, ba), (wb, bb) in zip(a["layers"], b["layers"]):
+                np.testing.assert_array_equal(wa, wb)
+                np.testing.assert_array_equal(ba, bb)
+    assert not np.array_equal(pooled["a"]["regions"][0]["layers"][0][0], pooled["b"]["regions"][0]["layers"][0][0])
     z, y = _teacher_data()
     capped = train_region(z, y, width=8, steps=10**6, max_minutes=0.02, seed=1)
     assert capped["stopped_by_time"] and 0 < capped["steps"] < 10**6

@@ -212,7 +212,7 @@ def normal_equations(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: 
         Je_s += js_b
         Je_o += jo_b
         sse += sse_b
-    V = np.triu(V) + np.triu(V, 1).T
+    V = np.triu(V) + np.triu(V, 1).T  # the product is whole already; this keeps V exactly symmetric
     return _assemble(V, Je_s, Je_o, theta, n_in, n_hidden, n_out) + (sse,)
 
 
@@ -362,7 +362,8 @@ def normal_equations_dense(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hi
 def mlp_sse(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: int, chunk: int = 8192,
             workers: int = 1) -> float:
     """Sum of squared errors of the network over (Z, Y), chunk by chunk; ``workers`` threads, the chunks'
-    sums added in chunk order (the result does not depend on ``workers``)."""
+    sums added in chunk order (the result does not depend on ``workers``).  Chunks of 8192 rows, as the
+    normal equations' (65,536 until 2026-12-05: one chunk at the paper_scale size, so one worker idled)."""
     def block(s):
         pred, _ = mlp_forward(theta, Z[s:s + chunk], n_hidden, Y.shape[1])
         return float(((pred - Y[s:s + chunk]) ** 2).sum())

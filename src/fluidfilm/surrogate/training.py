@@ -37,7 +37,8 @@ class _TanhFunction(torch.autograd.Function):
     Why: torch 2.13's CPU ``tanh`` is not vectorised (550 us for the 4096 x 64 hidden layer of a training
     step, one thread) while ``sigmoid`` is (55 us), so this form takes a third off the step
     (benchmarks/bench_training_step.py).  It differs from ``torch.tanh`` by at most 1.8e-7 (absolute,
-    float32), the rounding of the float32 sum 2 s - 1 (test_training.py).
+    float32), the rounding of the float32 sum 2 s - 1
+    (tests/test_surrogate.py::test_training_layers_equal_torchs_own_in_value_and_gradient).
     """
 
     @staticmethod
@@ -63,8 +64,8 @@ class _NarrowInputLinearFunction(torch.autograd.Function):
     """x W^T + b with the weight's gradient formed as (x^T g)^T.
 
     Why: autograd's g^T x, a (width x rows) by (rows x 4) product with the transposed operand first,
-    takes MKL 210 us for 4096 rows at one thread; x^T g, the same numbers summed in the same order per
-    element, takes 35 us.  Only the first layer has so few inputs.
+    takes MKL 210 us for 4096 rows at one thread; x^T g, the same products (summed in BLAS's order, so equal
+    to round-off), takes 35 us.  Only the first layer has so few inputs.
     """
 
     @staticmethod
@@ -188,7 +189,7 @@ class ForceMLP(L.LightningModule):
         h = self.hparams
         # fused: one kernel for all parameters instead of a dozen small foreach ops per step (the CPU's
         # fused Adam, torch >= 2.4); the same update to round-off
-        fused = self.device.type == "cpu" or None
+        fused = True if self.device.type == "cpu" else None
         if h.optimizer == "adam":
             opt = torch.optim.Adam(self.parameters(), lr=h.lr, weight_decay=h.weight_decay, fused=fused)
         elif h.optimizer == "adamw":
