@@ -363,7 +363,7 @@ def mlp_sse(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: int, chun
             workers: int = 1) -> float:
     """Sum of squared errors of the network over (Z, Y), chunk by chunk; ``workers`` threads, the chunks'
     sums added in chunk order (the result does not depend on ``workers``).  Chunks of 8192 rows, as the
-    normal equations' (65,536 until 2026-12-05: one chunk at the paper_scale size, so one worker idled)."""
+    normal equations': a 40 k-sample fit's sums then spread over both workers (one chunk would idle one)."""
     def block(s):
         pred, _ = mlp_forward(theta, Z[s:s + chunk], n_hidden, Y.shape[1])
         return float(((pred - Y[s:s + chunk]) ** 2).sum())
