@@ -469,8 +469,11 @@ def _stages_loop(fn, bp, loop_args):
     compiled loop, since the kernel is now a value, not part of the loop's type); parameters must be the
     library's types without compiled functions inside (``integrate._holds_functions``: an ensemble's), else
     the uncached twin runs, as it does for kernels from outside the library."""
+    def dispatcher_typed(kernel, params, *rest):  # the loop as ``run_loop`` runs it (cached or uncached twin)
+        return run_loop(_rk4_stages, _rk4_stages_uncached, kernel, params, *rest)
+
     if not _first_class_kernel(fn, bp):
-        return lambda fn, bp, *rest: run_loop(_rk4_stages, _rk4_stages_uncached, fn, bp, *rest)
+        return dispatcher_typed
     kernel_args = (typeof(bp), _STAGE_VIEW, _STAGE_VIEW, _STAGE_VIEW)
     fn.compile(kernel_args)
     signature = fn.overloads[kernel_args].signature
@@ -482,14 +485,14 @@ def _stages_loop(fn, bp, loop_args):
         if loop_types not in _rk4_stages.overloads:
             warnings.warn(f"numba could not use its on-disk cache of the stage-batched loop ({err}); this process "
                           "compiles the loop without the cache (same arithmetic)", RuntimeWarning, stacklevel=3)
-            return lambda fn, bp, *rest: run_loop(_rk4_stages, _rk4_stages_uncached, fn, bp, *rest)
+            return dispatcher_typed
     entry = _rk4_stages.overloads[loop_types].entry_point
     kernel_type = kernel_args[0]
 
     def loop(kernel, params, *rest):
         # the compiled entry skips the dispatcher's type checks: every chunk must bring this kernel's types
         if kernel is not fn or typeof(params) != kernel_type:
-            return run_loop(_rk4_stages, _rk4_stages_uncached, kernel, params, *rest)
+            return dispatcher_typed(kernel, params, *rest)
         return entry(kernel, params, *rest)
 
     return loop
