@@ -79,6 +79,7 @@ bench: setup
 	$(PY) benchmarks/bench_surrogate_kernels.py
 	$(PY) benchmarks/probe_thread_spread.py
 	$(PY) benchmarks/bench_universal_cost.py
+	$(PY) benchmarks/bench_tanh64.py
 
 .PHONY: time-tests
 time-tests: setup

@@ -91,7 +91,8 @@ def _units32(x, silu, sig):
 
 def test_silu_and_sigmoid_through_tanh_keep_the_exp_forms_values():
     """sigma(x) = (1 + tanh(x/2)) / 2 is an identity; the tanh forms (which vectorise) against the exp forms
-    in float64 (the error where 1 + tanh cancels is absolute: 2e-16 of sigma, times |x| for SiLU) and the
+    in float64 (the error where 1 + tanh cancels is absolute: 2.5e-16 of sigma, measured 2.0e-16 near x = -24, times
+    |x| for SiLU) and the
     float32 forms to float32's own resolution near sigma = 1 (1.2e-7; measured 1.8e-7 absolute, the clamp at
     |x/2| = 7.9 included), times |x| for SiLU."""
     x = _dense_grid()[::7]
@@ -99,8 +100,8 @@ def test_silu_and_sigmoid_through_tanh_keep_the_exp_forms_values():
     silu, sig = np.empty_like(x64), np.empty_like(x64)
     _units64(x64, silu, sig)
     exact_sig = np.array([1.0 / (1.0 + math.exp(-t)) if t > -700 else 0.0 for t in x64])
-    assert np.all(np.abs(sig - exact_sig) <= 2e-16 + 2e-15 * exact_sig)
-    assert np.all(np.abs(silu - x64 * exact_sig) <= (2e-16 + 2e-15 * exact_sig) * np.abs(x64))
+    assert np.all(np.abs(sig - exact_sig) <= 2.5e-16 + 2e-15 * exact_sig)
+    assert np.all(np.abs(silu - x64 * exact_sig) <= (2.5e-16 + 2e-15 * exact_sig) * np.abs(x64))
     assert sigmoid64(0.0) == 0.5 and silu64(0.0) == 0.0 and sigmoid64(800.0) == 1.0 and sigmoid64(-800.0) == 0.0
     x32 = x.astype(np.float32)
     silu32_, sig32_ = np.empty_like(x32), np.empty_like(x32)

@@ -16,7 +16,7 @@ holds what the integrator runs instead:
   of ``params`` with the input standardisation folded into the first
   layer and the output un-standardisation into the last, so every model of
   one shape (an ensemble's members) shares one compiled function.  ``tanh``
-  is ``tanh64``: a [7/6] Pade approximant at x/8 doubled three times, pure
+  is ``tanh64``: a [9/8] Pade approximant at x/4 doubled twice, pure
   arithmetic (it vectorises over a layer) and within 1e-15 relative of
   ``math.tanh`` (tests/test_surrogate_kernels.py states and checks the
   bound), so the fast kernel equals the generic one to round-off.
@@ -77,12 +77,20 @@ __all__ = ["tanh64", "tanh32", "silu64", "silu32", "sigmoid64", "sigmoid32", "fa
 
 # ---------------------------------------------------------------------------------------------- tanh
 
-# tanh(u) ~ u P(u^2) / Q(u^2), the [7/6] Pade approximant (a convergent of Lambert's continued
-# fraction), normalised to Q(0) = 1; used at u = x/8, then tanh(2u) = 2 t / (1 + t^2) three times on
-# the pair (p, q) (p' = 2 p q, q' = p^2 + q^2: no division until the end, and the map contracts a
-# relative error in p or q by (1 - t^2)/(1 + t^2)).  Clamped at |x| = 19.5, where tanh rounds to 1.
-_P1, _P3, _P5, _P7 = 1.0, 17325.0 / 135135.0, 378.0 / 135135.0, 1.0 / 135135.0
-_Q0, _Q2, _Q4, _Q6 = 1.0, 62370.0 / 135135.0, 3150.0 / 135135.0, 28.0 / 135135.0
+# tanh(u) ~ u P(u^2) / Q(u^2), the [9/8] Pade approximant (a convergent of Lambert's continued fraction),
+# normalised to Q(0) = 1, at u = x/4 (the 1/4 folded into the coefficients: powers of two, exact), then
+# doubled twice in one step: with c = p q and s = p^2 + q^2, tanh(2u) = 2c/s and tanh(4u) = 4cs/(4c^2 + s^2)
+# = cs/(c^2 + (s/2)^2): one division at the end, and each doubling contracts a relative error in p or q by
+# (1 - t^2)/(1 + t^2).  Clamped at |x| = 19.5, where tanh rounds to 1.  19 vector operations and a division per
+# 8 units, against 23 for the [7/6] approximant at x/8 doubled three times that it replaced (the doublings were
+# half of its cost), at the same accuracy (largest relative error 4.6e-16 against 5.7e-16, mpmath, |x| <= 19.5;
+# ``benchmarks/bench_tanh64.py`` times and checks both).  Measured and not kept: fewer doublings chosen per
+# network from its largest |pre-activation| (a [11/10] approximant with one doubling below 4.875): ~30 %
+# slower per force, the max-reduction and the branch sit on the one-state path's critical path.
+_P1, _P3, _P5, _P7, _P9 = (1.0 / 4.0, 4729725.0 / 34459425.0 / 4.0 ** 3, 135135.0 / 34459425.0 / 4.0 ** 5,
+                           990.0 / 34459425.0 / 4.0 ** 7, 1.0 / 34459425.0 / 4.0 ** 9)
+_Q0, _Q2, _Q4, _Q6, _Q8 = (1.0, 16216200.0 / 34459425.0 / 4.0 ** 2, 945945.0 / 34459425.0 / 4.0 ** 4,
+                           13860.0 / 34459425.0 / 4.0 ** 6, 45.0 / 34459425.0 / 4.0 ** 8)
 TANH64_CLAMP = 19.5
 
 
@@ -90,14 +98,13 @@ TANH64_CLAMP = 19.5
 def tanh64(x):
     """tanh in float64 from arithmetic only (vectorises); within 1e-15 relative of ``math.tanh``."""
     x = min(max(x, -TANH64_CLAMP), TANH64_CLAMP)
-    u = 0.125 * x
-    u2 = u * u
-    p = u * (_P1 + u2 * (_P3 + u2 * (_P5 + u2 * _P7)))
-    q = _Q0 + u2 * (_Q2 + u2 * (_Q4 + u2 * _Q6))
-    p, q = 2.0 * p * q, p * p + q * q
-    p, q = 2.0 * p * q, p * p + q * q
-    p, q = 2.0 * p * q, p * p + q * q
-    return p / q
+    x2 = x * x
+    p = x * (_P1 + x2 * (_P3 + x2 * (_P5 + x2 * (_P7 + x2 * _P9))))
+    q = _Q0 + x2 * (_Q2 + x2 * (_Q4 + x2 * (_Q6 + x2 * _Q8)))
+    c = p * q
+    s = p * p + q * q
+    h = 0.5 * s
+    return (c * s) / (c * c + h * h)
 
 
 # Eigen's float32 tanh (TensorFlow/Eigen ``generic_fast_tanh_float``): a 13/6 rational function on
@@ -134,7 +141,7 @@ def tanh32(x):
 # SiLU and the logistic sigmoid through tanh: sigma(x) = (1 + tanh(x / 2)) / 2, so that they vectorise like
 # tanh (math.exp does not: no SVML here; the active bearing's 4-64-64-2 SiLU network spent ~60 % of its
 # one-state force in 128 scalar exp calls).  tanh64 keeps them within round-off of x / (1 + exp(-x)): where
-# 1 + tanh cancels (x < -30) the error is absolute, ~1e-16 of sigma (times x for SiLU), far below one unit of
+# 1 + tanh cancels (x below about -20) the error is absolute, ~2e-16 of sigma (times x for SiLU), far below one unit of
 # the next layer's sum.  tanh32's clamp at |x / 2| = 7.9 puts sigma's error below 1.2e-7 absolute.
 
 
