@@ -17,7 +17,7 @@ holds what the integrator runs instead:
   layer and the output un-standardisation into the last, so every model of
   one shape (an ensemble's members) shares one compiled function.  ``tanh``
   is ``tanh64``: a [9/8] Pade approximant at x/4 doubled twice, pure
-  arithmetic (it vectorises over a layer) and within 1e-15 relative of
+  arithmetic (it vectorises over a layer) and within 1.5e-15 relative of
   ``math.tanh`` (tests/test_surrogate_kernels.py states and checks the
   bound), so the fast kernel equals the generic one to round-off.
   ``fast_force_kernel(model, "float32")`` is the same source with the networks in float32 (inputs rounded,
@@ -77,26 +77,31 @@ __all__ = ["tanh64", "tanh32", "silu64", "silu32", "sigmoid64", "sigmoid32", "fa
 
 # ---------------------------------------------------------------------------------------------- tanh
 
-# tanh(u) ~ u P(u^2) / Q(u^2), the [9/8] Pade approximant (a convergent of Lambert's continued fraction),
-# normalised to Q(0) = 1, at u = x/4 (the 1/4 folded into the coefficients: powers of two, exact), then
-# doubled twice in one step: with c = p q and s = p^2 + q^2, tanh(2u) = 2c/s and tanh(4u) = 4cs/(4c^2 + s^2)
-# = cs/(c^2 + (s/2)^2): one division at the end, and each doubling contracts a relative error in p or q by
-# (1 - t^2)/(1 + t^2).  Clamped at |x| = 19.5, where tanh rounds to 1.  19 vector operations and a division per
-# 8 units, against 23 for the [7/6] approximant at x/8 doubled three times that it replaced (the doublings were
-# half of its cost), at the same accuracy (largest relative error 4.6e-16 against 5.7e-16, mpmath, |x| <= 19.5;
-# ``benchmarks/bench_tanh64.py`` times and checks both).  Measured and not kept: fewer doublings chosen per
-# network from its largest |pre-activation| (a [11/10] approximant with one doubling below 4.875): ~30 %
-# slower per force, the max-reduction and the branch sit on the one-state path's critical path.
-_P1, _P3, _P5, _P7, _P9 = (1.0 / 4.0, 4729725.0 / 34459425.0 / 4.0 ** 3, 135135.0 / 34459425.0 / 4.0 ** 5,
-                           990.0 / 34459425.0 / 4.0 ** 7, 1.0 / 34459425.0 / 4.0 ** 9)
-_Q0, _Q2, _Q4, _Q6, _Q8 = (1.0, 16216200.0 / 34459425.0 / 4.0 ** 2, 945945.0 / 34459425.0 / 4.0 ** 4,
-                           13860.0 / 34459425.0 / 4.0 ** 6, 45.0 / 34459425.0 / 4.0 ** 8)
+# tanh(u) ~ u P(u^2) / Q(u^2), the [9/8] Pade approximant (a convergent of Lambert's continued fraction), at u =
+# x/4 with the 1/4 folded into the coefficients and p and q both scaled by 4 so that p = x (1 + ...): powers of
+# two, so every product rounds as the unscaled form's would, and a tiny x (subnormal too) comes back exactly
+# (scaling x by 1/4 first lost its last bits). Then both doublings in one step: with c = p q and s = p^2 + q^2,
+# tanh(2u) = 2c/s and tanh(4u) = 4cs/(4c^2 + s^2) = cs/(c^2 + (s/2)^2); one division at the end, and each
+# doubling contracts a relative error in p or q by (1 - t^2)/(1 + t^2). Clamped at |x| = 19.5, where tanh rounds
+# to 1. 19 vector operations and a division per 8 units, against 23 for the [7/6] approximant at x/8 doubled
+# three times that it replaced (the doublings were half of its cost). Accuracy: the largest relative error
+# against mpmath is a little lower (``benchmarks/bench_tanh64.py`` measures both); near saturation (|x| above
+# ~8) the fused step's last roundings all land on the result, so there it is a little higher than the old form's
+# (4.0e-16 against 3.3e-16 at most, mpmath, 8 <= |x| <= 19.5), and |tanh64| can round one ulp above 1 there (the
+# old form did too; tested to be never more). Measured and not kept: fewer doublings chosen per network from its
+# largest |pre-activation| (an [11/10] approximant with one doubling below 4.875): 99 against 73 ns per force,
+# the max-reduction and the branch sit on the one-state path's critical path.
+_P1, _P3, _P5, _P7, _P9 = (1.0, 4729725.0 / 34459425.0 / 4.0 ** 2, 135135.0 / 34459425.0 / 4.0 ** 4,
+                           990.0 / 34459425.0 / 4.0 ** 6, 1.0 / 34459425.0 / 4.0 ** 8)
+_Q0, _Q2, _Q4, _Q6, _Q8 = (4.0, 16216200.0 / 34459425.0 / 4.0, 945945.0 / 34459425.0 / 4.0 ** 3,
+                           13860.0 / 34459425.0 / 4.0 ** 5, 45.0 / 34459425.0 / 4.0 ** 7)
 TANH64_CLAMP = 19.5
 
 
 @njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def tanh64(x):
-    """tanh in float64 from arithmetic only (vectorises); within 1e-15 relative of ``math.tanh``."""
+    """tanh in float64 from arithmetic only (vectorises); within 1.5e-15 relative of ``math.tanh`` (libm's own
+    error included; tests/test_surrogate_kernels.py), exactly odd, exactly x for tiny x."""
     x = min(max(x, -TANH64_CLAMP), TANH64_CLAMP)
     x2 = x * x
     p = x * (_P1 + x2 * (_P3 + x2 * (_P5 + x2 * (_P7 + x2 * _P9))))
