@@ -27,6 +27,7 @@ import mpmath
 import numpy as np
 from numba import njit
 
+from bench_universal_cost import states  # this folder: the script's own (python adds it to sys.path)
 from fluidfilm import load_surrogate, paper_bearing, universal_bearing
 from fluidfilm.perf import write_benchmark
 from fluidfilm.perf.speed import _kernel_loop, best_shaped_surrogate, median_seconds
@@ -94,11 +95,7 @@ def max_rel_error(f, dtype) -> float:
 def compiled_with(model, act):
     """The model's generated one-state float64 kernel (``kernels.kernel_source``) with ``act`` for tanh64,
     compiled as ``kernels.compiled_kernel`` compiles it."""
-    source = kernels.kernel_source(model._fast_key)
-    namespace = {"__name__": "fluidfilm_generated", "math": math, "np": np, "tanh64": act,
-                 "silu64": kernels.silu64, "sigmoid64": kernels.sigmoid64, "float32_tail": kernels.float32_tail}
-    exec(compile(source, "<bench kernel>", "exec"), namespace)
-    return njit(error_model="numpy", fastmath={"contract", "reassoc"})(namespace["surrogate_kernel"])
+    return kernels.one_state_function(kernels.kernel_source(model._fast_key), "<bench kernel>", {"tanh64": act})
 
 
 def main(argv=None) -> None:
@@ -126,11 +123,8 @@ def main(argv=None) -> None:
         (best_shaped_surrogate(bearing), "best shape (random weights)")
     models = {"universal (Gumbel)": universal_bearing(bearing, "gumbel"), best[1]: best[0]}
     acts = {"tanh64": tanh64, "previous tanh64": tanh64_pade76, "identity (no tanh)": identity}
-    ang_rng = np.random.default_rng(0)
     n = 5000
-    eps, ang = 0.9 * ang_rng.random(n), 2 * np.pi * ang_rng.random(n)
-    x = bearing.clearance * np.stack([eps * np.sin(ang), eps * np.cos(ang)], axis=1)
-    v = 0.05 * (2 * ang_rng.random((n, 2)) - 1)
+    x, v = states(bearing.clearance, 0.0, 0.9, n, 0)  # the universal model's timing states
     fns = {}
     for mname, m in models.items():
         for aname, act in acts.items():

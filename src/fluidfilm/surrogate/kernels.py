@@ -70,7 +70,7 @@ from numba.extending import intrinsic
 
 from fluidfilm.core.force_model import check_precision
 
-__all__ = ["tanh64", "tanh32", "silu64", "silu32", "sigmoid64", "sigmoid32", "fast_force_kernel", "shape_key", "pack", "kernel_source", "compiled_kernel",
+__all__ = ["tanh64", "tanh32", "silu64", "silu32", "sigmoid64", "sigmoid32", "fast_force_kernel", "shape_key", "pack", "kernel_source", "one_state_function", "compiled_kernel",
            "compile_seconds", "BatchParams", "batch_params", "forces_batch", "TILE", "FastBatchParams",
            "batch_shape_key", "fast_batch_params", "batch_kernel_source", "batch_kernel", "with_workspace",
            "WORKSPACE_STATES"]
@@ -588,6 +588,19 @@ _COMPILED: dict[tuple, Any] = {}
 compile_seconds: dict[tuple, float] = {}
 
 
+def one_state_function(source: str, label: str, units: dict[str, Any] | None = None):
+    """The numba dispatcher (not yet compiled) of a one-state kernel's ``source`` (``kernel_source``), with
+    ``compiled_kernel``'s flags; ``units`` replaces unit functions by name (``benchmarks/bench_tanh64.py``
+    compiles the same source with another tanh)."""
+    # a module name outside the package: the integrator takes its uncached loops for this kernel
+    # (numba cannot cache a function generated at run time; see rotor.integrate._library_types)
+    namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np, "tanh64": tanh64,
+                                 "silu64": silu64, "sigmoid64": sigmoid64, "tanh32": tanh32, "silu32": silu32,
+                                 "sigmoid32": sigmoid32, "float32_tail": float32_tail, **(units or {})}
+    exec(compile(source, label, "exec"), namespace)
+    return njit(error_model="numpy", fastmath={"contract", "reassoc"})(namespace["surrogate_kernel"])
+
+
 def compiled_kernel(key, precision: str = "float64"):
     """The one-state kernel of a model shape in ``precision``, compiled once per process (``kernel_source``);
     ``compile_seconds`` records the time under ``key`` (float64) or ``(key, "one-state float32")``."""
@@ -595,14 +608,7 @@ def compiled_kernel(key, precision: str = "float64"):
     name = key if precision == "float64" else (key, f"one-state {precision}")
     fn = _COMPILED.get(name)
     if fn is None:
-        source = kernel_source(key, precision)
-        # a module name outside the package: the integrator takes its uncached loops for this kernel
-        # (numba cannot cache a function generated at run time; see rotor.integrate._library_types)
-        namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np, "tanh64": tanh64,
-                                     "silu64": silu64, "sigmoid64": sigmoid64, "tanh32": tanh32, "silu32": silu32,
-                                     "sigmoid32": sigmoid32, "float32_tail": float32_tail}
-        exec(compile(source, f"<surrogate kernel {len(_COMPILED)}>", "exec"), namespace)
-        fn = njit(error_model="numpy", fastmath={"contract", "reassoc"})(namespace["surrogate_kernel"])
+        fn = one_state_function(kernel_source(key, precision), f"<surrogate kernel {len(_COMPILED)}>")
         t0 = time.perf_counter()
         fn.compile((types.float64[::1], types.float64, types.float64, types.float64, types.float64))
         compile_seconds[name] = time.perf_counter() - t0
