@@ -549,16 +549,45 @@ def test_the_equal_accuracy_speed_up_is_the_median_of_side_by_side_rounds():
     from fluidfilm.studies.universal import reference_cost_at_equal_accuracy
 
     cfg = OmegaConf.create({"evaluate": {"n_timing": 200, "n_batch": 64, "timing_rounds": 3}})
-    errors = pd.DataFrame({"cavitation": ["gumbel"] * 3, "ld": [0.75] * 3, "rel_err": [0.02, 0.03, 0.01]})
+    errors = pd.DataFrame({"cavitation": ["gumbel"] * 3, "ld": [0.75] * 3, "rel_err": [0.02, 0.03, 0.01],
+                           "n_theta": 192, "n_z": 47, "rel_err_grid_48": [0.01, 0.02, 0.015],
+                           "rel_err_grid_72": [0.001, 0.002, 0.001]})
     with pytest.raises(ValueError, match="rounds=0"):
         reference_cost_at_equal_accuracy(cfg, errors, rounds=0)
     row = reference_cost_at_equal_accuracy(cfg, errors).iloc[0]
     # the grid the convergence check accepts at the model's median error (2 %), and three rounds by the config
     assert row.tol == pytest.approx(0.02) and row.rounds == 3 and row.n_theta >= 8
-    for name in ("speedup", "speedup_float32", "speedup_batched"):
+    # on the model's yardstick the 48-node grid's median (1.5 %) and p99 (2.0 %) are below the model's
+    assert (row.n_theta_matched, row.n_z_matched, bool(row.grid_at_ladder_floor)) == (48, 13, True)
+    assert row.tol_p99 == pytest.approx(np.quantile([0.02, 0.03, 0.01], 0.99))
+    for name in ("speedup", "speedup_float32", "speedup_batched", "speedup_matched", "speedup_float32_matched",
+                 "speedup_batched_matched"):
         assert 0.0 < row[f"{name}_lo"] <= row[name] <= row[f"{name}_hi"]
     # each reading's median ratio lies within the spread of the arms' own medians (a ratio, not a lone sample)
     assert row.speedup == pytest.approx(row.reference_us / row.universal_us, rel=0.5)
+    assert row.speedup_matched == pytest.approx(row.reference_us_matched / row.universal_us, rel=0.5)
+
+
+def test_the_matched_grid_is_the_coarsest_whose_median_and_p99_are_the_models_or_less():
+    import pandas as pd
+
+    from fluidfilm.studies.universal import matched_grid
+
+    rng = np.random.default_rng(0)
+    base = rng.lognormal(-7.0, 0.5, 400)                     # one grid's errors; each finer grid's half
+    e = pd.DataFrame({"n_theta": 192, "n_z": 33, **{f"rel_err_grid_{nt}": base / 2 ** k
+                                                    for k, nt in enumerate((48, 72, 96, 144))}})
+    med = {nt: float(np.median(base / 2 ** k)) for k, nt in enumerate((48, 72, 96, 144))}
+    p99 = {nt: float(np.quantile(base / 2 ** k, 0.99)) for k, nt in enumerate((48, 72, 96, 144))}
+    # the median alone decides when the p99 bound is loose; the tie counts as as accurate
+    assert matched_grid(e, 0.3, med[72], 1.0)["n_theta"] == 72
+    assert matched_grid(e, 0.3, med[72] * (1 - 1e-9), 1.0)["n_theta"] == 96
+    # and the p99 when it is tight: a grid with a small median but a long tail is not as accurate
+    g = matched_grid(e, 0.3, 1.0, p99[96])
+    assert (g["n_theta"], g["p99"], g["floor"]) == (96, pytest.approx(p99[96]), False)
+    assert matched_grid(e, 0.3, 1.0, 1.0)["floor"] is True
+    # none qualifies: the converged reference's own grid, error 0
+    assert matched_grid(e, 0.3, 0.0, 0.0) == {"n_theta": 192, "n_z": 33, "median": 0.0, "p99": 0.0, "floor": False}
 
 
 @pytest.mark.slow
