@@ -283,6 +283,39 @@ def test_the_readmes_universal_sentence_states_the_evaluations_numbers(tmp_path)
     assert "whirl threshold within 0.5 %" in text and "within 2.1 % (direct) and 40 % (cross)" in text
 
 
+def test_the_universal_table_gives_the_least_speed_up_of_each_yardstick(tmp_path):
+    """The accuracy table's speed-up rows: for the convergence check's grids and for the matched grids, each
+    reading's least speed-up over the held-out rows, with its grid, met or not against the goal; no matched
+    rows for an evaluation without them; the ladder-floor caveat only when a matched grid sits there."""
+    from fluidfilm.reporting.readme import render_universal
+
+    u = json.loads((ROOT / "reports" / "universal.json").read_text())
+    rows = u["reference_equal_accuracy"]
+    goal = u["goals"]["speedup_equal_accuracy"]
+
+    def table(report):
+        (tmp_path / "universal.json").write_text(json.dumps(report))
+        return [line for line in render_universal(tmp_path).splitlines() if line.startswith("| speed-up per force")]
+
+    lines = table(u)
+    assert len(lines) == 6
+    for line, (suffix, key) in zip(lines, [(s, k) for s in ("", "_matched")
+                                           for k in ("speedup", "speedup_float32", "speedup_batched")]):
+        worst = min(rows, key=lambda r: r[key + suffix])
+        assert ("convergence check" in line) == (suffix == "")
+        assert f"least: {worst['cavitation']}, L/D {worst['ld']:g}, " \
+               f"{worst['n_theta' + suffix]} x {worst['n_z' + suffix]}" in line
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert cells[1].startswith(f"{worst[key + suffix]:.0f}x")
+        assert cells[3] == ("yes" if worst[key + suffix] >= goal else "no")
+    assert any("upper bounds" in line for line in lines) == any(r["grid_at_ladder_floor"] for r in rows)
+    floor = {**u, "reference_equal_accuracy": [{**rows[0], "grid_at_ladder_floor": True}, *rows[1:]]}
+    assert all("upper bounds" in line for line in table(floor)[3:])
+    older = {**u, "reference_equal_accuracy": [{k: v for k, v in r.items() if "matched" not in k and "floor" not in k}
+                                               for r in rows]}
+    assert len(table(older)) == 3
+
+
 def test_the_headline_reads_the_largest_converged_split_and_flags_a_larger_one_stopped_by_its_budget(tmp_path):
     """The README's headline: the paper's split at the largest size trained to the validation rule, and a larger
     one stopped by its LM time budget beside it, said to be unconverged (never passed off as the verdict)."""

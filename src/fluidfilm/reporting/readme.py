@@ -557,11 +557,11 @@ def render_universal(reports: Path) -> str:
                                                        for r in same if "n_theta_matched" in r})]
         floor = any(r.get("grid_at_ladder_floor") for r in same)
         for suffix, rule_words, grid_list in (
-                ("", "the grid its convergence check accepts at the model's median error (eps 0.8, every "
-                     "direction)", grids),
-                ("_matched", "the coarsest grid whose own median and p99 errors at the held-out states are the "
-                             "model's or less" + (" (some at the ladder's coarsest grid: upper bounds)" if floor
-                                                  else ""), matched)):
+                ("", "the grid the dataset's convergence check accepts at the model's median error (eps 0.8, "
+                     "every direction)", grids),
+                ("_matched", "the coarsest ladder grid whose own median and p99 errors at the held-out states are "
+                             "the model's or less" + (" (some at the ladder's coarsest grid: upper bounds)" if floor
+                                                      else ""), matched)):
             for key, how in (("speedup", "one state each"),
                              ("speedup_float32", "one state each, the model's networks in float32"),
                              ("speedup_batched", "both batched, one thread")):
