@@ -73,6 +73,7 @@ test-slow: setup
 bench: setup
 	$(PY) benchmarks/bench_solver.py
 	$(PY) benchmarks/bench_swift_stieber.py
+	$(PY) benchmarks/bench_swift_stieber_scaling.py
 	$(PY) benchmarks/bench_rotor.py
 	$(PY) benchmarks/bench_conical.py
 	$(PY) benchmarks/bench_training_step.py
