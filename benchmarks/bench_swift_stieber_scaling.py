@@ -13,7 +13,7 @@ cavitation boundary slants across many columns. Rows: the plain bearing (D 50 mm
 solve (``kernels.active_set_field`` called directly, one state at a time), the same with the envelope
 factorisation only (``transform=False``), the linear solves per force, and the sources of the final
 cavitation set as ``capacitance_field`` counts them; and the share of states whose final set the operation
-count sends to the envelope factorisation.
+count sends to the envelope factorisation (earlier steps of a solve may go there too).
 
 Writes reports/benchmarks/swift_stieber_scaling.json (docs/reference_model.md shows it).
 """
@@ -31,12 +31,11 @@ from fluidfilm.perf.speed import sample_states
 from fluidfilm.reynolds import kernels
 
 
-def capacitance_count(p: np.ndarray, n_modes: int) -> tuple[int, bool]:
-    """Sources of the final cavitation set of field ``p`` (no held columns, no supply pressure: the lower half
-    of the axial nodes is solved) and whether ``capacitance_field``'s operation count picks the envelope."""
-    n, nz = p.shape
-    mh = (nz - 2 + 1) // 2
-    c = (p[:, 1:mh + 1] > 0.0).sum(axis=1)
+def capacitance_count(free: np.ndarray, n_modes: int) -> tuple[int, bool]:
+    """Sources of a free set (``active_set_field``'s ``warm`` output, shape (n_theta, rows solved + 2); no
+    held columns) and whether ``capacitance_field``'s operation count, copied here, picks the envelope."""
+    mh = free.shape[1] - 2
+    c = free[:, 1:mh + 1].sum(axis=1)
     run = c > 0                         # a column with a free node: inside a run; else a boundary column
     s_tot = int((mh - c)[run].sum())
     n_part = int(((c < mh) & run).sum())
@@ -56,15 +55,18 @@ def row(ld: float, n_theta: int, n_states: int) -> list[str]:
     for i in range(n_states):
         for transform in (True, False):
             p = np.zeros((n_theta, nz))
+            # the final free set, written by the kernel (warm_in False: its start is its own); the field alone
+            # would not tell a free node at p = 0 from a cavitated one
+            final = np.zeros((n_theta, (nz - 1) // 2 + 2), dtype=np.bool_)
             t0 = time.perf_counter()
             it = kernels.active_set_field(solver.params, x[i, 0], x[i, 1], v[i, 0], v[i, 1], p, fixed, True,
-                                          n_theta * nz, transform)
+                                          n_theta * nz, transform, final, False)
             t[transform].append(time.perf_counter() - t0)
             if it < 0:
                 raise RuntimeError(f"the active-set iteration did not settle at L/D {ld}, {n_theta} x {nz}, state {i}")
             if transform:
                 solves.append(it)
-                s, env = capacitance_count(p, solver.params.lam.shape[0])
+                s, env = capacitance_count(final, solver.params.lam.shape[0])
                 sources.append(s)
                 envelope.append(env)
     return [f"{ld:g}", f"{n_theta} x {nz}", f"{np.median(sources):.0f}", f"{100 * np.mean(envelope):.0f} %",
@@ -85,7 +87,7 @@ def main(argv=None) -> None:
             print(" | ".join(rows[-1]), flush=True)
     write_benchmark("swift_stieber_scaling", "Swift-Stieber active-set solver on the plain bearing: cost per force "
                     "against L/D and grid, with the capacitance system's size",
-                    ["L/D", "grid", "sources (median)", "states sent to the envelope", "linear solves (median)",
+                    ["L/D", "grid", "sources (median)", "final set solved by the envelope", "linear solves (median)",
                      "ms per force", "ms per force, envelope only"], rows,
                     notes=f"Medians over {args.states} states (eps 0-0.9, |v| <= 0.05 m/s), one at a time; "
                           "sources: cavitated nodes of partly cavitated columns in the final cavitation set, "
