@@ -552,26 +552,25 @@ def render_universal(reports: Path) -> str:
                      "yes" if c["universal_vs_best_cost_ratio_batched_float32"] <= 1.0 else "no"])
     if "reference_equal_accuracy" in u:  # evaluations before 2026-12-02 did not time the reference
         same = u["reference_equal_accuracy"]
-        grids = [f"{nt} x {nz}" for nt, nz in sorted({(int(r["n_theta"]), int(r["n_z"])) for r in same})]
         goal = g.get("speedup_equal_accuracy", 100)
         # two yardsticks for "as accurate" (studies.universal.reference_cost_at_equal_accuracy): the
         # convergence check's grid, and the grid whose own median and p99 errors match the model's (suffix
         # _matched; evaluations since 2026-12-05, tenth session)
-        matched = [f"{nt} x {nz}" for nt, nz in sorted({(int(r["n_theta_matched"]), int(r["n_z_matched"]))
-                                                       for r in same if "n_theta_matched" in r})]
         floor = any(r.get("grid_at_ladder_floor") for r in same)
-        for suffix, rule_words, grid_list in (
+        for suffix, rule_words in (
                 ("", "the grid the dataset's convergence check accepts at the model's median error (eps 0.8, "
-                     "every direction)", grids),
+                     "every direction)"),
                 ("_matched", "the coarsest ladder grid whose own median and p99 errors at the held-out states are "
                              "the model's or less" + (" (some at the ladder's coarsest grid: upper bounds)" if floor
-                                                      else ""), matched)):
+                                                      else ""))):
+            grid_list = [f"{nt} x {nz}" for nt, nz in sorted({(int(r["n_theta" + suffix]), int(r["n_z" + suffix]))
+                                                             for r in same if "n_theta" + suffix in r})]
             for key, how in (("speedup", "one state each"),
                              ("speedup_float32", "one state each, the model's networks in float32"),
                              ("speedup_batched", "both batched, one thread")):
-                if key + suffix not in same[0]:
-                    continue
                 k = key + suffix
+                if k not in same[0]:
+                    continue
                 worst = min(same, key=lambda r: r[k])
                 ref_us = worst[("reference_batched_us" if key == "speedup_batched" else "reference_us") + suffix]
                 nt, nz = (worst["n_theta" + suffix], worst["n_z" + suffix])

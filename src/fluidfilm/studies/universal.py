@@ -430,12 +430,14 @@ def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, rounds: int | No
         raise ValueError(f"reference_cost_at_equal_accuracy needs at least one round, got rounds={rounds}")
     rows = []
     for (rule, ld), g in errors.groupby(["cavitation", "ld"]):
-        tol = float(max(g.rel_err.median(), g.rel_err_float32.median() if "rel_err_float32" in g else 0.0))
-        tol99 = float(max(g.rel_err.quantile(0.99), g.rel_err_float32.quantile(0.99) if "rel_err_float32" in g else 0.0))
+        model_err = g[[c for c in ("rel_err", "rel_err_float32") if c in g]]  # the larger reading of each
+        tol = float(model_err.median().max())
+        tol99 = float(model_err.quantile(0.99).max())
         nt, _, _ = converged_grid(float(ld), rule, 0.8, tol)
+        nz = _n_z(nt, float(ld))
         matched = matched_grid(g, float(ld), tol, tol99) if any(c.startswith("rel_err_grid_") for c in g) else None
         b = JournalBearing(length=0.05 * float(ld), diameter=0.05, clearance=75e-6, speed_rpm=5000.0, viscosity=0.02)
-        ref = ReynoldsSolver(b, nt, _n_z(nt, float(ld)), cavitation=rule)
+        ref = ReynoldsSolver(b, nt, nz, cavitation=rule)
         model = universal_bearing(b, rule)
         # the reference on a few hundred states (its solve is 10 us - 13 ms here), the model on evaluate.n_timing
         x, v = sample_states(b.clearance, n=200, eps_max=0.9, v_max=0.05)
@@ -446,7 +448,7 @@ def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, rounds: int | No
                 "universal_float32_us": lambda: time_per_force_eval(model, xm, vm, repeats=3, precision="float32"),
                 "reference_batched_us": lambda: time_per_force_eval_batched(ref, x, v, "float64", repeats=3),
                 "universal_batched_us": lambda: time_per_force_eval_batched(model, xb, vb, "float32", repeats=3)}
-        same_grid = matched is not None and (matched["n_theta"], matched["n_z"]) == (nt, _n_z(nt, float(ld)))
+        same_grid = matched is not None and (matched["n_theta"], matched["n_z"]) == (nt, nz)
         if matched is not None and not same_grid:
             ref_m = ReynoldsSolver(b, matched["n_theta"], matched["n_z"], cavitation=rule)
             arms |= {"reference_us_matched": lambda: time_per_force_eval(ref_m, x, v, repeats=3),
@@ -459,7 +461,7 @@ def reference_cost_at_equal_accuracy(cfg, errors: pd.DataFrame, rounds: int | No
         if same_grid:  # one grid, one set of rounds: both readings are the same measurement
             t["reference_us_matched"], t["reference_batched_us_matched"] = t["reference_us"], t["reference_batched_us"]
         us = {k: 1e6 * float(np.median(val)) for k, val in t.items()}
-        row = {"cavitation": rule, "ld": float(ld), "tol": tol, "n_theta": nt, "n_z": _n_z(nt, float(ld)), **us,
+        row = {"cavitation": rule, "ld": float(ld), "tol": tol, "n_theta": nt, "n_z": nz, **us,
                "rounds": rounds}
         # the ratio of each round (its arms run back to back), then the median and range over the rounds: this
         # host's speed drifts by tens of per cent over seconds, and the reference (a sparse direct solve) and
