@@ -10,10 +10,14 @@ about half of a force in ``tanh64``. This benchmark times, interleaved in one pr
    times), the ratio p/q of ``tanh64``'s [9/8] approximant alone (its clamp and doublings left out: what they
    cost; not a tanh, no error given), ``tanh32`` (float32), and ``math.tanh`` (libm: scalar, does not
    vectorise); beside each tanh, its largest relative error against mpmath on |x| <= 19.5.
+   Beside them ``pade_tanh64``, the universal networks' activation (tanh's [5/4] Pade approximant taken as the
+   activation itself: exact by definition, so no error is given).
 2. ns per force of the one-state float64 kernel of the universal model (Gumbel, the paper's bearing) and of
    the best model (``models/best`` where trained, else its shape with random weights), compiled from the same
-   generated source with each tanh, and with tanh replaced by the identity (not a model: what the rest of
-   the kernel costs). States: eps uniform in 0-0.9, the universal evaluation's timing states.
+   generated source with each unit in place of the model's own activation, and with the identity (not a
+   model: what the rest of the kernel costs). Only the model's own activation gives the model; the other
+   rows show what each unit costs in that kernel. States: eps uniform in 0-0.9, the universal evaluation's
+   timing states.
 
 Writes reports/benchmarks/tanh64.json (docs/fast_surrogates.md shows it).
 """
@@ -32,7 +36,7 @@ from fluidfilm import load_surrogate, paper_bearing, universal_bearing
 from fluidfilm.perf import write_benchmark
 from fluidfilm.perf.speed import _kernel_loop, best_shaped_surrogate, median_seconds
 from fluidfilm.surrogate import kernels
-from fluidfilm.surrogate.kernels import _P1, _P3, _P5, _P7, _P9, _Q0, _Q2, _Q4, _Q6, _Q8, tanh32, tanh64
+from fluidfilm.surrogate.kernels import _P1, _P3, _P5, _P7, _P9, _Q0, _Q2, _Q4, _Q6, _Q8, pade_tanh64, tanh32, tanh64
 
 FLAGS = {"error_model": "numpy", "fastmath": {"contract"}}
 
@@ -93,9 +97,11 @@ def max_rel_error(f, dtype) -> float:
 
 
 def compiled_with(model, act):
-    """The model's generated one-state float64 kernel (``kernels.kernel_source``) with ``act`` for tanh64,
-    compiled as ``kernels.compiled_kernel`` compiles it."""
-    return kernels.one_state_function(kernels.kernel_source(model._fast_key), "<bench kernel>", {"tanh64": act})
+    """The model's generated one-state float64 kernel (``kernels.kernel_source``) with ``act`` in place of its
+    activation unit (``tanh64``, or ``pade_tanh64`` for the universal networks), compiled as
+    ``kernels.compiled_kernel`` compiles it."""
+    unit = {"tanh": "tanh64", "pade_tanh": "pade_tanh64"}[model.activation]
+    return kernels.one_state_function(kernels.kernel_source(model._fast_key), "<bench kernel>", {unit: act})
 
 
 def main(argv=None) -> None:
@@ -108,6 +114,7 @@ def main(argv=None) -> None:
     units = {"tanh64 ([9/8] at x/4, two doublings)": (tanh64, np.float64),
              "previous tanh64 ([7/6] at x/8, three doublings)": (tanh64_pade76, np.float64),
              "tanh64's p/q alone (no clamp, no doubling; not a tanh)": (pade98_only, np.float64),
+             "pade_tanh64 (the universal networks' activation; not tanh)": (pade_tanh64, np.float64),
              "tanh32 (Eigen's rational, float32)": (tanh32, np.float32),
              "math.tanh (libm, scalar)": (libm_tanh, np.float64)}
     loops = {}
@@ -122,7 +129,8 @@ def main(argv=None) -> None:
     best = (load_surrogate("models/best"), "best (trained)") if Path("models/best").exists() else \
         (best_shaped_surrogate(bearing), "best shape (random weights)")
     models = {"universal (Gumbel)": universal_bearing(bearing, "gumbel"), best[1]: best[0]}
-    acts = {"tanh64": tanh64, "previous tanh64": tanh64_pade76, "identity (no tanh)": identity}
+    acts = {"tanh64": tanh64, "previous tanh64": tanh64_pade76, "pade_tanh64": pade_tanh64,
+            "identity (no activation)": identity}
     n = 5000
     x, v = states(bearing.clearance, 0.0, 0.9, n, 0)  # the universal model's timing states
     fns = {}
@@ -142,13 +150,14 @@ def main(argv=None) -> None:
 
     rows = []
     for name, (f, dt) in units.items():
-        err = "" if f is pade98_only else f"{max_rel_error(f, dt):.1e}"
+        err = "" if f in (pade98_only, pade_tanh64) else f"{max_rel_error(f, dt):.1e}"
         rows.append([name, f"{1e9 * float(np.median(t_unit[name])):.3f}", err, "", ""])
     for mname in models:
         base = float(np.median(t_force[(mname, "tanh64")]))
         for aname in acts:
             t = float(np.median(t_force[(mname, aname)]))
-            rows.append([f"one-state float64 force, {mname}, {aname}", "", "", f"{1e9 * t:.1f}",
+            own = " (the model)" if aname == {"tanh": "tanh64", "pade_tanh": "pade_tanh64"}[models[mname].activation] else ""
+            rows.append([f"one-state float64 force, {mname}, {aname}{own}", "", "", f"{1e9 * t:.1f}",
                          f"{t / base:.3f}"])
     for r in rows:
         print(" | ".join(r), flush=True)
@@ -158,7 +167,9 @@ def main(argv=None) -> None:
                      "force time / with tanh64"], rows,
                     notes=f"Medians of {args.repeats} interleaved rounds; one thread. States eps uniform in 0-0.9, "
                           "velocities within +-0.05 m/s. tanh64's p/q alone and the identity are not tanh: they "
-                          "show what the clamp and doublings, and the tanh, cost.")
+                          "show what the clamp and doublings, and the tanh, cost. pade_tanh64 is the universal "
+                          "networks' own activation (exact by definition); '(the model)' marks the row that "
+                          "runs each model as trained.")
 
 
 if __name__ == "__main__":

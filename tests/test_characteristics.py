@@ -282,6 +282,7 @@ def _random_surrogate(kind, frame, activation, structure, boundaries, blend, see
     ("physics", "polar", "sigmoid", "damping", (0.4, 0.8), 0.06),
     ("physics", "whirl", "tanh", "plain", (0.5,), 0.04),
     ("physics_v", "whirl", "silu", "plain", (), 0.0),
+    ("physics", "whirl", "pade_tanh", "plain", (0.3, 0.5), 0.04),   # the universal model's shape
 ])
 def test_surrogate_jacobian_is_the_networks_derivative(kind, frame, activation, structure, boundaries, blend):
     """Forward-mode value = the compiled kernel's force; derivatives = central differences (~1e-7)."""

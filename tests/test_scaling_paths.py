@@ -15,7 +15,8 @@ from fluidfilm.surrogate import SurrogateForceModel
 from fluidfilm.surrogate import transforms as tf
 
 ACT = {"tanh": np.tanh, "relu": lambda a: np.maximum(a, 0.0), "silu": lambda a: a / (1.0 + np.exp(-a)),
-       "sigmoid": lambda a: 1.0 / (1.0 + np.exp(-a))}
+       "sigmoid": lambda a: 1.0 / (1.0 + np.exp(-a)),
+       "pade_tanh": lambda a: a * (945 + 105 * a**2 + a**4) / (945 + 420 * a**2 + 15 * a**4)}
 
 
 def _numpy_net(layers, act, z):
@@ -32,7 +33,7 @@ CASES += [("physics", "whirl", False), ("physics_v", "whirl", False)]
 
 
 @pytest.mark.parametrize("kind,frame,sleeve", CASES)
-@pytest.mark.parametrize("act", ["tanh", "silu"])
+@pytest.mark.parametrize("act", ["tanh", "silu", "pade_tanh"])
 def test_numpy_and_compiled_paths_agree_to_round_off(kind, frame, sleeve, act):
     rng = np.random.default_rng(11)
     b = bearing_from_dict(gm.CONICAL) if sleeve else paper_bearing()

@@ -141,6 +141,11 @@ def _surrogates():
     # regions of one shape whose scalings differ in speed and clearance: the one-body kernel of a uniform
     # shape must redo the frame for a blend zone's second region
     out["best_shaped_mixed_scalings"] = (_with_mixed_scalings(out["best_shaped"][0]), None)
+    # the universal networks' activation, whichever the shipped weights use
+    b = out["best_shaped"][0]
+    out["best_shaped_pade_tanh"] = (SurrogateForceModel(b.bearing, b.networks, b.scalings, "pade_tanh",
+                                                        boundaries=b.boundaries, blend_width=b.blend_width,
+                                                        domain=b.domain, eps_max=b.eps_max), None)
     return out
 
 

@@ -270,16 +270,49 @@ def test_derivative_targets_are_the_derivatives_of_the_targets():
         derivative_targets(frame(eps, alpha).drop(columns="dG_t_dalpha"), 2.0)
 
 
-def test_the_derivative_residuals_jacobian_is_autograds():
+def test_pade_tanh_is_tanhs_approximant_smooth_and_increasing_with_exact_derivatives():
+    # the activation against independent truths: tanh's Taylor series at 0 (an [5/4] approximant matches it to
+    # x^9), tanh itself within 4e-4 on |x| < 3, a positive slope everywhere, its derivatives autograd's, and
+    # the compiled kernels' float64 form the NumPy one to round-off (float32 to its precision)
+    import torch
+
+    from fluidfilm.surrogate.activations import pade_tanh
+    from fluidfilm.surrogate.kernels import pade_tanh32, pade_tanh64
+
+    x = np.linspace(-60.0, 60.0, 240_001)
+    f, df, _ = pade_tanh(x)
+    small = np.abs(x) < 0.05
+    np.testing.assert_allclose(f[small], np.tanh(x[small]), rtol=1e-12, atol=0.0)
+    assert np.abs(f - np.tanh(x))[np.abs(x) < 3.0].max() < 4e-4
+    assert df.min() > 4e-3 and np.all(np.diff(f) > 0.0)
+    np.testing.assert_allclose(pade_tanh(np.array(1e4))[0] / 1e4, 1.0 / 15.0, rtol=1e-3)   # grows like x / 15
+    a = torch.linspace(-20.0, 20.0, 4001, dtype=torch.float64, requires_grad=True)
+    fa, da, d2a = pade_tanh(a)
+    g = torch.autograd.grad(fa.sum(), a, create_graph=True)[0]
+    torch.testing.assert_close(da, g, rtol=1e-13, atol=1e-15)
+    torch.testing.assert_close(d2a, torch.autograd.grad(g.sum(), a)[0], rtol=1e-12, atol=1e-14)
+    k64 = np.array([pade_tanh64(t) for t in x[::97]])
+    np.testing.assert_allclose(k64, f[::97], rtol=4e-16 * 4, atol=0.0)
+    k32 = np.array([pade_tanh32(np.float32(t)) for t in x[::97]])
+    np.testing.assert_allclose(k32, pade_tanh(x[::97].astype(np.float32).astype(np.float64))[0], rtol=1e-6, atol=0.0)
+
+
+@pytest.mark.parametrize("activation", ["tanh", "pade_tanh"])
+def test_the_derivative_residuals_jacobian_is_autograds(activation):
     import torch
 
     from fluidfilm.surrogate.universal_fit import UniversalNet
 
     torch.manual_seed(3)
-    net = UniversalNet(width=5, derivative_weight=1.0)
+    net = UniversalNet(width=5, derivative_weight=1.0, activation=activation)
     theta = net._theta().clone()
     z, S, T = (torch.randn(*shape, dtype=torch.float64) for shape in ((7, 4), (7, 2, 4), (7, 2, 2)))
     Wd = torch.rand(7, 2, 2, dtype=torch.float64)
+    # the value residuals' Jacobian too
+    y, w = torch.randn(7, 2, dtype=torch.float64), torch.rand(7, 2, dtype=torch.float64)
+    J0 = net._jacobian(theta, z, net._residuals(theta, z, y, w)[0], w)
+    J0_auto = torch.autograd.functional.jacobian(lambda t: net._residuals(t, z, y, w)[1].reshape(-1), theta)
+    torch.testing.assert_close(J0, J0_auto, rtol=1e-12, atol=1e-13)
     H, D, Q, r = net._derivative_residuals(theta, z, S, T, Wd)
     J = net._derivative_jacobian(theta, z, S, Wd, H, D, Q)
     J_auto = torch.autograd.functional.jacobian(lambda t: net._derivative_residuals(t, z, S, T, Wd)[3].reshape(-1), theta)
@@ -292,7 +325,8 @@ def test_the_derivative_residuals_jacobian_is_autograds():
     torch.testing.assert_close(d, torch.einsum("mki,mai->mak", grads, S), rtol=1e-12, atol=1e-13)
 
 
-def test_the_normal_equations_by_output_are_those_of_the_whole_jacobian():
+@pytest.mark.parametrize("activation", ["tanh", "pade_tanh"])
+def test_the_normal_equations_by_output_are_those_of_the_whole_jacobian(activation):
     # the fit's J^T J and J^T r, formed per output with dsyrk in a reordered weight space, are the products of
     # the plain Jacobian (values and derivative rows stacked), and the sums of squares are the residuals'
     import torch
@@ -300,7 +334,7 @@ def test_the_normal_equations_by_output_are_those_of_the_whole_jacobian():
     from fluidfilm.surrogate.universal_fit import UniversalNet
 
     torch.manual_seed(5)
-    net = UniversalNet(width=7, derivative_weight=1.0)
+    net = UniversalNet(width=7, derivative_weight=1.0, activation=activation)
     theta = net._theta().clone()
     n, m = 13, 5
     z, y, w = torch.randn(n, 4, dtype=torch.float64), torch.randn(n, 2, dtype=torch.float64), torch.rand(n, 2, dtype=torch.float64)

@@ -36,8 +36,12 @@ PARTS = ("dataset", "train", "evaluate")
 
 
 def check(cfg) -> None:
+    from fluidfilm.surrogate.activations import HIDDEN_ACTIVATIONS
+
     if cfg.part not in PARTS:
         raise ConfigError(f"part={cfg.part!r}; choose one of {PARTS}")
+    if cfg.train.activation not in HIDDEN_ACTIVATIONS:
+        raise ConfigError(f"train.activation={cfg.train.activation!r}; choose one of {HIDDEN_ACTIVATIONS}")
 
 
 def outputs(cfg) -> dict:
@@ -116,13 +120,15 @@ def _train(cfg) -> Logged:
         # the first phase's settings (the second phase keys its own files: train_universal)
         first = {k: plain(tr)[k] for k in ("boundaries", "blend_width", "overlap", "power", "width", "floor_share",
                                            "seed")} | {k: settings[k] for k in ("steps", "max_minutes")}
+        if tr.activation != "tanh":   # (tanh fits keep the folders they had before there was a choice)
+            first["activation"] = str(tr.activation)
         work = Path(cfg.cache_dir) / f"{rule}-{meta['config_hash'][:12]}-{config_hash(first)[:8]}"
         fits[rule] = dict(frame=frame, boundaries=list(tr.boundaries), blend_width=tr.blend_width,
                           overlap=tr.overlap, power=tr.power, width=tr.width, floor_share=tr.floor_share,
                           seed=tr.seed, work_dir=work, what=f"{rule} ",
                           derivative_weight=derivative_weight_for(tr.derivative_weight, rule),
                           logger_for=factories[rule].logger_for if rule in factories else None,
-                          derivative_rows=str(tr.derivative_rows), **settings)
+                          derivative_rows=str(tr.derivative_rows), activation=str(tr.activation), **settings)
     try:
         # both rules' regions in one pool of workers, the largest first (weights as fitted one rule at a time)
         results = train_universals(fits, workers=tr.workers)
@@ -137,7 +143,7 @@ def _train(cfg) -> Logged:
         info = {"dataset_hash": meta["config_hash"], "n_rows": int(len(frame)),
                 **{k: v for k, v in fit.items() if k.startswith("val_") or k in ("train_seconds", "train_wall_s", "workers")},
                 "threads_per_fit": 1,
-                "width": int(tr.width), "depth": 1, "optimizer": "levenberg-marquardt",
+                "width": int(tr.width), "depth": 1, "activation": str(tr.activation), "optimizer": "levenberg-marquardt",
                 "derivative_weight": weight, "derivative_rows": str(tr.derivative_rows),
                 "regions": [{k: v for k, v in reg.items() if isinstance(v, (int, float))} for reg in fit["regions"]]}
         write_weights(fit, rule, meta["spec"]["eps_max"], (meta["spec"]["ld_min"], meta["spec"]["ld_max"]), info,

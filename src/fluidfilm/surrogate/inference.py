@@ -52,6 +52,7 @@ class Activation(IntEnum):
     RELU = 1
     SILU = 2
     SIGMOID = 3
+    PADE_TANH = 4
 
 
 class Structure(IntEnum):
@@ -64,7 +65,7 @@ class Structure(IntEnum):
 #: activation name (as in configs and model.json) -> kernel code
 ACTIVATIONS = {a.name.lower(): int(a) for a in Activation}
 # plain ints for the compiled code
-_TANH, _RELU, _SILU = int(Activation.TANH), int(Activation.RELU), int(Activation.SILU)
+_TANH, _RELU, _SILU, _SIGMOID = int(Activation.TANH), int(Activation.RELU), int(Activation.SILU), int(Activation.SIGMOID)
 _DAMPING = int(Structure.DAMPING)
 
 
@@ -119,9 +120,14 @@ def _activate(buf, n, act):
     elif act == _SILU:
         for o in range(n):
             buf[o] = buf[o] / (1.0 + math.exp(-buf[o]))
-    else:
+    elif act == _SIGMOID:
         for o in range(n):
             buf[o] = 1.0 / (1.0 + math.exp(-buf[o]))
+    else:  # pade_tanh (surrogate.kernels.pade_tanh64)
+        for o in range(n):
+            x = buf[o]
+            x2 = x * x
+            buf[o] = x * (945.0 + x2 * (105.0 + x2)) / (945.0 + x2 * (420.0 + 15.0 * x2))
 
 
 @njit(cache=True, inline="always")
@@ -319,8 +325,8 @@ class SurrogateForceModel:
         ``structure="damping"`` a pair (static layers, damping-matrix layers).
     scalings : list of Scaling
         One per network: its input and output scaling.
-    activation : {"tanh", "relu", "silu"}
-        Hidden-layer activation.
+    activation : {"tanh", "relu", "silu", "sigmoid", "pade_tanh"}
+        Hidden-layer activation (``pade_tanh``: the universal networks', ``surrogate.activations``).
     boundaries : sequence of float, default ()
         Eccentricity ratios that split the regions, increasing strictly within (0, 1).
     blend_width : float, default 0.0

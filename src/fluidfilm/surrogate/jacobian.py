@@ -17,6 +17,8 @@ import math
 
 import numpy as np
 
+from fluidfilm.surrogate.activations import pade_tanh
+
 # a dual number is an array (5,): value, d/dx1, d/dx2, d/dv1, d/dv2
 
 
@@ -73,6 +75,8 @@ def _activate(z, act):
     elif act == "sigmoid":
         y = 1.0 / (1.0 + np.exp(-a))
         d = y * (1.0 - y)
+    elif act == "pade_tanh":
+        y, d, _ = pade_tanh(a)
     else:
         raise ValueError(f"unknown activation {act!r}")
     out = np.empty_like(z)

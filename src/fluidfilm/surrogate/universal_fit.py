@@ -1,7 +1,8 @@
 """Training of the universal plain-bearing networks with Lightning, and writing the shipped weights.
 
 One network per eccentricity region (the ``best`` model's layout: regions blended over a narrow band of
-eps), each a tanh MLP 4 -> width -> 2 mapping (eps, cos alpha, sin alpha, ln L/D), standardised, to the
+eps), each an MLP 4 -> width -> 2 (hidden activation tanh or ``pade_tanh``, tanh's [5/4] Pade approximant:
+``surrogate.activations``) mapping (eps, cos alpha, sin alpha, ln L/D), standardised, to the
 dimensionless force G (1 - eps^2)^p / slenderness_gain(L/D), standardised (``surrogate.universal``).  One
 hidden layer keeps the cost per force at the best model's (L/D is folded into the first layer's bias for one
 bearing); the regions give the capacity.
@@ -35,6 +36,7 @@ from torch import nn
 
 from fluidfilm import io
 from fluidfilm.data.spec import config_hash
+from fluidfilm.surrogate.activations import HIDDEN_ACTIVATIONS, pade_tanh
 from fluidfilm.surrogate.fit import _exit_with_parent, side_by_side, torch_threads, worker_count
 from fluidfilm.surrogate.universal import WEIGHTS_DIR, slenderness_gain
 
@@ -150,6 +152,25 @@ def region_rows(eps: np.ndarray, boundaries, blend_width: float, region: int, ov
     return np.isin(eps, keep)
 
 
+def units(A, activation: str):
+    """The activation's values and first and second derivatives (H, D, E) at pre-activations ``A`` (NumPy or
+    torch): tanh (the paper's tansig), or ``pade_tanh`` (``surrogate.activations``: tanh's [5/4] Pade
+    approximant as the activation itself, which the one-state float64 kernel evaluates exactly with 6 vector
+    operations and a division where tanh takes 19 and a division)."""
+    if activation == "tanh":
+        H = np.tanh(A) if isinstance(A, np.ndarray) else torch.tanh(A)
+        D = 1.0 - H * H
+        return H, D, -2.0 * H * D
+    return pade_tanh(A)
+
+
+class PadeTanh(nn.Module):
+    """The ``pade_tanh`` activation as a torch module."""
+
+    def forward(self, a):
+        return units(a, "pade_tanh")[0]
+
+
 def _weight_order(h: int) -> np.ndarray:
     """For each weight in ``UniversalNet._theta``'s order (W1 (h, 4) by unit, b1, W2 (2, h), b2), its index in
     the normal equations' order [W1 by input (i h + j), b1, W2_0, b2_0, W2_1, b2_1]."""
@@ -159,7 +180,7 @@ def _weight_order(h: int) -> np.ndarray:
 
 
 class UniversalNet(L.LightningModule):
-    """A tanh MLP 4 -> width -> 2 fitted by Levenberg-Marquardt on weighted residuals, one full-batch step per
+    """An MLP 4 -> width -> 2 (``activation``: tanh or ``pade_tanh``) fitted by Levenberg-Marquardt on weighted residuals, one full-batch step per
     epoch (Lightning's manual optimisation).
 
     The batch is (z standardised, y standardised, w): the residual of row n and output k is
@@ -178,14 +199,21 @@ class UniversalNet(L.LightningModule):
         Initial damping.
     mu_max : float, default 1e10
         Damping at which the fit has converged.
+    derivative_weight : float, default 0.0
+        Weight of the derivative residuals (``train_region``).
+    activation : {"tanh", "pade_tanh"}, default "tanh"
+        Hidden activation (``units``).
     """
 
     def __init__(self, width: int = 64, out_mean=(0.0, 0.0), out_std=(1.0, 1.0), mu: float = 1e-3,
-                 mu_max: float = 1e10, derivative_weight: float = 0.0):
+                 mu_max: float = 1e10, derivative_weight: float = 0.0, activation: str = "tanh"):
         super().__init__()
+        if activation not in HIDDEN_ACTIVATIONS:
+            raise ValueError(f"activation={activation!r}: choose one of {HIDDEN_ACTIVATIONS}")
         self.save_hyperparameters()
         self.automatic_optimization = False
-        self.net = nn.Sequential(nn.Linear(4, width), nn.Tanh(), nn.Linear(width, 2)).double()
+        self.net = nn.Sequential(nn.Linear(4, width), nn.Tanh() if activation == "tanh" else PadeTanh(),
+                                 nn.Linear(width, 2)).double()
         self.register_buffer("out_mean", torch.tensor(out_mean, dtype=torch.float64))
         self.register_buffer("out_std", torch.tensor(out_std, dtype=torch.float64))
         self.register_buffer("mu", torch.tensor(float(mu), dtype=torch.float64))
@@ -209,7 +237,7 @@ class UniversalNet(L.LightningModule):
 
     def _residuals(self, theta, z, y, w):
         W1, b1, W2, b2 = self._unpack(theta)
-        H = torch.tanh(z @ W1.T + b1)
+        H = self.net[1](z @ W1.T + b1)
         return H, ((H @ W2.T + b2) - y) * w
 
     def _derivative_residuals(self, theta, z, S, T, Wd):
@@ -217,10 +245,9 @@ class UniversalNet(L.LightningModule):
 
         ``S`` (m, 2, 4): the directions d/deps and d/dalpha in standardised input space; ``T`` (m, 2, 2) the
         targets (standardised outputs per raw eps or alpha); the network's derivative along S_a is
-        W2 (D * (W1 S_a)), D = 1 - tanh^2."""
+        W2 (D * (W1 S_a)), D the activation's slope (``units``)."""
         W1, b1, W2, _ = self._unpack(theta)
-        H = torch.tanh(z @ W1.T + b1)
-        D = 1.0 - H * H
+        H, D, _ = units(z @ W1.T + b1, self.hparams.activation)
         Q = S @ W1.T                                              # (m, 2, h): W1 S_a
         d = (D[:, None, :] * Q) @ W2.T                            # (m, 2, 2): [row, direction, output]
         return H, D, Q, (d - T) * Wd
@@ -229,8 +256,8 @@ class UniversalNet(L.LightningModule):
         """d residual / d theta, rows (n, k) flattened, columns in ``_theta``'s order (W1, b1, W2, b2)."""
         h = self.hparams.width
         n = z.shape[0]
-        W2 = theta[5 * h:7 * h].view(2, h)
-        D = 1.0 - H * H
+        W1, b1, W2, _ = self._unpack(theta)
+        D = units(z @ W1.T + b1, self.hparams.activation)[1]
         J = torch.zeros((n, 2, theta.numel()), dtype=theta.dtype)
         for k in range(2):
             G = w[:, k:k + 1] * W2[k] * D                      # (n, h): d r_k / d (pre-activation)
@@ -243,13 +270,14 @@ class UniversalNet(L.LightningModule):
     def _derivative_jacobian(self, theta, z, S, Wd, H, D, Q):
         """d (derivative residual) / d theta, rows (m, a, k) flattened (``_derivative_residuals``'s order).
 
-        With A = W1 z + b1, d_ak = sum_j W2_kj D_j Q_aj: d/dW2_kj = D_j Q_aj, d/db1_j = -2 W2_kj H_j D_j Q_aj,
-        d/dW1_ji = W2_kj (-2 H_j D_j Q_aj z_i + D_j S_ai), d/db2 = 0."""
+        With A = W1 z + b1, d_ak = sum_j W2_kj D_j Q_aj: d/dW2_kj = D_j Q_aj, d/db1_j = W2_kj E_j Q_aj,
+        d/dW1_ji = W2_kj (E_j Q_aj z_i + D_j S_ai), d/db2 = 0, with D and E the activation's first and second
+        derivatives (tanh: 1 - H^2 and -2 H D)."""
         h = self.hparams.width
         m = z.shape[0]
         W2 = theta[5 * h:7 * h].view(2, h)
         J = torch.zeros((m, 2, 2, theta.numel()), dtype=theta.dtype)
-        HD2 = -2.0 * H * D
+        HD2 = units(z @ self._unpack(theta)[0].T + self._unpack(theta)[1], self.hparams.activation)[2]
         for a in range(2):
             for k in range(2):
                 c = Wd[:, a, k:k + 1] * W2[k]                    # (m, h)
@@ -298,19 +326,17 @@ class UniversalNet(L.LightningModule):
         bufs = getattr(self, "_jbufs", None)
         if bufs is None or bufs[0].shape != (n + 2 * m, q):
             bufs = self._jbufs = [np.zeros((n + 2 * m, q)) for _ in range(2)]   # derivative rows' b2 column: 0
-        H = np.tanh(zn @ W1.T + b1)
-        D = 1.0 - H * H
+        act = self.hparams.activation
+        H, D, _ = units(zn @ W1.T + b1, act)
         r = (H @ W2.T + th[7 * h:] - yn) * wn                                     # (n, 2)
         sse_values = float(np.einsum("ij,ij->", r, r))
         sse = sse_values
         if deriv is not None:
             zd, Sd, Td, Wdd = (a.numpy() for a in deriv)
-            Hd = np.tanh(zd @ W1.T + b1)
-            Dd = 1.0 - Hd * Hd
+            Hd, Dd, HD2 = units(zd @ W1.T + b1, act)
             Q = Sd @ W1.T                                                         # (m, 2, h): W1 S_a
             rd = (np.einsum("mah,kh->mak", Dd[:, None, :] * Q, W2) - Td) * Wdd    # (m, 2 directions, 2 outputs)
             sse += float(np.einsum("mak,mak->", rd, rd))
-            HD2 = -2.0 * Hd * Dd
         # J^T J in the order [W1 by input (i h + j), b1, W2_0, b2_0, W2_1, b2_1]: output k's buffer columns
         # are the first 5 h and one contiguous block, and the first layer's columns by input make its block
         # of the buffer (n, 4, h) products of a row's input and its h-vector (vectorised; by unit, (n, h, 4),
@@ -456,7 +482,7 @@ class _EpochLog(L.Callback):
 def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 3000, max_minutes: float | None = None,
                  floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0, ckpt_dir=None, logger=None,
                  what: str = "region", derivatives: np.ndarray | None = None, derivative_weight: float = 0.0,
-                 init: dict | None = None) -> dict:
+                 init: dict | None = None, activation: str = "tanh") -> dict:
     """Fit one region's network (``UniversalNet``) on raw inputs ``z`` and raw targets ``y``, and optionally on
     the targets' derivatives (a Sobolev fit).
 
@@ -472,6 +498,8 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
         Weight of the derivative residuals (0: values only).
     init : dict or None, default None
         A finished fit (what this function returns) to start from: its weights and standardisation.
+    activation : {"tanh", "pade_tanh"}, default "tanh"
+        Hidden activation (``units``); the second phase must use the first's.
     width : int, default 64
         Hidden units.
     steps : int, default 3000
@@ -538,7 +566,8 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
     def loader(mask):
         return torch.utils.data.DataLoader(_FullBatch(tensors(mask)), batch_size=None)
 
-    net = UniversalNet(width, out_mean.tolist(), out_std.tolist(), derivative_weight=float(derivative_weight))
+    net = UniversalNet(width, out_mean.tolist(), out_std.tolist(), derivative_weight=float(derivative_weight),
+                       activation=activation)
     if init is not None:
         with torch.no_grad():
             linears = [m for m in net.net if isinstance(m, nn.Linear)]
@@ -650,6 +679,9 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         another thread count, and Levenberg-Marquardt carries round-off into other weights within a few
         hundred steps, so one thread per fit is what makes the weights the same on any machine of the same
         arithmetic (another CPU's BLAS kernels may sum in another order).
+    activation : {"tanh", "pade_tanh"}, default "tanh"
+        Hidden activation of every region's network (``units``); a fit's finished files are named by it (tanh's
+        without a tag).
 
     Returns
     -------
@@ -663,7 +695,8 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
                                       floor_share=floor_share, val_fraction=val_fraction, seed=seed,
                                       work_dir=work_dir, logger_for=logger_for, what=what,
                                       derivative_weight=derivative_weight, derivative_rows=derivative_rows,
-                                      refine_minutes=refine_minutes, refine_steps=refine_steps)},
+                                      refine_minutes=refine_minutes, refine_steps=refine_steps,
+                                      activation=activation)},
                             workers=workers)[""]
 
 
@@ -702,7 +735,7 @@ def _region_jobs(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.87)
                  overlap: int = 1, power: float = 2.0, width: int = 64, steps=3000, max_minutes=None,
                  floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0, work_dir=None,
                  logger_for=None, what: str = "", derivative_weight: float = 0.0, derivative_rows: str = "static",
-                 refine_minutes=None, refine_steps=3000) -> tuple[list[dict], dict]:
+                 refine_minutes=None, refine_steps=3000, activation: str = "tanh") -> tuple[list[dict], dict]:
     """``train_universal``'s settings checked and cut into one job per region (``_fit_region``), with the
     model's settings that the result carries."""
     bounds = [float(b) for b in boundaries]
@@ -723,17 +756,22 @@ def _region_jobs(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.87)
     for r in range(n_regions):
         rows = region_rows(eps, bounds, blend_width, r, overlap)
         # the second phase's file is keyed by its own settings: another weight or budget is another fit
-        key = config_hash(float(derivative_weight), derivative_rows, refine[r], refine_steps_r[r])[:8]
+        # (and the activation's, when not tanh: tanh fits keep the names they had before there was a choice)
+        tag = "" if activation == "tanh" else f"-{activation}"
+        key = config_hash(float(derivative_weight), derivative_rows, refine[r], refine_steps_r[r],
+                          *(() if activation == "tanh" else (activation,)))[:8]
         # what both phases share: the region's rows, the network, the loss floor and the validation split.
         # Not the logger: each phase is its own tracked run (its hyperparameters differ, and MLflow refuses
         # to change a logged parameter), created only when that phase actually trains
         jobs.append({"r": r, "z": z[rows], "y": y[rows], "dy": None if dy is None else dy[rows], "work": work,
-                     "what": f"{what}region {r}", "logger_for": logger_for, "derivative_key": key,
+                     "what": f"{what}region {r}", "logger_for": logger_for, "derivative_key": key, "tag": tag,
                      "steps": steps_r[r], "max_minutes": minutes[r], "refine_steps": refine_steps_r[r],
                      "refine_minutes": refine[r], "derivative_weight": float(derivative_weight),
-                     "common": dict(width=width, floor_share=floor_share, val_fraction=val_fraction, seed=seed + r),
+                     "common": dict(width=width, floor_share=floor_share, val_fraction=val_fraction, seed=seed + r,
+                                    activation=activation),
                      "parent_pid": os.getpid()})
-    return jobs, {"boundaries": bounds, "blend_width": float(blend_width), "power": float(power)}
+    return jobs, {"boundaries": bounds, "blend_width": float(blend_width), "power": float(power),
+                  "activation": activation}
 
 
 def _fit_region(job: dict) -> dict:
@@ -743,7 +781,7 @@ def _fit_region(job: dict) -> dict:
     if job["parent_pid"] != os.getpid():
         _exit_with_parent(job["parent_pid"])
     r, z, y, dy, work, what, logger_for = (job[k] for k in ("r", "z", "y", "dy", "work", "what", "logger_for"))
-    res = _finished_or_fit(work, f"region{r}", what, lambda ckpt: {
+    res = _finished_or_fit(work, f"region{r}{job['tag']}", what, lambda ckpt: {
         **train_region(z, y, steps=job["steps"], max_minutes=job["max_minutes"], ckpt_dir=ckpt, what=what,
                        logger=logger_for(r) if logger_for is not None else None, **job["common"]),
         "n_rows": len(z)})
@@ -831,7 +869,7 @@ def write_weights(fit: dict, cavitation: str, eps_max: float, ld_range: tuple[fl
     """
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
-    arrays: dict[str, Any] = {"n_regions": np.array(len(fit["regions"])), "activation": np.array("tanh"),
+    arrays: dict[str, Any] = {"n_regions": np.array(len(fit["regions"])), "activation": np.array(fit.get("activation", "tanh")),
                               "boundaries": np.asarray(fit["boundaries"], dtype=np.float64),
                               "blend_width": np.array(float(fit["blend_width"])), "power": np.array(fit["power"]),
                               "eps_max": np.array(float(eps_max)), "ld_min": np.array(float(ld_range[0])),
