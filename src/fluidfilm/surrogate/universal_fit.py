@@ -622,7 +622,7 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
                     max_minutes=None, floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0,
                     work_dir=None, logger_for=None, what: str = "", derivative_weight: float = 0.0,
                     derivative_rows: str = "static", refine_minutes=None, refine_steps=3000,
-                    workers: int | None = None) -> dict:
+                    workers: int | None = None, activation: str = "tanh") -> dict:
     """Fit the universal networks of one cavitation rule, one per eccentricity region.
 
     Two phases per region: a fit to the values G (Levenberg-Marquardt from a random start), then, if
