@@ -1,9 +1,9 @@
-"""What a float64 tanh costs in the surrogates' one-state kernels, and how close it is to the floor (#29).
+"""What a float64 tanh (and the universal networks' pade_tanh) costs in the one-state kernels (#29).
 
     python benchmarks/bench_tanh64.py [--repeats 7]
 
-The float64 one-state kernel (``surrogate.kernels.kernel_source``: what ``simulate`` runs by default) spends
-about half of a force in ``tanh64``. This benchmark times, interleaved in one process, one thread:
+The float64 one-state kernel (``surrogate.kernels.kernel_source``: what ``simulate`` runs by default) of a
+tanh network spends about half of a force in ``tanh64``. This benchmark times, interleaved in one process, one thread:
 
 1. ns per unit of each tanh in a vectorised loop over 64 units (a hidden layer), independent evaluations:
    ``tanh64`` ([9/8] Pade approximant at x/4 doubled twice), the form it replaced ([7/6] at x/8 doubled three
@@ -11,7 +11,7 @@ about half of a force in ``tanh64``. This benchmark times, interleaved in one pr
    cost; not a tanh, no error given), ``tanh32`` (float32), and ``math.tanh`` (libm: scalar, does not
    vectorise); beside each tanh, its largest relative error against mpmath on |x| <= 19.5.
    Beside them ``pade_tanh64``, the universal networks' activation (tanh's [5/4] Pade approximant taken as the
-   activation itself: exact by definition, so no error is given).
+   activation itself: the function itself, with no approximation error to give).
 2. ns per force of the one-state float64 kernel of the universal model (Gumbel, the paper's bearing) and of
    the best model (``models/best`` where trained, else its shape with random weights), compiled from the same
    generated source with each unit in place of the model's own activation, and with the identity (not a
@@ -161,14 +161,14 @@ def main(argv=None) -> None:
                          f"{t / base:.3f}"])
     for r in rows:
         print(" | ".join(r), flush=True)
-    write_benchmark("tanh64", "float64 tanh: ns per unit in a vectorised 64-unit loop, and ns per one-state force "
-                    "with each tanh in the generated kernel",
+    write_benchmark("tanh64", "float64 tanh and pade_tanh: ns per unit in a vectorised 64-unit loop, and ns per "
+                    "one-state force with each unit in the generated kernel",
                     ["arm", "ns per unit", "largest relative error (mpmath, |x| <= 19.5)", "ns per force",
                      "force time / with tanh64"], rows,
                     notes=f"Medians of {args.repeats} interleaved rounds; one thread. States eps uniform in 0-0.9, "
                           "velocities within +-0.05 m/s. tanh64's p/q alone and the identity are not tanh: they "
                           "show what the clamp and doublings, and the tanh, cost. pade_tanh64 is the universal "
-                          "networks' own activation (exact by definition); '(the model)' marks the row that "
+                          "networks' own activation (no approximation error: it is the function); '(the model)' marks the row that "
                           "runs each model as trained.")
 
 

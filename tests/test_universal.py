@@ -421,6 +421,8 @@ def test_a_per_rule_or_per_region_setting_is_refused_naming_the_value():
         train_universal(frame, boundaries=[0.5], refine_minutes=[0, 1])
     with pytest.raises(ValueError, match="workers must be >= 1"):
         train_universal(frame, boundaries=[0.5], workers=0)
+    with pytest.raises(ValueError, match=r"activation='softsign': choose one of \('tanh', 'pade_tanh'\)"):
+        train_universal(frame, boundaries=[0.5], activation="softsign")
 
 
 def test_the_weights_depend_on_the_steps_not_on_workers_or_the_clock(tmp_path):
@@ -681,7 +683,7 @@ def test_the_configured_step_counts_refit_the_shipped_weights_bit_for_bit(tmp_pa
                           overlap=tr.overlap, power=tr.power, width=tr.width, floor_share=tr.floor_share,
                           seed=tr.seed, derivative_weight=derivative_weight_for(tr.derivative_weight, "gumbel"),
                           derivative_rows=tr.derivative_rows, steps=[first[0], 1], refine_steps=[first[1], 1],
-                          workers=1)
+                          workers=1, activation=str(tr.activation))
     shipped = load_weights("gumbel")["regions"][0]
     for (W, b), (Ws, bs) in zip(fit["regions"][0]["layers"], shipped["layers"]):
         np.testing.assert_array_equal(W, Ws)

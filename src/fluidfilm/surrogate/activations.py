@@ -7,7 +7,7 @@ activation in its own right:
 
 It is smooth and increasing on the whole line (f'(x) > 0 everywhere; f' has its least value about 0.0046 near
 |x| = 3.9), within 4e-4 of tanh for |x| < 3, and grows like x / 15 beyond, where tanh saturates.  Networks
-trained with it (the universal bearing's: ``surrogate.universal_fit``) are evaluated exactly, to round-off, by
+trained with it (the universal bearing's: ``surrogate.universal_fit``) are evaluated without approximation error (round-off only) by
 6 vector operations and one division per 8 units (``surrogate.kernels.pade_tanh64``), where a tanh exact to
 round-off costs 19 and one (``tanh64``).
 

@@ -37,7 +37,8 @@ holds what the integrator runs instead:
   scalar ``math.exp``.  The universal networks' ``pade_tanh`` units
   (``surrogate.activations``: tanh's [5/4] Pade approximant as the activation
   itself) are ``pade_tanh64`` / ``pade_tanh32``: 6 vector operations and a
-  division, exact in both kernels.
+  division, and no approximation error: each is the function itself, to the
+  round-off of its precision.
 - ``batch_kernel(batch_shape_key(model), dtype)``: the batched kernel generated per model shape, what
   ``simulate_batch`` calls once per RK4 stage (``forces_batch``'s signature; ``fast_batch_params`` makes
   its parameters): per state in order the inputs, frame and gain without a branch (vectorised), the
@@ -179,8 +180,8 @@ def silu32(x):
 
 # pade_tanh: tanh's [5/4] Pade approximant taken as an activation in its own right (the universal networks are
 # trained with it: surrogate.universal_fit.units), x (945 + 105 x^2 + x^4) / (945 + 420 x^2 + 15 x^4): smooth and
-# increasing on the whole line, 6 vector operations and one division where tanh64 takes 19 and one.  Exact: the
-# network is this function, not an approximation of one
+# increasing on the whole line, 6 vector operations and one division where tanh64 takes 19 and one.  No
+# approximation error: the network is this function, not an approximation of one (round-off only)
 @njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def pade_tanh64(x):
     """The ``pade_tanh`` activation in float64 (vectorises)."""

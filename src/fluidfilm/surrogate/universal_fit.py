@@ -158,17 +158,20 @@ def units(A, activation: str):
     approximant as the activation itself, which the one-state float64 kernel evaluates exactly with 6 vector
     operations and a division where tanh takes 19 and a division)."""
     if activation == "tanh":
-        H = np.tanh(A) if isinstance(A, np.ndarray) else torch.tanh(A)
+        H = torch.tanh(A) if isinstance(A, torch.Tensor) else np.tanh(A)
         D = 1.0 - H * H
         return H, D, -2.0 * H * D
-    return pade_tanh(A)
+    if activation == "pade_tanh":
+        return pade_tanh(A)
+    raise ValueError(f"activation={activation!r}: choose one of {HIDDEN_ACTIVATIONS}")
 
 
 class PadeTanh(nn.Module):
     """The ``pade_tanh`` activation as a torch module."""
 
     def forward(self, a):
-        return units(a, "pade_tanh")[0]
+        x2 = a * a                       # pade_tanh's value alone, the same arithmetic as activations.pade_tanh
+        return a * (945.0 + x2 * (105.0 + x2)) / (945.0 + x2 * (420.0 + 15.0 * x2))
 
 
 def _weight_order(h: int) -> np.ndarray:
@@ -748,6 +751,8 @@ def _region_jobs(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.87)
     refine = _per_region("refine_minutes", refine_minutes, n_regions, float)
     if derivative_weight < 0.0:
         raise ValueError(f"derivative_weight must be >= 0, got {derivative_weight!r}")
+    if activation not in HIDDEN_ACTIVATIONS:
+        raise ValueError(f"activation={activation!r}: choose one of {HIDDEN_ACTIVATIONS}")
     z, y = features(frame, power)
     dy = derivative_targets(frame, power, derivative_rows) if derivative_weight > 0.0 else None
     eps = frame["eps"].to_numpy()
