@@ -281,6 +281,16 @@ def test_the_readmes_universal_sentence_states_the_evaluations_numbers(tmp_path)
     text = render_universal_summary(tmp_path)
     assert "within 0.12 % (median; 3.4 % at the 99th percentile)" in text
     assert "whirl threshold within 0.5 %" in text and "within 2.1 % (direct) and 40 % (cross)" in text
+    assert "A force costs" not in text                     # no cost in the report: no clause
+    # with the cost: one float64 force in ns, and the smaller of the two yardsticks' least speed-ups
+    for check, matched, least in ((128.4, 141.0, "128x"), (150.0, 97.6, "98x")):
+        (tmp_path / "universal.json").write_text(json.dumps({
+            "universal_rel_err_median": 0.0012, "universal_rel_err_p99": 0.034, "universal_whirl_threshold_rel_err": 0.005,
+            "universal_kc_max_rel_err_direct": 0.021, "universal_kc_max_rel_err_cross": 0.4,
+            "force_eval_us_universal": 0.0394, "universal_speedup_vs_reference_equal_accuracy_min": check,
+            "universal_speedup_vs_reference_matched_min": matched, "cost": {"machine": "Box X"}}))
+        text = render_universal_summary(tmp_path)
+        assert f"A force costs 39 ns (one state, float64; Box X), at least {least} less than the reference" in text
 
 
 def test_the_universal_table_gives_the_least_speed_up_of_each_yardstick(tmp_path):

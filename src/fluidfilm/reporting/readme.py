@@ -482,7 +482,20 @@ def render_universal_summary(reports: Path) -> str:
             f"{100 * u['universal_rel_err_p99']:.2g} % at the 99th percentile) of the grid-converged reference and "
             f"its whirl threshold within {100 * u['universal_whirl_threshold_rel_err']:.2g} %; its stiffness and "
             f"damping along the equilibrium locus are within {100 * u['universal_kc_max_rel_err_direct']:.2g} % "
-            f"(direct) and {100 * u['universal_kc_max_rel_err_cross']:.2g} % (cross).\n")
+            f"(direct) and {100 * u['universal_kc_max_rel_err_cross']:.2g} % (cross).{_universal_speed(u)}\n")
+
+
+def _universal_speed(u: Mapping) -> str:
+    """The README's clause on the universal model's cost: one float64 force, and the least speed-up over the
+    reference on a grid as accurate (the smaller of the two yardsticks' readings, when the report has them)."""
+    if "force_eval_us_universal" not in u or "universal_speedup_vs_reference_equal_accuracy_min" not in u:
+        return ""
+    least = min(u["universal_speedup_vs_reference_equal_accuracy_min"],
+                u.get("universal_speedup_vs_reference_matched_min", math.inf))
+    machine = u.get("cost", {}).get("machine", "this machine")
+    return (f" A force costs {1e3 * u['force_eval_us_universal']:.0f} ns (one state, float64; {machine}), "
+            f"at least {least:.0f}x less than the reference on a grid as accurate "
+            f"([docs/universal.md](docs/universal.md#cost-per-force)).")
 
 
 def render_universal_kc(reports: Path) -> str:
