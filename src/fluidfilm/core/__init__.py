@@ -8,11 +8,12 @@
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict, paper_bearing
 from fluidfilm.core.force_model import (WHOLE_FILM, AdjustableForceModel, BatchForceModel, BatchSettable,
                                         ForceModel, LinearPressureModel, PrecisionKernelModel, ReferenceModel,
-                                        SpeedScalableModel, ValidityDomain, as_adjustable)
+                                        SpeedScalableModel, TransientFilmModel, ValidityDomain,
+                                        as_adjustable)
 from fluidfilm.core.states import V_MAX_PHYSICAL, as_state_pairs, check_states
 
 __all__ = ["JournalBearing", "ConicalBearing", "bearing_from_dict", "paper_bearing", "ForceModel",
            "AdjustableForceModel", "BatchForceModel", "BatchSettable", "LinearPressureModel", "PrecisionKernelModel",
            "ReferenceModel",
-           "SpeedScalableModel", "ValidityDomain", "WHOLE_FILM", "as_adjustable", "V_MAX_PHYSICAL", "as_state_pairs",
+           "SpeedScalableModel", "TransientFilmModel", "ValidityDomain", "WHOLE_FILM", "as_adjustable", "V_MAX_PHYSICAL", "as_state_pairs",
            "check_states"]

@@ -264,6 +264,33 @@ class SpeedScalableModel(Protocol):
     def speed_kernel(self) -> tuple[SpeedForceKernel, Any] | None: ...
 
 
+@runtime_checkable
+class TransientFilmModel(Protocol):
+    """A film with memory: the force depends on the film content carried from step to step (mass-conserving
+    cavitation, ``reynolds.elrod_adams.ElrodAdamsSolver``).  ``simulate`` integrates such a model with the
+    content as state (``rotor.film_memory``); ``forces``/``force_kernel`` give the force with the content at its
+    steady value (equilibria, K and C).
+
+    ``transient_kernels()`` -> ``(stage, commit, params)``, compiled: ``stage(params, K_omega, x1, x2, v1, v2, dt,
+    tol, th_n, content, p, th) -> (F1, F2, sweeps, status)`` and ``commit(params, K_omega, x1_old, x2_old, x1,
+    x2, dt, th_n, content, p, th) -> (sweeps, status)``; ``steady_field(x, omega)`` -> (p, content) at rest.
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> from fluidfilm.core import TransientFilmModel
+    >>> from fluidfilm.reynolds.elrod_adams import ElrodAdamsSolver
+    >>> isinstance(ElrodAdamsSolver(paper_bearing(), 16, 8), TransientFilmModel)
+    True
+    >>> isinstance(ReynoldsSolver(paper_bearing(), 16, 8), TransientFilmModel)
+    False
+    """
+
+    def transient_kernels(self) -> tuple[Callable[..., Any], Callable[..., Any], Any]: ...
+
+    def steady_field(self, x: ArrayLike, omega: float | None = None) -> tuple[np.ndarray, np.ndarray]: ...
+
+
 def one_state_kernel(model: ForceModel, precision: str = "float64") -> tuple[ForceKernel, Any, str]:
     """``(fn, params, ran)``: the model's one-state kernel with its networks in ``precision`` where it has
     float32 networks (``PrecisionKernelModel``), else its float64 ``force_kernel``; ``ran`` is the precision

@@ -56,7 +56,7 @@ import numpy as np
 from numba import njit, typeof
 from numba.core import types as nb_types
 
-from fluidfilm.core.force_model import BatchForceModel, BatchSettable, ForceModel, check_precision
+from fluidfilm.core.force_model import BatchForceModel, BatchSettable, ForceModel, TransientFilmModel, check_precision
 from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, Trajectory, _holds_functions, _ramped,
                                        _rk4_step, _rk4_step_uncached, _uncached, check_run_args, run_loop)
 from fluidfilm.rotor.model import Rotor
@@ -587,6 +587,9 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     if not isinstance(model, ForceModel):
         raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel); "
                          "the integrator needs one")
+    if isinstance(model, TransientFilmModel):
+        raise ValueError(f"{model.name} is a film with memory (mass-conserving cavitation): its content is state that "
+                         "simulate_batch does not carry; integrate each rotor with simulate")
     kernel, params = model.force_kernel
     bearing = model.bearing
     rotor_list = [rotors] if isinstance(rotors, Rotor) else list(rotors)

@@ -39,7 +39,7 @@ import numpy as np
 from numba import njit
 from numba.core.registry import CPUDispatcher as Dispatcher
 
-from fluidfilm.core.force_model import ForceModel, SpeedScalableModel, one_state_kernel
+from fluidfilm.core.force_model import ForceModel, SpeedScalableModel, TransientFilmModel, one_state_kernel
 from fluidfilm.rotor.model import RPM, Rotor, SpeedSchedule, ramped
 
 _ramped = njit(inline="always")(ramped)
@@ -479,6 +479,14 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     if not isinstance(model, ForceModel):
         raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel: forces, "
                          "force_kernel, bearing, clearance, validity, domain report); the integrator needs one")
+    if isinstance(model, TransientFilmModel):
+        # a film with memory (mass-conserving cavitation): its content is state, integrated in its own loop
+        from fluidfilm.rotor.film_memory import simulate_film
+
+        if precision not in ("float64", "float32"):
+            raise ValueError(f"precision must be 'float64' or 'float32', got {precision!r}")
+        return simulate_film(model, rotor, t_end, dt, x0, v0, eps_stop=eps_stop, record_every=record_every,
+                             eps_substep=eps_substep, max_substeps=max_substeps, t0=t0, speed=speed)
     # precision: what the networks actually run in (a model without float32 networks computes in float64)
     kernel, params, precision = one_state_kernel(model, precision)
     if precision == "float32" and speed is not None:
