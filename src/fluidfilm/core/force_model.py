@@ -271,9 +271,10 @@ class TransientFilmModel(Protocol):
     content as state (``rotor.film_memory``); ``forces``/``force_kernel`` give the force with the content at its
     steady value (equilibria, K and C).
 
-    ``transient_kernels()`` -> ``(stage, commit, params)``, compiled: ``stage(params, K_omega, x1, x2, v1, v2, dt,
-    tol, th_n, content, p, th) -> (F1, F2, sweeps, status)`` and ``commit(params, K_omega, x1_old, x2_old, x1,
-    x2, dt, th_n, content, p, th) -> (sweeps, status)``; ``steady_field(x, omega)`` -> (p, content) at rest.
+    ``transient_kernels()`` -> ``(stage, commit, flows, params)``, compiled: ``stage(params, K_omega, x1, x2, v1,
+    v2, dt, tol, th_n, content, p, th) -> (F1, F2, sweeps, status)``, ``commit(params, K_omega, x1_old, x2_old,
+    x1, x2, dt, th_n, content, p, th) -> (sweeps, status)`` and ``flows(params, omega, e1, e2, p, th) -> (side
+    flow, friction power)``; ``steady_field(x, omega)`` -> (p, content) at rest.
 
     Examples
     --------
@@ -286,7 +287,7 @@ class TransientFilmModel(Protocol):
     False
     """
 
-    def transient_kernels(self) -> tuple[Callable[..., Any], Callable[..., Any], Any]: ...
+    def transient_kernels(self) -> tuple[Callable[..., Any], Callable[..., Any], Callable[..., Any], Any]: ...
 
     def steady_field(self, x: ArrayLike, omega: float | None = None) -> tuple[np.ndarray, np.ndarray]: ...
 

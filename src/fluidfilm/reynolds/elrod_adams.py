@@ -55,6 +55,12 @@ _FAST = {"reassoc", "contract", "arcp"}
 
 # the sweep's results: converged, or the sweep limit reached
 EA_CONVERGED, EA_NOT_CONVERGED, EA_DIVERGED = 0, 1, 2
+# the cavitation rules one solver runs on the same grid and feed: mass-conserving (the film content carried),
+# Swift-Stieber (p >= 0 by complementarity, the content held full) and Guembel (the linear film, negative
+# pressures dropped from the force)
+RULE_JFO, RULE_SWIFT_STIEBER, RULE_GUMBEL = 0, 1, 2
+RULES = {"jfo": RULE_JFO, "swift-stieber": RULE_SWIFT_STIEBER, "gumbel": RULE_GUMBEL}
+
 # sweeps after which a solve drops its over-relaxation (``ea_sweeps``)
 SLOW_SWEEPS = 500
 
@@ -87,6 +93,11 @@ class EAParams(NamedTuple):
     max_sweeps: int
     coarse_every: int        # a coarse correction (``coarse_correction``) every that many sweeps; 0: none
     mode_shape: np.ndarray   # (n_z,) the coarse correction's axial shape, sin(pi z / L)
+    rule: int                # RULE_JFO, or a non-conserving rule on the same grid and feed (content held at 1)
+    mu: float                # viscosity [Pa s], radius and clearance [m], axial node spacing [m]: the film's flow
+    radius: float            # and friction (``film_flows``)
+    clearance: float
+    dz: float
 
 
 @njit(cache=True)
@@ -154,6 +165,7 @@ def coarse_correction(ep, aw, ae, an, ap, cin, cout, tk, h, content, p, th):
     n = ep.n_theta
     nz = ep.n_z
     s = ep.mode_shape
+    every = ep.rule == RULE_GUMBEL   # the linear film: every node is an unknown, whatever its sign
     d = np.zeros(n)
     lo = np.zeros(n)
     up = np.zeros(n)
@@ -174,7 +186,7 @@ def coarse_correction(ep, aw, ae, an, ap, cin, cout, tk, h, content, p, th):
         uu = 0.0
         bb = 0.0
         for j in range(1, nz - 1):
-            if pc[j] <= 0.0:
+            if pc[j] <= 0.0 and not every:
                 continue
             sj = s[j]
             # residual of the node's full-film equation: ap (p_trial - p)
@@ -183,14 +195,14 @@ def coarse_correction(ep, aw, ae, an, ap, cin, cout, tk, h, content, p, th):
                 src += tk * content[i, j]
             bb += sj * (src - full - ap[i] * pc[j])
             a_s = ap[i] * sj
-            if pc[j - 1] > 0.0:
+            if pc[j - 1] > 0.0 or (every and j > 1):
                 a_s -= an[i] * s[j - 1]
-            if pc[j + 1] > 0.0:
+            if pc[j + 1] > 0.0 or (every and j < nz - 2):
                 a_s -= an[i] * s[j + 1]
             dd += sj * a_s
-            if pw[j] > 0.0 and not ep.fixed[im]:
+            if (pw[j] > 0.0 or every) and not ep.fixed[im]:
                 ll -= sj * aw[i] * sj
-            if pe[j] > 0.0 and not ep.fixed[ip]:
+            if (pe[j] > 0.0 or every) and not ep.fixed[ip]:
                 uu -= sj * ae[i] * sj
         if dd == 0.0:
             d[i] = 1.0
@@ -206,7 +218,9 @@ def coarse_correction(ep, aw, ae, an, ap, cin, cout, tk, h, content, p, th):
             continue
         pc = p[i]
         for j in range(1, nz - 1):
-            if pc[j] > 0.0:
+            if every:
+                pc[j] += a[i] * s[j]
+            elif pc[j] > 0.0:
                 v = pc[j] + a[i] * s[j]
                 pc[j] = v if v > 0.0 else 0.0
 
@@ -219,6 +233,7 @@ def _half_sweep(ep, colour, aw, ae, an, ap, cin, cout, tk, h, split_c, split_p, 
     the squared changes of p and phi and of p^2 (a NaN propagates through them)."""
     n = ep.n_theta
     nz = ep.n_z
+    rule = ep.rule
     dp2 = 0.0
     dth2 = 0.0
     p2 = 0.0
@@ -248,21 +263,33 @@ def _half_sweep(ep, colour, aw, ae, an, ap, cin, cout, tk, h, split_c, split_p, 
         # k - 1 + q and k + q
         k0 = 1 - q
         k1 = (nz - 2 - q) // 2 + 1
-        for k in range(k0, k1):
-            src = awi * pw[k] + aei * pe[k] + ani * (oc[k - 1 + q] + oc[k + q]) + cini * tw[k] + tk * cc[k]
-            p_old = pc[k]
-            th_old = tc[k]
-            p_new = p_old + w * ((src - full_rhs) * inv_api - p_old)
-            t = src * cav_den
-            t = t if t < 1.0 else 1.0
-            full = p_new > 0.0
-            pn = p_new if full else 0.0
-            tn = 1.0 if full else t
-            pc[k] = pn
-            tc[k] = tn
-            dp2 += (pn - p_old) * (pn - p_old)
-            dth2 += (tn - th_old) * (tn - th_old)
-            p2 += pn * pn
+        if rule == RULE_JFO:
+            for k in range(k0, k1):
+                src = awi * pw[k] + aei * pe[k] + ani * (oc[k - 1 + q] + oc[k + q]) + cini * tw[k] + tk * cc[k]
+                p_old = pc[k]
+                th_old = tc[k]
+                p_new = p_old + w * ((src - full_rhs) * inv_api - p_old)
+                t = src * cav_den
+                t = t if t < 1.0 else 1.0
+                full = p_new > 0.0
+                pn = p_new if full else 0.0
+                tn = 1.0 if full else t
+                pc[k] = pn
+                tc[k] = tn
+                dp2 += (pn - p_old) * (pn - p_old)
+                dth2 += (tn - th_old) * (tn - th_old)
+                p2 += pn * pn
+        else:
+            # the content stays full: Swift-Stieber projects p >= 0 (Cryer's PSOR), Guembel solves the linear film
+            lo = 0.0 if rule == RULE_SWIFT_STIEBER else -np.inf
+            for k in range(k0, k1):
+                src = awi * pw[k] + aei * pe[k] + ani * (oc[k - 1 + q] + oc[k + q]) + cini + tk * cc[k]
+                p_old = pc[k]
+                p_new = p_old + w * ((src - full_rhs) * inv_api - p_old)
+                pn = p_new if p_new > lo else lo
+                pc[k] = pn
+                dp2 += (pn - p_old) * (pn - p_old)
+                p2 += pn * pn
     return dp2, dth2, p2
 
 
@@ -349,13 +376,15 @@ def ea_sweeps(ep, k_omega, h, hf, inv_dt, content, p, th, tol, max_sweeps):
 
 @njit(cache=True)
 def ea_force(ep, p):
-    """Simpson integral of the field: F = -R sum w_theta w_z p (sin, cos) [N] (``kernels.integrate_field``)."""
+    """Simpson integral of the field: F = -R sum w_theta w_z p (sin, cos) [N] (``kernels.integrate_field``), the
+    negative pressures dropped under Guembel's rule."""
     f1 = 0.0
     f2 = 0.0
+    clip = ep.rule == RULE_GUMBEL
     for i in range(ep.n_theta):
         col = 0.0
         for j in range(ep.n_z):
-            col += ep.w_z[j] * p[i, j]
+            col += ep.w_z[j] * (max(p[i, j], 0.0) if clip else p[i, j])
         f1 -= ep.a_sin[i] * col
         f2 -= ep.a_cos[i] * col
     return f1, f2
@@ -417,7 +446,10 @@ def stage_film(ep, k_omega, x1, x2, v1, v2, dt, tol, th_n, content, p, th):
 @njit(cache=True)
 def commit_film(ep, k_omega, x1_old, x2_old, x1, x2, dt, th_n, content, p, th):
     """The committed step: backward Euler from phi^n H(X_n) to X_{n+1}; ``th`` is phi^{n+1} on return and
-    ``content`` holds phi^n H(X_n) (the flow balance's start).  Returns (sweeps, status)."""
+    ``content`` holds phi^n H(X_n) (the flow balance's start).  Returns (sweeps, status); nothing to commit (0
+    sweeps) under a non-conserving rule, whose content stays full."""
+    if ep.rule != RULE_JFO:
+        return 0, EA_CONVERGED
     inv_c = ep.inv_c
     h = np.empty(ep.n_theta)
     hf = np.empty(ep.n_theta)
@@ -425,6 +457,40 @@ def commit_film(ep, k_omega, x1_old, x2_old, x1, x2, dt, th_n, content, p, th):
     fill_content(ep, th_n, h, content)
     journal_gap(ep, x1 * inv_c, x2 * inv_c, h, hf)
     return ea_sweeps(ep, k_omega, h, hf, 1.0 / dt, content, p, th, ep.tol_commit, ep.max_sweeps)
+
+
+@njit(cache=True)
+def film_flows(ep, omega, e1, e2, p, th):
+    """(side flow [m^3/s], friction power [W]) of a film at position e = X/c and shaft speed omega.
+
+    Side flow: the pressure flow out through both ends, h^3/(12 mu) dp/dz on the end faces (the scheme's own
+    face fluxes).  Friction: the shear on the journal, tau = phi mu omega R / h + (h / 2R) dp/dtheta (the liquid
+    fraction phi carries the Couette shear in a cavity: striated film; phi = 1 under the non-conserving rules,
+    which assume the film full), times the surface speed omega R over the journal's surface."""
+    n = ep.n_theta
+    nz = ep.n_z
+    c = ep.clearance
+    r = ep.radius
+    mu = ep.mu
+    dth = 1.0 / ep.inv_dtheta
+    q = 0.0
+    power = 0.0
+    for i in range(n):
+        h = c * (1.0 - e1 * ep.sin_node[i] - e2 * ep.cos_node[i])
+        g = h * h * h / (12.0 * mu) * r * dth / ep.dz
+        q += g * ((p[i, 1] - p[i, 0]) + (p[i, nz - 2] - p[i, nz - 1]))
+        im = i - 1 if i > 0 else n - 1
+        ip = i + 1 if i < n - 1 else 0
+        for j in range(nz):
+            phi = th[i, j] if ep.rule == RULE_JFO else 1.0
+            pj = max(p[i, j], 0.0) if ep.rule == RULE_GUMBEL else p[i, j]
+            pe = max(p[ip, j], 0.0) if ep.rule == RULE_GUMBEL else p[ip, j]
+            pw = max(p[im, j], 0.0) if ep.rule == RULE_GUMBEL else p[im, j]
+            tau = phi * mu * omega * r / h + h / (2.0 * r) * (pe - pw) * 0.5 * ep.inv_dtheta
+            power += tau * omega * r * r * dth * ep.w_z[j]
+            if pj < -1e300:  # keeps pj used under every rule (numba types it alike)
+                power = np.nan
+    return q, power
 
 
 @njit(cache=True)
@@ -550,6 +616,10 @@ class ElrodAdamsSolver:
         Sweeps between coarse corrections (``coarse_correction``); 0: none.
     max_sweeps : int, default 100000
         Sweeps before a solve is reported as not converged.
+    cavitation : {"jfo", "swift-stieber", "gumbel"}, default "jfo"
+        The mass-conserving film, or a non-conserving rule on the same grid, feed and solver (the content held
+        full; Swift-Stieber by complementarity, Guembel by dropping negative pressures from the force): the
+        like-for-like comparison of the rules (``studies.cavitation_rules``).
 
     Raises
     ------
@@ -567,13 +637,14 @@ class ElrodAdamsSolver:
     [14.6, -8.8]
     """
 
-    cavitation = "jfo"
-
     def __init__(self, bearing: JournalBearing, n_theta: int = 60, n_z: int = 31, groove_angle: float | None = math.pi,
                  n_grooves: int = 1, sor_omega: float = 1.5, tol: float = 1e-5, tol_commit: float = 1e-8,
-                 max_sweeps: int = 100_000, coarse_every: int = 3):
+                 max_sweeps: int = 100_000, coarse_every: int = 3, cavitation: str = "jfo"):
         if not isinstance(bearing, JournalBearing):
             raise ValueError(f"bearing must be a JournalBearing, got {type(bearing).__name__}")
+        if cavitation not in RULES:
+            raise ValueError(f"unknown cavitation rule {cavitation!r}; choose one of {tuple(RULES)}")
+        self.cavitation = cavitation
         self._bearing = bearing
         self._c = bearing.clearance
         self.mesh = FilmMesh(n_theta, n_z, bearing.length)
@@ -623,13 +694,15 @@ class ElrodAdamsSolver:
             w_z=self.mesh.w_z.copy(), w_cell=self.mesh.dtheta * dzeta,
             p_supply=float(bearing.supply_pressure), p_end=0.0, fixed=fixed,
             sor_omega=float(sor_omega), tol=float(tol), tol_commit=float(tol_commit), max_sweeps=int(max_sweeps),
-            coarse_every=int(coarse_every), mode_shape=np.sin(np.pi * self.mesh.z / bearing.length))
-        self.dt_inst = QUASI_STATIC_STEP_REV * 2.0 * math.pi / bearing.omega
+            coarse_every=int(coarse_every), mode_shape=np.sin(np.pi * self.mesh.z / bearing.length),
+            rule=RULES[cavitation], mu=float(mu), radius=float(r), clearance=float(c), dz=float(self.mesh.dz))
+        # a squeeze film (no rotation) takes the step of a 3000 rpm shaft
+        self.dt_inst = QUASI_STATIC_STEP_REV * 2.0 * math.pi / (bearing.omega if bearing.omega > 0.0 else 100.0 * math.pi)
 
     # --- the one interface ---------------------------------------------------------------------------------
     @property
     def name(self) -> str:
-        return "ElrodAdamsSolver"
+        return "ElrodAdamsSolver" if self.cavitation == "jfo" else f"ElrodAdamsSolver[{self.cavitation}]"
 
     @property
     def bearing(self) -> JournalBearing:
@@ -672,12 +745,12 @@ class ElrodAdamsSolver:
                                              float(self._bearing.omega))
 
     def transient_kernels(self):
-        """What ``rotor.film_memory`` integrates: ``(stage_film, commit_film, params)``."""
-        return stage_film, commit_film, self.params
+        """What ``rotor.film_memory`` integrates: ``(stage_film, commit_film, film_flows, params)``."""
+        return stage_film, commit_film, film_flows, self.params
 
     def __repr__(self) -> str:
         g = "no groove" if self.groove_angle is None else f"{self.n_grooves} groove(s) at {self.groove_angle:.4g} rad"
-        return f"ElrodAdamsSolver({self.n_theta}x{self.n_z}, {g})"
+        return f"ElrodAdamsSolver({self.n_theta}x{self.n_z}, {g}, cavitation={self.cavitation!r})"
 
     def forces(self, X, V) -> np.ndarray:
         """Film force [N] at positions X [m] and velocities V [m/s], (..., 2), the content at its steady value."""
@@ -704,6 +777,12 @@ class ElrodAdamsSolver:
         if steady_film(self.params, k_omega, xa[0, 0], xa[0, 1], p, th) != EA_CONVERGED:
             raise RuntimeError(f"the steady Elrod-Adams solve did not converge at x={tuple(xa[0])} m")
         return p, th
+
+    def flows(self, x, p, th, omega: float | None = None) -> tuple[float, float]:
+        """(side flow [m^3/s], friction power [W]) of a field (p, th) at position x [m] (``film_flows``)."""
+        w = self._bearing.omega if omega is None else float(omega)
+        return film_flows(self.params, w, x[0] / self._c, x[1] / self._c, np.ascontiguousarray(p),
+                          np.ascontiguousarray(th))
 
     def integrate(self, p) -> np.ndarray:
         """Force [N] of a pressure field on this grid by Simpson integration."""

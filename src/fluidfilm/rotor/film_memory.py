@@ -52,10 +52,11 @@ def _film_acceleration(stage, ep, k_ref, x1, x2, v1, v2, t, h, tol, th_n, conten
 
 
 @njit
-def _film_run(stage, commit, ep, k_ref, tol, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop, eps_substep,
-              max_substeps, th_n, p, th, out_t, out_x, out_v, stats):
+def _film_run(stage, commit, flows, ep, k_ref, tol, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
+              eps_substep, max_substeps, th_n, p, th, out_t, out_x, out_v, out_film, stats):
     """Integrate; returns (n_recorded, status, t_stop, n_force_evals).  ``th_n``, ``p``, ``th``: the committed
-    content and the working fields (warm starts), updated in place.  ``stats``: [stage sweeps, commit sweeps, stage solves, commit solves]."""
+    content and the working fields (warm starts), updated in place.  ``out_film``: (side flow [m^3/s], friction
+    power [W]) of the film at each record (``flows``).  ``stats``: [stage sweeps, commit sweeps, stage solves, commit solves]."""
     c2 = consts[6]
     w_ref = consts[2]
     times, omegas, cum = consts[9], consts[10], consts[11]
@@ -70,6 +71,11 @@ def _film_run(stage, commit, ep, k_ref, tol, consts, x0, v0, t0, dt, n_steps, re
     out_x[0, 1] = x2
     out_v[0, 0] = v1
     out_v[0, 1] = v2
+    w = schedule_at(times, omegas, cum, w_ref, t)[0]
+    inv_c = 1.0 / math.sqrt(c2)
+    q, pw = flows(ep, w, x1 * inv_c, x2 * inv_c, p, th)
+    out_film[0, 0] = q
+    out_film[0, 1] = pw
     n_rec = 1
     status = OK
     for step in range(n_steps):
@@ -140,6 +146,9 @@ def _film_run(stage, commit, ep, k_ref, tol, consts, x0, v0, t0, dt, n_steps, re
             out_x[n_rec, 1] = x2
             out_v[n_rec, 0] = v1
             out_v[n_rec, 1] = v2
+            q, pw = flows(ep, w, x1 * inv_c, x2 * inv_c, p, th)
+            out_film[n_rec, 0] = q
+            out_film[n_rec, 1] = pw
             n_rec += 1
     if status != OK:
         out_t[n_rec] = t
@@ -147,6 +156,8 @@ def _film_run(stage, commit, ep, k_ref, tol, consts, x0, v0, t0, dt, n_steps, re
         out_x[n_rec, 1] = x2
         out_v[n_rec, 0] = v1
         out_v[n_rec, 1] = v2
+        out_film[n_rec, 0] = np.nan
+        out_film[n_rec, 1] = np.nan
         n_rec += 1
     return n_rec, status, t, n_evals
 
@@ -159,11 +170,12 @@ def simulate_film(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, 
     As ``rotor.integrate.simulate`` (the same arguments, checks and status texts), with the film content
     carried from step to step (module doc).  ``film_content``: the content phi (n_theta, n_z) at t0; None:
     the steady film at x0.  The returned trajectory's ``meta`` holds ``film_content`` at the end (to continue
-    the run), the sweeps per stage and per commit, and the speed schedule if any.
+    the run), ``side_flow_m3s`` and ``friction_power_W`` at every record, the sweeps per stage and per commit,
+    and the speed schedule if any.
     """
     if not isinstance(rotor, Rotor):
         raise ValueError(f"rotor must be a Rotor, got {type(rotor).__name__}")
-    stage, commit, ep = model.transient_kernels()
+    stage, commit, flows, ep = model.transient_kernels()
     c = float(model.clearance)
     n_steps = check_run_args(t_end, dt, t0, eps_stop, eps_substep, record_every, max_substeps)
     for name, value in (("x0", x0), ("v0", v0)):
@@ -199,6 +211,7 @@ def simulate_film(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, 
     out_t = np.empty(n_out)
     out_x = np.empty((n_out, 2))
     out_v = np.empty((n_out, 2))
+    out_film = np.empty((n_out, 2))
     stats = np.zeros(4, dtype=np.int64)
     u_final = rotor.imbalance if rotor.imbalance_final is None else rotor.imbalance_final
     consts = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega, float(rotor.imbalance_direction),
@@ -206,10 +219,10 @@ def simulate_film(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, 
               u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0) \
         + _schedule_arrays(speed, omega)
     t_start = time.perf_counter()
-    n_rec, status, t_stop, n_evals = _film_run(stage, commit, ep, float(ep.k_omega), float(ep.tol), consts, x0, v0,
+    n_rec, status, t_stop, n_evals = _film_run(stage, commit, flows, ep, float(ep.k_omega), float(ep.tol), consts, x0, v0,
                                                float(t0), float(dt), n_steps, record_every, float(eps_stop),
                                                float(eps_substep), int(max_substeps), th_n, p, th, out_t, out_x,
-                                               out_v, stats)
+                                               out_v, out_film, stats)
     wall = time.perf_counter() - t_start
     if status == OK:
         text, t_stop = "ok", None
@@ -220,7 +233,8 @@ def simulate_film(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, 
     else:
         text = f"diverged: non-finite state after t={t_stop:.6g} s"
     meta = {"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every, "precision": "float64",
-            "film_content": th_n.copy(),
+            "film_content": th_n.copy(), "side_flow_m3s": out_film[:n_rec, 0].copy(),
+            "friction_power_W": out_film[:n_rec, 1].copy(),
             "sweeps_per_stage": float(stats[0]) / max(int(stats[2]), 1),
             "sweeps_per_commit": float(stats[1]) / max(int(stats[3]), 1),
             "film_solves": int(stats[2] + stats[3])}
