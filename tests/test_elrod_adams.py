@@ -253,4 +253,9 @@ def test_side_flow_balances_the_groove_in_a_steady_film_and_friction_matches_pet
     change, inflow, scale = ea.flow_balance(ep, ep.k_omega, h, hf, 0.0, np.zeros_like(p), p, th)
     assert change == 0.0 and abs(inflow) < 1e-9 * scale
     q, power = film.flows(x, p, th)
-    assert q > 0.0 and power < petroff   # the cavity's striated film shears less than a full one
+    full = ElrodAdamsSolver(b, 30, 31, tol_commit=1e-13, cavitation="swift-stieber")
+    q_ss, power_ss = full.flows(x, *full.steady_field(x))
+    # the same pressure zone (the groove feeds it full), so the same leakage; the cavity's striated film shears
+    # less than the full film the non-conserving rule assumes
+    assert q > 0.0 and abs(q / q_ss - 1.0) < 1e-6
+    assert power < 0.95 * power_ss
