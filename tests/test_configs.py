@@ -22,6 +22,7 @@ GROUPS = {
     "integrator": ("trajectories", "integrator"), "case": ("trajectories", "cases.a"),
     "metrics": ("compare", "metrics"), "controller": ("train_controller", "controller"), "protocol": ("train_surrogate", "protocol"),
     "characteristics": ("characteristics", "characteristics"), "runup": ("runup", "runup"),
+    "cavitation_rules": ("cavitation_rules", "cavitation_rules"),
 }
 
 

@@ -21,6 +21,8 @@ from fluidfilm.core import TransientFilmModel
 from fluidfilm.reynolds import elrod_adams as ea
 from fluidfilm.reynolds.elrod_adams import ElrodAdamsSolver
 from fluidfilm.reynolds.feed import GroovedReynoldsSolver
+from fluidfilm.reynolds.jfo_cases import (AUSAS_P0, AUSAS_SIGMA_MAX, AUSAS_T_RUPTURE, ausas_errors, ausas_exact,
+                                          ausas_gap, ausas_squeeze)
 
 
 def test_steady_film_equals_swift_stieber_where_the_groove_feeds_the_pressure_zone():
@@ -93,73 +95,29 @@ def test_the_committed_step_conserves_mass_to_round_off_along_a_whirl():
     assert abs(total_change - total_inflow) < 1e-9 * abs(total_inflow), (total_change, total_inflow)
 
 
-def _squeeze_params(nx: int, p0: float = 0.025) -> tuple[ea.EAParams, np.ndarray]:
-    """Ausas et al. (2009) sec. 3 on the solver's grid: 2 d(phi h)/dt = d/dx(h^3 dp/dx) on 0 <= x <= 1, p = p0 and
-    full at both ends, no sliding (K_omega = 0), every theta column alike (so theta carries no flux)."""
-    x = np.linspace(0.0, 1.0, nx)
-    n = 8
-    th = 2.0 * np.pi * np.arange(n) / n
-    return ea.EAParams(n_theta=n, n_z=nx, sin_node=np.sin(th), cos_node=np.cos(th), sin_face=np.sin(th),
-                       cos_face=np.cos(th), inv_c=1.0, inv_dtheta=1.0, inv_dtheta2=1.0, inv_dzeta2=1.0 / (x[1] - x[0]) ** 2,
-                       k_omega=0.0, kvc=2.0, a_sin=np.zeros(n), a_cos=np.zeros(n), w_z=np.zeros(nx), w_cell=1.0,
-                       p_supply=p0, p_end=p0, fixed=np.zeros(n, dtype=np.bool_), sor_omega=1.9, tol=1e-10,
-                       tol_commit=1e-10, max_sweeps=200_000, coarse_every=3, mode_shape=np.sin(np.pi * x),
-                       rule=ea.RULE_JFO, mu=1.0, radius=1.0, clearance=1.0, dz=x[1] - x[0]), x
-
-
-def ausas_squeeze_run(nx: int = 151, dt: float = 6.6e-4, t_end: float = 0.3149, p0: float = 0.025):
-    """(t, cavity edge Sigma, p at x = 1/2) after every step of the oscillatory squeeze film
-    h(t) = 0.125 cos(4 pi t) + 0.375 (Ausas et al. 2009, sec. 3)."""
-    ep, x = _squeeze_params(nx, p0)
-    n = ep.n_theta
-    p = np.full((n, nx), p0)
-    th = np.ones((n, nx))
-    ea.reset_fields(ep, p, th)
-    content = np.empty_like(p)
-    hh = np.empty(n)
-    hf = np.empty(n)
-    t = 0.0
-    out = []
-    while t < t_end:
-        h_old = 0.125 * math.cos(4.0 * math.pi * t) + 0.375
-        t += dt
-        hh[:] = hf[:] = 0.125 * math.cos(4.0 * math.pi * t) + 0.375
-        content[:] = th * h_old
-        _, status = ea.ea_sweeps(ep, 0.0, hh, hf, 1.0 / dt, content, p, th, 1e-10, 200_000)
-        assert status == ea.EA_CONVERGED
-        cav = np.flatnonzero(th[0] < 1.0)
-        out.append((t, x[cav.max()] if cav.size else math.nan, p[0, nx // 2]))
-    return np.array(out), x[1] - x[0]
-
-
-def ausas_squeeze_exact(t: float, p0: float = 0.025) -> tuple[float, float]:
-    """(p at x = 1/2 of the full film, the cavity's right edge during rupture) of the oscillatory squeeze film:
-    p = p0 + (h'/h^3)(x^2 - x); Sigma = 1 - sqrt(p0 h^3 / h') (Ausas et al. 2009, eqs. 19 and 21)."""
-    h = 0.125 * math.cos(4.0 * math.pi * t) + 0.375
-    dh = -0.5 * math.pi * math.sin(4.0 * math.pi * t)
-    return p0 - dh / (4.0 * h**3), (1.0 - math.sqrt(p0 * h**3 / dh) if dh > 0.0 else math.nan)
-
-
 def test_ausas_squeeze_film_pressure_and_cavity_edge_against_the_exact_solution():
-    run, dx = ausas_squeeze_run()
-    t = run[:, 0]
+    run = ausas_squeeze(nx=151, dt=6.6e-4)
+    dx = 1.0 / 150
     dt = 6.6e-4
+    t = run[:, 0]
     for tq in (0.0625, 0.125, 0.1875):
         k = int(np.argmin(abs(t - tq)))
         # the full film's parabola is exact on the grid (second differences of a quadratic), with backward Euler's
         # secant (h_{n+1} - h_n)/dt in place of h' and h at the step's end: equal to round-off
-        h1, h0 = (0.125 * math.cos(4.0 * math.pi * s) + 0.375 for s in (t[k], t[k] - dt))
-        discrete = 0.025 - (h1 - h0) / dt / (4.0 * h1**3)
+        h1, h0 = ausas_gap(t[k]), ausas_gap(t[k] - dt)
+        discrete = AUSAS_P0 - (h1 - h0) / dt / (4.0 * h1**3)
         assert abs(run[k, 2] - discrete) < 1e-8 * discrete, (tq, run[k, 2], discrete)
         # and the continuous exact solution within backward Euler's O(dt) error
-        exact = ausas_squeeze_exact(t[k])[0]
+        exact = ausas_exact(t[k])[0]
         assert abs(run[k, 2] - exact) < 5e-3 * exact, (tq, run[k, 2], exact)
-    assert np.isnan(run[t < 0.2500792 - 6.6e-4, 1]).all()       # no cavity before rupture (t_rup = 0.2500792)
+    assert np.isnan(run[t < AUSAS_T_RUPTURE - dt, 1]).all()       # no cavity before rupture
     for tq in (0.26, 0.28, 0.30):
         k = int(np.argmin(abs(t - tq)))
-        exact = ausas_squeeze_exact(t[k])[1]
+        exact = ausas_exact(t[k])[1]
         assert abs(run[k, 1] - exact) <= 1.5 * dx, (tq, run[k, 1], exact)
-    assert abs(np.nanmax(run[:, 1]) - 0.976992) <= 1.5 * dx
+    assert abs(np.nanmax(run[:, 1]) - AUSAS_SIGMA_MAX) <= 1.5 * dx
+    errors = ausas_errors(run)
+    assert max(errors.values()) < 1.0, errors
 
 
 def test_force_and_cavity_boundary_converge_with_the_grid():

@@ -54,7 +54,7 @@ _table = report.markdown_table
 # Stages that the paper's figures and numbers do not need: the workspace's own surrogate (three seeds),
 # its ensemble, error map and batched speed, the grading study, the ablation and the characteristics.
 BEYOND_PAPER_STAGES = ("dataset_orbit", "train_best", "train_best_seeds", "ensemble", "error_map", "batch_speed",
-                       "grading_study", "ablation", "characteristics", "runup")
+                       "grading_study", "ablation", "characteristics", "runup", "cavitation_rules")
 
 
 def _untimed_stages(reports: Path, timed) -> list[str]:
@@ -473,6 +473,75 @@ def render_runup(reports: Path) -> str:
             f"/ run-down:\n\n"
             + _table(["run", "onset [rpm]", "vs Lund", "whirl ratio at onset", "established, up [rpm]",
                       "gone, down [rpm]", "ramp [rpm/s]"], rows))
+def render_cavitation_rules(reports: Path) -> str:
+    """The cavitation rules against the mass-conserving film (``reports/cavitation_rules.json``, the
+    ``cavitation_rules`` stage): per case, each non-conserving rule's orbit distance from JFO's; thresholds,
+    run-up onsets, the damper, flows; the JFO model's own checks."""
+    import pandas as pd
+
+    cr = _load(reports, "cavitation_rules.json")
+    cases = pd.read_csv(reports / "cavitation_rules" / "cases.csv")
+    st = cr["settings"]
+    rows = []
+    for case, g in cases.groupby("case", sort=True):
+        by = {r.rule: r for r in g.itertuples()}
+        cells = [case]
+        for rule in ("gumbel", "swift-stieber"):
+            r = by.get(rule)
+            cells += ([_num(r.rms_pct, ".2f"), _num(r.hausdorff_pct, ".2f")] if r is not None and hasattr(r, "rms_pct")
+                      and r.rms_pct == r.rms_pct else ["n/a", "n/a"])
+        j = by.get("jfo")
+        cells += [_num(j.span, ".3f") if j is not None else "n/a"]
+        for rule in ("gumbel", "swift-stieber"):
+            r = by.get(rule)
+            cells += [_num(getattr(r, "friction_power_rel_diff_pct", None), "+.1f", " %") if r is not None else "n/a"]
+        rows.append(cells)
+    m = cr["metrics"]
+    lund = cr["thresholds_paper_bearing"]
+    lp = cr["thresholds_pfeil"]
+    ru = cr["runup_pfeil"]
+    dm = cr["damper"]
+    th_rows = [[rule, _num(lund[rule]["speed_rpm"], ",.0f"), _num(lp[rule]["speed_rpm"], ",.0f"),
+                _num(ru[rule].get("onset_rpm"), ",.0f"), _num(ru[rule].get("limit_cycle_amplitude_c"), ".3f"),
+                _num(dm[rule]["damping_N_s_m"], ",.1f"), _num(dm[rule]["stiffness_N_m"], ",.0f")]
+               for rule in ("gumbel", "swift-stieber", "jfo")]
+    over = cr["cases_over_threshold"]
+    gc = cr.get("grid_check_rms_pct_c", {})
+    cost = cr["step_cost"]
+    return (f"Three rules on one grid ({st['grid'][0]}x{st['grid'][1]}), one feed (an axial groove at "
+            f"{st['groove_angle_deg']:g} deg, {st['supply_pressure_Pa']:g} Pa) and one solver; orbits settled from "
+            f"t = {st['t_settle']:g} s. Distances of each non-conserving rule's orbit from the mass-conserving one, "
+            f"in % of c (RMS / Hausdorff), JFO's span, and the friction power's difference from JFO's:\n\n"
+            + _table(["case", "Gümbel RMS", "Gümbel Hausdorff", "Swift-Stieber RMS", "Swift-Stieber Hausdorff",
+                      "JFO span [c]", "friction, Gümbel", "friction, Swift-Stieber"], rows)
+            + f"\n\nOver {st['threshold_pct']:g} % of c: " + ("; ".join(over) if over else "none") + ". Grid check "
+            f"(case {cr['settings'].get('check_case', '')} on {st['check_grid'][0]}x{st['check_grid'][1]}, each rule "
+            "against its own orbit on the study's grid, RMS % of c): "
+            + ", ".join(f"{k} {v:.2f}" for k, v in gc.items()) + ".\n\n"
+            + "Whirl thresholds (Lund, K and C with the film content at its steady value), Pfeil's run-up and the "
+            "squeeze-film damper:\n\n"
+            + _table(["rule", f"Lund, paper bearing {lund['mass_kg']:g} kg [rpm]", "Lund, Pfeil's bearing [rpm]",
+                      "Pfeil run-up onset [rpm]", "limit cycle [c]", "damper damping [N s/m]", "damper stiffness [N/m]"],
+                     th_rows)
+            + f"\n\nThe JFO model's own checks: flow balance of committed steps {m['jfo_mass_balance_rel_err_max']:.1e} "
+            f"(at tol_commit 1e-13: {m['jfo_mass_balance_rel_err_max_tight']:.1e}); Ausas et al. (2009)'s squeeze film "
+            f"within {m['jfo_published_case_max_err_pct']:.2f} % of its exact solution ({cr['ausas_squeeze']['nodes']} "
+            f"nodes); {cost['us_per_step']:.0f} us per rotor time step on 30x30 ({cost['sweeps_per_stage']:.1f} sweeps "
+            f"per stage, {cost['sweeps_per_commit']:.1f} per commit).\n")
+
+
+def render_cavitation_rules_summary(reports: Path) -> str:
+    """The README's sentence on how far the non-conserving rules' orbits are from the mass-conserving film's."""
+    cr = _load(reports, "cavitation_rules.json")
+    m = cr["metrics"]
+    return (f"Against the mass-conserving (JFO) film on the same grid and feed, Gümbel's orbits of the paper's seven "
+            f"cases are up to {m['jfo_orbit_rms_pct_c_gumbel_max']:.1f} % of c away (RMS) and Swift-Stieber's up to "
+            f"{m['jfo_orbit_rms_pct_c_swift_max']:.1f} %; Gümbel's whirl threshold differs by "
+            f"{_num(100 * m['jfo_whirl_threshold_rel_diff_gumbel'], '.1f', ' %')} and its run-up onset (Pfeil's rotor) by "
+            f"{_num(100 * m['jfo_runup_onset_rel_diff_gumbel'], '.1f', ' %')} "
+            f"([docs/mass_conserving.md](docs/mass_conserving.md)).\n")
+
+
 def render_universal_summary(reports: Path) -> str:
     """The README's sentence on the shipped universal model's accuracy on bearings it never saw, from
     ``reports/universal.json`` (the ``universal_evaluate`` stage)."""
@@ -944,6 +1013,8 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "ablation": render_ablation,
     "error_map": render_error_map,
     "runup": render_runup,
+    "cavitation_rules": render_cavitation_rules,
+    "cavitation_rules_summary": render_cavitation_rules_summary,
     "universal": render_universal,
     "universal_kc": render_universal_kc,
     "surrogate_goals": render_surrogate_goals,

@@ -53,6 +53,7 @@ class ReportInputs:
     # the other PAPER_SCALE_REPORTS (make paper-scale-curve / paper-full-scale, committed), those present
     paper_scale_beyond: tuple = ()
     runup: dict | None = None         # reports/runup.json, where that stage ran
+    cavitation_rules: dict | None = None  # reports/cavitation_rules.json, where that stage ran
     universal: dict | None = None     # reports/universal.json, where that stage ran
     # reports/reproduce_timing.json: each stage's last wall time, written by `make reproduce` as stages finish
     # (not a DVC dependency: it is the pipeline's own record, and changes while the pipeline runs)
@@ -91,7 +92,7 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         grading_study=optional(rd / "grading_study" / "summary.json"), ablation=optional(rd / "ablation" / "summary.json"),
         error_map=optional(rd / "error_map.json"), paper_scale=optional(rd / "paper_scale.json"),
         paper_scale_beyond=tuple(_load(rd / name) for name in PAPER_SCALE_REPORTS[1:] if (rd / name).exists()),
-        runup=optional(rd / "runup.json"),
+        runup=optional(rd / "runup.json"), cavitation_rules=optional(rd / "cavitation_rules.json"),
         universal=optional(rd / "universal.json"),
         reproduce_timing=optional(rd / "reproduce_timing.json"), dvc_stages=pipeline_stages(rd))
 
@@ -224,6 +225,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
     metrics.update(paper_scale_all_metrics(inp.paper_scale, inp.paper_scale_beyond))
     if inp.runup is not None:  # the run-up: onset of whirl from the transient against Lund's threshold
         metrics.update(inp.runup["metrics"])
+    if inp.cavitation_rules is not None:  # Guembel and Swift-Stieber against the mass-conserving film
+        metrics.update(inp.cavitation_rules["metrics"])
     if inp.universal is not None:  # the universal plain-bearing surrogate on bearings it never saw
         metrics.update(universal_metrics(inp.universal))
     for study in ("grading_study", "ablation"):

@@ -10,6 +10,9 @@ One responsibility per module:
                  h(theta, z) path, axial force, sleeve displacement
 - ``policy``     the paper's grid policy (coarse grid at low, dense at high eccentricity)
 - ``params``     the kernels' named parameters (``FilmParams``, ``GeneralParams``) and ``Cavitation``
+- ``elrod_adams`` mass-conserving cavitation (JFO / Elrod-Adams p-theta film): kernels and
+                 ``ElrodAdamsSolver`` (the same grid and feed under Guembel or Swift-Stieber too)
+- ``jfo_cases``  published mass-conserving test cases with exact solutions (Ausas et al. 2009)
 """
 from fluidfilm.reynolds.conical import ConicalReynoldsSolver
 from fluidfilm.reynolds.params import Cavitation, FilmParams, GeneralParams

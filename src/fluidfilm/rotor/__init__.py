@@ -3,6 +3,8 @@
 - ``model``        ``Rotor``: what one bearing carries (mass, imbalance, external load);
                    ``SpeedSchedule``: the shaft speed against time (run-ups)
 - ``integrate``    ``simulate``: one compiled RK4 loop for every force model
+- ``film_memory``  the loop for a film with memory (mass-conserving cavitation): the film content carried
+                   between RK4 steps (``simulate`` dispatches to it)
 - ``linear``       ``LinearBearing``: an isotropic spring-damper force model (analytic checks)
 - ``equilibrium``  static equilibrium position (``characteristics.static.equilibrium``) and the locus
 - ``metrics``      settled-orbit statistics and model-vs-reference distances

@@ -90,6 +90,15 @@ CAPTIONS: dict[str, str] = {
         "Sub-synchronous amplitude (top, log scale) and whirl frequency ratio (bottom) against shaft speed on the "
         "run-up (solid) and run-down (dashed), per force model; dotted: the onset from each transient, dashed: "
         "Lund's linear threshold, star: Lund's whirl ratio there. The gap between the curves is the hysteresis."),
+    "figures/cavitation_rules_orbits.png": (
+        "The paper's seven cases (Fig. 4 a-g) under three cavitation rules on one grid, one feed (a groove at "
+        "the top) and one solver: settled orbits in units of c, gravity down the page; black: the mass-conserving "
+        "(JFO / Elrod-Adams) film, dashed: Guembel and Swift-Stieber."),
+    "figures/cavitation_rules_runup.png": (
+        "Left: Pfeil's run-up (d = L = 0.1 m, c = 150 um, 200 kg, 60 -> 140 Hz in 1 s) under the three rules: "
+        "sub-synchronous amplitude against shaft speed, dotted: each onset. Right: the paper's bearing as a "
+        "squeeze-film damper (circular orbit at eps 0.5, 100 Hz, no rotation, fed at 20 kPa): radial (solid) and tangential "
+        "(dashed) film force over a whirl period."),
 }
 
 

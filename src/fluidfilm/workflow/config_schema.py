@@ -341,6 +341,65 @@ class RunupSchema:
     imbalance_check: Optional[float] = MISSING
 
 
+@dataclass
+class CavitationRunupSchema:
+    length: float = MISSING
+    diameter: float = MISSING
+    clearance: float = MISSING
+    viscosity: float = MISSING
+    supply_pressure: float = MISSING
+    mass: float = MISSING
+    imbalance: float = MISSING
+    f_start_hz: float = MISSING
+    f_end_hz: float = MISSING
+    duration_s: float = MISSING
+    grid: list[int] = MISSING
+    dt: float = MISSING
+    record_every: int = MISSING
+    samples_per_rev: int = MISSING
+    window_revs: int = MISSING
+    hop_revs: int = MISSING
+    band: list[float] = MISSING
+    whirl_level: float = MISSING
+    onset_fit_nepers: float = MISSING
+    limit_cycle_window_s: float = MISSING
+
+
+@dataclass
+class DamperSchema:
+    supply_pressure: float = MISSING
+    eps: float = MISSING
+    whirl_hz: float = MISSING
+    revolutions: int = MISSING
+    steps_per_rev: int = MISSING
+
+
+@dataclass
+class CavitationRulesSchema:
+    grid: list[int] = MISSING
+    check_grid: list[int] = MISSING
+    check_case: str = MISSING
+    groove_angle_deg: float = MISSING
+    tol: float = MISSING
+    tol_commit: float = MISSING
+    cases: list[str] = MISSING
+    t_end: float = MISSING
+    t_settle: float = MISSING
+    dt: float = MISSING
+    record_every: int = MISSING
+    threshold_pct: float = MISSING
+    threshold_mass: float = MISSING
+    speed_bracket: list[float] = MISSING
+    workers: int = MISSING
+    runup: CavitationRunupSchema = MISSING
+    damper: DamperSchema = MISSING
+    ausas_nodes: int = MISSING
+    ausas_dt: float = MISSING
+    balance_steps: int = MISSING
+    cost_steps: int = MISSING
+    cost_repeats: int = MISSING
+
+
 #: group -> schema, or -> (key, {value of key: schema}) where the options differ in shape
 GROUPS: dict[str, Any] = {
     "bearing": ("kind", {"journal": JournalBearingSchema, "conical": ConicalBearingSchema}),
@@ -361,6 +420,7 @@ GROUPS: dict[str, Any] = {
     "controller": ControllerSchema,
     "characteristics": CharacteristicsSchema,
     "runup": RunupSchema,
+    "cavitation_rules": CavitationRulesSchema,
 }
 #: the value of the selecting key when an option leaves it out
 _SELECTOR_FALLBACK = {"bearing": "journal"}
