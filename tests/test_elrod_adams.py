@@ -217,3 +217,13 @@ def test_side_flow_balances_the_groove_in_a_steady_film_and_friction_matches_pet
     # less than the full film the non-conserving rule assumes
     assert q > 0.0 and abs(q / q_ss - 1.0) < 1e-6
     assert power < 0.95 * power_ss
+
+
+def test_a_film_solve_that_does_not_converge_ends_the_run_as_diverged_never_ok():
+    film = ElrodAdamsSolver(paper_bearing(), 16, 9, max_sweeps=2, tol=1e-12, tol_commit=1e-12)
+    # the steady start already needs more than two sweeps: refused with the position named
+    with pytest.raises(RuntimeError, match="did not converge"):
+        simulate(film, Rotor(mass=2.5, imbalance=5e-4), t_end=1e-3, dt=1e-5, x0=(0.0, 50e-6))
+    traj = simulate(film, Rotor(mass=2.5, imbalance=5e-4), t_end=1e-3, dt=1e-5, x0=(0.0, 50e-6),
+                    film_content=np.ones((16, 9)))
+    assert not traj.ok and traj.status.startswith("diverged: the film solve did not converge")

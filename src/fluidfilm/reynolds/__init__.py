@@ -15,9 +15,10 @@ One responsibility per module:
 - ``jfo_cases``  published mass-conserving test cases with exact solutions (Ausas et al. 2009)
 """
 from fluidfilm.reynolds.conical import ConicalReynoldsSolver
+from fluidfilm.reynolds.elrod_adams import ElrodAdamsSolver
 from fluidfilm.reynolds.params import Cavitation, FilmParams, GeneralParams
 from fluidfilm.reynolds.policy import GradedReynoldsModel, make_solver
 from fluidfilm.reynolds.solver import CAVITATION_MODELS, ReynoldsSolver
 
-__all__ = ["ReynoldsSolver", "ConicalReynoldsSolver", "GradedReynoldsModel", "CAVITATION_MODELS", "make_solver",
+__all__ = ["ReynoldsSolver", "ConicalReynoldsSolver", "ElrodAdamsSolver", "GradedReynoldsModel", "CAVITATION_MODELS", "make_solver",
            "Cavitation", "FilmParams", "GeneralParams"]

@@ -403,7 +403,7 @@ def _speed_kernel(model: ForceModel, speed: SpeedSchedule | None):
 def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
              eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
              max_substeps: int = 256, t0: float = 0.0, speed: SpeedSchedule | None = None,
-             precision: str = "float64") -> Trajectory:
+             precision: str = "float64", film_content=None) -> Trajectory:
     """Integrate the rotor in ``model`` (a ``fluidfilm.core.force_model.ForceModel``: its compiled ``force_kernel``).
 
     Fixed-step RK4 of m dV/dt = F_film(X, V) + imbalance + m g (along +X2) + F_ext (module doc);
@@ -445,6 +445,11 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         gains stay float64), at constant speed only.  A model without float32 networks (a reference
         solver, an ensemble) computes in float64 either way; the trajectory's ``meta["precision"]`` says
         which ran.
+    film_content : array_like or None, default None
+        A film with memory only (``core.force_model.TransientFilmModel``, mass-conserving cavitation): the
+        film content (n_theta, n_z) at t0, e.g. ``meta["film_content"]`` of a previous run to continue it;
+        None: the steady film at x0.  Such a model runs in ``rotor.film_memory``'s loop, which carries the
+        content between RK4 steps.
 
     Returns
     -------
@@ -479,6 +484,8 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     if not isinstance(model, ForceModel):
         raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel: forces, "
                          "force_kernel, bearing, clearance, validity, domain report); the integrator needs one")
+    if film_content is not None and not isinstance(model, TransientFilmModel):
+        raise ValueError(f"film_content is the state of a film with memory; {model.name} has none")
     if isinstance(model, TransientFilmModel):
         # a film with memory (mass-conserving cavitation): its content is state, integrated in its own loop
         from fluidfilm.rotor.film_memory import simulate_film
@@ -486,7 +493,8 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         if precision not in ("float64", "float32"):
             raise ValueError(f"precision must be 'float64' or 'float32', got {precision!r}")
         return simulate_film(model, rotor, t_end, dt, x0, v0, eps_stop=eps_stop, record_every=record_every,
-                             eps_substep=eps_substep, max_substeps=max_substeps, t0=t0, speed=speed)
+                             eps_substep=eps_substep, max_substeps=max_substeps, t0=t0, speed=speed,
+                             film_content=film_content)
     # precision: what the networks actually run in (a model without float32 networks computes in float64)
     kernel, params, precision = one_state_kernel(model, precision)
     if precision == "float32" and speed is not None:
