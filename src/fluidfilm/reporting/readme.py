@@ -502,7 +502,8 @@ def render_cavitation_rules(reports: Path) -> str:
     ru = cr["runup_pfeil"]
     dm = cr["damper"]
     th_rows = [[rule, _num(lund[rule]["speed_rpm"], ",.0f"), _num(lp[rule]["speed_rpm"], ",.0f"),
-                _num(ru[rule].get("onset_rpm"), ",.0f"), _num(ru[rule].get("limit_cycle_amplitude_c"), ".3f"),
+                _num(ru[rule].get("onset_rpm"), ",.0f"), _num(ru[rule].get("growth_nepers"), ".2f"),
+                _num(ru[rule].get("limit_cycle_amplitude_c"), ".3f"),
                 _num(dm[rule]["damping_N_s_m"], ",.1f"), _num(dm[rule]["stiffness_N_m"], ",.0f")]
                for rule in ("gumbel", "swift-stieber", "jfo")]
     over = cr["cases_over_threshold"]
@@ -521,7 +522,7 @@ def render_cavitation_rules(reports: Path) -> str:
             + "Whirl thresholds (Lund, K and C with the film content at its steady value), Pfeil's run-up and the "
             "squeeze-film damper:\n\n"
             + _table(["rule", f"Lund, paper bearing {lund['mass_kg']:g} kg [rpm]", "Lund, Pfeil's bearing [rpm]",
-                      "Pfeil run-up onset [rpm]", "limit cycle [c]", "damper damping [N s/m]", "damper stiffness [N/m]"],
+                      "Pfeil run-up onset [rpm]", "sub-synchronous growth [nepers]", "orbit radius, last 0.05 s [c]", "damper damping [N s/m]", "damper stiffness [N/m]"],
                      th_rows)
             + f"\n\nThe JFO model's own checks: flow balance of committed steps {m['jfo_mass_balance_rel_err_max']:.1e} "
             f"(at tol_commit 1e-13: {m['jfo_mass_balance_rel_err_max_tight']:.1e}); Ausas et al. (2009)'s squeeze film "
