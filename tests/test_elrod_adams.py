@@ -180,6 +180,9 @@ def test_a_film_without_feed_and_bad_settings_are_refused_naming_them():
         simulate_batch(film, [Rotor(mass=1.0)], t_end=1e-3)
     with pytest.raises(ValueError, match="eccentricity"):
         film.forces([0.0, 120e-6], [0.0, 0.0])
+    from fluidfilm import ReynoldsSolver
+    with pytest.raises(ValueError, match="film_content is the state of a film with memory"):
+        simulate(ReynoldsSolver(paper_bearing(), 16, 8), Rotor(mass=1.0), t_end=1e-3, film_content=np.ones((16, 8)))
 
 
 @pytest.mark.parametrize("rule", ["swift-stieber", "gumbel"])
