@@ -197,6 +197,20 @@ def test_a_coarse_reference_grid_warns_once_and_converged_meets_its_tolerance():
             ReynoldsSolver.converged(b, **kwargs)
 
 
+def test_the_grid_envelope_bounds_every_measured_square_grid_error():
+    """The rule adds a circumferential and an axial part measured on n x 120 and 120 x n grids; the square
+    grids' errors, measured apart (the same Richardson truth), must lie below it wherever n >= 30."""
+    from fluidfilm.reynolds.grid import grid_error
+    from fluidfilm.reynolds.grid_table import GRID_ERROR
+
+    for cav, by_ld in GRID_ERROR.items():
+        for ld, rows in by_ld.items():
+            for eps, by_n in rows.items():
+                for n, (e1, e2) in by_n.items():
+                    if n >= 30:
+                        assert math.hypot(e1, e2) <= grid_error(n, n, eps, ld, cav) + 1e-6, (cav, ld, eps, n)
+
+
 def test_with_speed_gives_the_model_built_at_that_speed():
     from fluidfilm import GradedReynoldsModel
     from fluidfilm.reynolds.feed import GroovedReynoldsSolver
