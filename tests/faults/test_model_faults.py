@@ -109,6 +109,8 @@ def test_every_force_model_answers_inside_the_domain_and_surrogates_warn_outside
     else:
         with warnings.catch_warnings():
             warnings.simplefilter("error")
+            # item 24: a reference grid too coarse at eps 0.99 says so (once per solver), nothing else
+            warnings.filterwarnings("ignore", message=".*off a converged grid", category=RuntimeWarning)
             assert np.isfinite(model.forces(*outside)).all()
 
 

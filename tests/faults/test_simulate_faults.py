@@ -48,7 +48,8 @@ def test_coarse_output_step_reports_no_contact_that_does_not_happen(solver):
     near eps_stop; the coarse one must not claim it did."""
     rotor = Rotor(mass=2.5, imbalance=5e-4)
     fine = simulate(solver, rotor, t_end=0.05, dt=1e-5)
-    coarse = simulate(solver, rotor, t_end=0.05, dt=5e-3)
+    # 4 steps per revolution: the step check refuses it (test_integration_step.py); the retry is studied here
+    coarse = simulate(solver, rotor, t_end=0.05, dt=5e-3, check_step=False)
     assert fine.ok and fine.eccentricity(C).max() < 0.8
     assert coarse.ok, coarse.status
     assert coarse.n_force_evals > 4 * 10  # it refined its steps

@@ -224,4 +224,4 @@ def nonlinear_check(make_model, bearing, mass: float, speed_rpm: float, perturba
     last = float(dev[-max(n // 10, 1):].max())
     return {"speed_rpm": speed_rpm, "eps_eq": eq["eps"], "amp_first": first, "amp_last": last,
             "ratio": last / first, "status": traj.status,
-            "contact": not traj.ok, "t": traj.t[::5], "dev": dev[::5]}
+            "contact": not traj.completed, "t": traj.t[::5], "dev": dev[::5]}

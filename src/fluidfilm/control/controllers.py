@@ -140,7 +140,7 @@ class ModelPredictiveController:
                 continue
             tr = simulate(self.model, rotor, env.t + self.horizon * sc.control_interval, sc.dt, x0=env.x, v0=env.v,
                           eps_stop=sc.eps_stop, record_every=sc.record_every, t0=env.t)
-            if not tr.ok:
+            if not tr.completed:
                 costs[a] = env.weights.contact_penalty
                 continue
             move = abs(s - env.sleeve_positions[env.action]) / env.travel

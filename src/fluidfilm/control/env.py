@@ -308,7 +308,7 @@ class ActiveBearingEnv(gym.Env):
                 # a whole number of revolutions ending at t = 0, so the imbalance phase is continuous
                 tr = simulate(self.model, self.rotor_with(sc.imbalance_start), 0.0, sc.dt,
                               eps_stop=sc.eps_stop, record_every=sc.record_every, t0=-sc.settle_time)
-                if not tr.ok:
+                if not tr.completed:
                     raise RuntimeError(f"settling run failed: {tr.status}")
                 self._settled[a] = (tr.x[-1].copy(), tr.v[-1].copy())
             else:
@@ -396,7 +396,7 @@ class ActiveBearingEnv(gym.Env):
         observation and the gymnasium step tuple."""
         sc, w = self.scenario, self.weights
         if tr is not None:
-            terminated = not tr.ok  # contact or divergence
+            terminated = not tr.completed  # contact or divergence
             xs = tr.x
             self.x, self.v = tr.x[-1].copy(), tr.v[-1].copy()
         else:

@@ -182,7 +182,7 @@ class ActiveBearingVecEnv(VecEnv):
             for j, (i, env) in enumerate(zip(members, envs)):
                 tr = batch.trajectory(j)
                 c_r = env.bearing.clearance_at(env.sleeve_positions[env.action])
-                if not tr.ok and tr.status.startswith("contact") and np.hypot(*tr.x[-1]) < sc.eps_stop * c_r:
+                if not tr.completed and tr.status.startswith("contact") and np.hypot(*tr.x[-1]) < sc.eps_stop * c_r:
                     # a stage left the clearance: simulate retries such a step with more substeps
                     model.set_sleeve(env.sleeve_positions[env.action])
                     tr = simulate(model, rotors[j], t0 + sc.control_interval, sc.dt, x0=env.x, v0=env.v,

@@ -118,10 +118,10 @@ def trajectories_per_second(model, n: int, t_end: float, dt: float = 1e-5, batch
     def run() -> None:
         if batched:
             out = simulate_batch(model, rotors, t_end, dt, x0, v0, record_every=10, **kw)
-            n_ok[0], n_evals[0] = int(out.ok.sum()), int(out.n_force_evals.sum())
+            n_ok[0], n_evals[0] = int(out.completed.sum()), int(out.n_force_evals.sum())
         else:
             runs = [simulate(model, r, t_end, dt, a, b, record_every=10) for r, a, b in zip(rotors, x0, v0)]
-            n_ok[0], n_evals[0] = sum(tr.ok for tr in runs), sum(tr.n_force_evals for tr in runs)
+            n_ok[0], n_evals[0] = sum(tr.completed for tr in runs), sum(tr.n_force_evals for tr in runs)
 
     wall = median_seconds(run, repeats, warmup=False, **({} if clock is None else {"clock": clock}))
     out: dict[str, Any] = {"n": n, "batched": batched, "t_end_s": t_end, "wall_s": wall, "trajectories_per_s": n / wall,

@@ -21,7 +21,7 @@ positions, velocities and forces are rotated in and out.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -165,6 +165,9 @@ class GroovedReynoldsSolver(_GridSolver):
         g = float(groove_angle)
         if not math.isfinite(g):
             raise ValueError(f"groove_angle must be a finite angle in rad, got {groove_angle!r}")
+        self._options: dict[str, Any] = {"n_theta": n_theta, "n_z": n_z, "cavitation": cavitation, "groove_angle": groove_angle,
+                         "n_grooves": n_grooves, "groove_width": groove_width, "sor_omega": sor_omega,
+                         "sor_tol": sor_tol, "sor_max_iter": sor_max_iter, "method": method}
         # the groove-free solver provides the grid, the kernel parameters and the starting field
         self._base = ReynoldsSolver(bearing, n_theta, n_z, cavitation=cavitation, sor_omega=sor_omega,
                                     sor_tol=sor_tol, sor_max_iter=sor_max_iter, method=method)
@@ -193,6 +196,23 @@ class GroovedReynoldsSolver(_GridSolver):
     # --- read-only description (bearing, n_theta, n_z, theta, z: _GridSolver, on the groove-free solver's mesh) ---
     def _separable(self) -> bool:
         return False  # the groove couples the axial modes: no factorisation shared between velocities
+
+
+    def with_speed(self, speed_rpm: float) -> "GroovedReynoldsSolver":
+        """The same bearing, grooves, grid and solver settings at another shaft speed [rpm] (finite, >= 0).
+
+        Parameters
+        ----------
+        speed_rpm : float
+            Shaft speed [rpm].
+
+        Returns
+        -------
+        GroovedReynoldsSolver
+        """
+        import dataclasses
+
+        return GroovedReynoldsSolver(dataclasses.replace(self._bearing, speed_rpm=speed_rpm), **self._options)
 
     @property
     def force_kernel(self):

@@ -7,7 +7,7 @@ sections split) is our default and a config value.
 """
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -137,6 +137,24 @@ class GradedReynoldsModel(ReferenceModel):
         self._rebuild()
         ss = cavitation == "swift-stieber"
         self._kernel = graded_force_ss if ss else graded_force
+        self._options: dict[str, Any] = {"coarse": tuple(coarse), "dense": tuple(dense), "eps_threshold": eps_threshold,
+                         "cavitation": cavitation}
+
+    def with_speed(self, speed_rpm: float) -> "GradedReynoldsModel":
+        """The same bearing, grids and threshold at another shaft speed [rpm] (finite, >= 0).
+
+        Parameters
+        ----------
+        speed_rpm : float
+            Shaft speed [rpm].
+
+        Returns
+        -------
+        GradedReynoldsModel
+        """
+        import dataclasses
+
+        return GradedReynoldsModel(dataclasses.replace(self.bearing, speed_rpm=speed_rpm), **self._options)
 
     def _rebuild(self) -> None:
         self.params = GradedParams(self.coarse.params, self.dense.params, self.eps_threshold * self.clearance)

@@ -242,9 +242,105 @@ class ReynoldsSolver(_GridSolver):
             raise ValueError(f"sor_omega must lie in (0, 2), got {sor_omega!r}")
         if not sor_tol > 0.0:
             raise ValueError(f"sor_tol must be positive, got {sor_tol!r}")
+        self._options: dict[str, Any] = {"n_theta": n_theta, "n_z": n_z, "cavitation": cavitation, "sor_omega": sor_omega,
+                         "sor_tol": sor_tol, "sor_max_iter": sor_max_iter, "method": method}
         self.params = build_params(bearing, self.mesh, cavitation, sor_omega, sor_tol, sor_max_iter, method)
         self._c = bearing.clearance
         self._kernel = kernels.film_force_ss if cavitation == "swift-stieber" else kernels.film_force
+        self._grid_warned = False
+
+    @classmethod
+    def converged(cls, bearing: JournalBearing, tol: float = 0.01, eps_max: float = 0.9,
+                  cavitation: str = "gumbel", **options) -> "ReynoldsSolver":
+        """A solver on the smallest square grid whose static force is within ``tol`` of the grid-converged
+        one up to ``eps_max``, by the measured convergence table (``reynolds.grid``,
+        ``benchmarks/grid_convergence.py``).
+
+        Parameters
+        ----------
+        bearing : JournalBearing
+            The bearing.
+        tol : float, default 0.01
+            Largest relative force error, > 0.
+        eps_max : float, default 0.9
+            Largest eccentricity ratio the solver will be asked about, in [0, 1).
+        cavitation : str, default "gumbel"
+            As the constructor.
+        **options
+            The constructor's other keywords (``sor_omega``, ``sor_tol``, ``sor_max_iter``, ``method``).
+
+        Returns
+        -------
+        ReynoldsSolver
+
+        Raises
+        ------
+        ValueError
+            A bad ``tol`` or ``eps_max`` (named), or no tabulated grid up to 320x320 meets ``tol``.
+
+        Examples
+        --------
+        >>> from fluidfilm import ReynoldsSolver, paper_bearing
+        >>> ReynoldsSolver.converged(paper_bearing(), tol=0.01, eps_max=0.9)
+        ReynoldsSolver(60x60, cavitation='gumbel')
+        """
+        from fluidfilm.reynolds.grid import converged_grid
+
+        if not isinstance(bearing, JournalBearing):
+            raise ValueError(f"bearing must be a JournalBearing, got {type(bearing).__name__}")
+        label = cavitation.label if isinstance(cavitation, Cavitation) else cavitation
+        if label not in CAVITATION_MODELS:
+            raise ValueError(f"unknown cavitation model {cavitation!r}; choose one of {CAVITATION_MODELS}")
+        n = converged_grid(tol, eps_max, bearing.slenderness, label)
+        return cls(bearing, n, n, cavitation=label, **options)
+
+    def with_speed(self, speed_rpm: float) -> "ReynoldsSolver":
+        """The same bearing, grid and solver settings at another shaft speed [rpm].
+
+        Parameters
+        ----------
+        speed_rpm : float
+            Shaft speed [rpm], finite and >= 0 (``JournalBearing``'s check names a bad one).
+
+        Returns
+        -------
+        ReynoldsSolver
+
+        Examples
+        --------
+        >>> from fluidfilm import ReynoldsSolver, paper_bearing
+        >>> ReynoldsSolver(paper_bearing(), 16, 8).with_speed(6000).bearing.speed_rpm
+        6000.0
+        """
+        import dataclasses
+
+        return ReynoldsSolver(dataclasses.replace(self._bearing, speed_rpm=speed_rpm), **self._options)
+
+    def grid_error(self, eps: float) -> float:
+        """Upper envelope of this grid's relative static-force error at eccentricity ``eps``
+        (``reynolds.grid.grid_error``)."""
+        from fluidfilm.reynolds.grid import grid_error
+
+        return grid_error(self.n_theta, self.n_z, eps, self._bearing.slenderness, self.cavitation)
+
+    def check_grid(self, eps: float) -> None:
+        """Warn once per solver where its grid is too coarse at eccentricity ``eps``: the measured envelope
+        of its force error (``grid_error``) above ``reynolds.grid.GRID_WARN_TOL`` (2 %).  ``forces`` calls
+        it with the largest eccentricity asked, ``simulate`` and ``simulate_batch`` with the run's."""
+        from fluidfilm.reynolds.grid import GRID_WARN_TOL
+
+        if self._grid_warned or not math.isfinite(eps):
+            return
+        err = self.grid_error(eps)
+        if err > GRID_WARN_TOL:
+            self._grid_warned = True
+            import warnings
+
+            warnings.warn(
+                f"{self!r}: asked at eccentricity {eps:.3g}, where this grid's force is up to {100 * err:.2g} % off a "
+                f"converged grid (measured: benchmarks/grid_convergence.py); ReynoldsSolver.converged(bearing, "
+                f"tol=0.01, eps_max={min(eps, 0.98):.3g}, cavitation={self.cavitation!r}) gives a grid that meets a "
+                "tolerance", RuntimeWarning, stacklevel=3)
 
     # --- read-only description (bearing, n_theta, n_z, theta, z: _GridSolver) ---
     @property
@@ -281,10 +377,14 @@ class ReynoldsSolver(_GridSolver):
             eps = math.hypot(x1, x2) / self._c
             if eps >= 1.0 or math.hypot(v1, v2) > V_MAX_PHYSICAL:
                 check_states(np.array([[x1, x2]]), np.array([[v1, v2]]), self._c)
+            if not self._grid_warned:
+                self.check_grid(eps)
             return np.array(self._kernel(self.params, x1, x2, v1, v2))
         x, v, shape = as_state_pairs(X, V, self._c)
         out = np.empty_like(x)
         if x.shape[0]:
+            if not self._grid_warned:
+                self.check_grid(float(np.hypot(x[:, 0], x[:, 1]).max()) / self._c)
             kernels.forces_batch(self.params, x, v, out)
         return out.reshape(shape + (2,))
 

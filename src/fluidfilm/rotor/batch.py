@@ -57,8 +57,9 @@ from numba import njit, typeof
 from numba.core import types as nb_types
 
 from fluidfilm.core.force_model import BatchForceModel, BatchSettable, ForceModel, TransientFilmModel, check_precision
-from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, Trajectory, _holds_functions, _ramped,
-                                       _rk4_step, _rk4_step_uncached, _uncached, check_run_args, run_loop)
+from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, OUTSIDE_DOMAIN, OutsideDomainError,
+                                       Trajectory, _holds_functions, _ramped, _rk4_step, _rk4_step_uncached,
+                                       _uncached, check_run_args, rk4_step_limit, run_loop)
 from fluidfilm.rotor.model import Rotor
 
 
@@ -82,13 +83,20 @@ class BatchTrajectory:
 
     @property
     def ok(self) -> np.ndarray:
-        return np.array([s == "ok" or s.startswith("ok;") for s in self.status])
+        """Per trajectory: reached t_end with every force inside the model's domain (``Trajectory.ok``)."""
+        return np.array([s == "ok" or s.startswith("ok;") for s in self.status], dtype=bool)
+
+    @property
+    def completed(self) -> np.ndarray:
+        """Per trajectory: reached t_end, inside the model's domain or not (``Trajectory.completed``)."""
+        return np.array([s == "ok" or s.startswith("ok;") or s.startswith(OUTSIDE_DOMAIN) for s in self.status],
+                        dtype=bool)
 
     def trajectory(self, p: int) -> Trajectory:
         """Trajectory p as ``simulate`` would have returned it (its stopping time on its own time axis)."""
         n = int(self.n_recorded[p])
         t = self.t[:n].copy()
-        if not self.ok[p]:
+        if not self.completed[p]:
             t[-1] = self.t_stop[p]
         ts = None if math.isnan(self.t_stop[p]) else float(self.t_stop[p])
         return Trajectory(t=t, x=self.x[p, :n].copy(), v=self.v[p, :n].copy(), status=self.status[p], t_stop=ts,
@@ -534,6 +542,63 @@ def _run_stages(model, precision, n_threads, consts, x0, v0, *args) -> None:
         model.merge_counts(bp)
 
 
+def _check_batch_step(model, kernel, params, setting, settings_arr, consts, x0, v0, c, dt, omega, eps_substep,
+                      max_substeps) -> None:
+    """``simulate``'s start check for every distinct (rotor, start state, setting) of the batch: a ValueError
+    naming dt, the first trajectory it cannot resolve and the batch's largest safe step."""
+    seen: dict = {}
+    worst = None
+    for p in range(x0.shape[0]):
+        key = (consts[p].tobytes(), x0[p].tobytes(), v0[p].tobytes(), settings_arr[p].tobytes())
+        if key in seen:
+            continue
+        if setting.size:
+            setting[:] = settings_arr[p]
+
+        def force(x1, x2, v1, v2):
+            return kernel(params, x1, x2, v1, v2)
+        lim = rk4_step_limit(force, x0[p], v0[p], consts[p, 0], float(c[p]), omega, eps_substep, max_substeps)
+        seen[key] = lim
+        if worst is None or lim.dt_max < worst[1].dt_max:
+            worst = (p, lim)
+    assert worst is not None
+    p, lim = worst
+    if dt > lim.dt_max * (1.0 + 1e-9):
+        raise ValueError(f"dt={dt!r} s cannot resolve this batch: the largest safe step is {lim.dt_max:.3g} s "
+                         f"(trajectory {p} at its start, eccentricity {np.hypot(*x0[p]) / c[p]:.3g}; rule: "
+                         f"{lim.rule}). Use dt <= {lim.dt_max:.3g} or check_step=False (experts)")
+
+
+def _domain_texts(model, texts: list, out_x, out_v, n_rec, c, n_evals: int, strict: bool) -> list:
+    """The batch's statuses with its evaluations outside the model's domain (one warning, or
+    ``OutsideDomainError`` with ``strict``; ``simulate_batch``'s Returns)."""
+    n_outside = int(model.n_outside_domain)
+    note = model.domain_report()
+    n = len(texts)
+    eps_rec = np.array([np.hypot(*out_x[p, :n_rec[p]].T).max() / c[p] for p in range(n)])
+    if hasattr(model, "check_grid"):  # a reference solver warns once where its grid is too coarse for the run
+        model.check_grid(float(eps_rec.max()))
+    if not note:
+        return texts
+    if n_outside <= 0:  # a model that reports without counting keeps its own note
+        texts = [f"{s}; {note} (whole batch)" for s in texts]
+        warnings.warn(f"{model.name}: {note} during the batch", RuntimeWarning, stacklevel=3)
+        return texts
+    share = 100.0 * n_outside / max(n_evals, 1)
+    summary = (f"outside the training domain in {n_outside} force evaluations ({share:.3g} % of {n_evals}, whole "
+               f"batch), largest recorded eccentricity {eps_rec.max():.4g} (domain eps <= {model.validity.eps_max:g})")
+    if strict:
+        raise OutsideDomainError(f"{model.name}: {summary} during the batch (strict=True)")
+    warnings.warn(f"{model.name}: {summary} during the batch", RuntimeWarning, stacklevel=3)
+    out = []
+    for p, s in enumerate(texts):
+        mine = (f"outside the training domain in {n_outside} force evaluations ({share:.3g} % of {n_evals}, whole "
+                f"batch), largest recorded eccentricity {eps_rec[p]:.4g} (domain eps <= {model.validity.eps_max:g})")
+        # the count is the batch's (its loops count per batch): no finished trajectory can be vouched for
+        out.append(f"{OUTSIDE_DOMAIN}: reached the end time; {mine}" if s == "ok" else f"{s}; {mine}")
+    return out
+
+
 def _rows(value, n: int, what: str) -> np.ndarray:
     a = np.zeros((n, 2)) if value is None else np.asarray(value, dtype=float)
     if a.ndim == 1:
@@ -548,7 +613,8 @@ def _rows(value, n: int, what: str) -> np.ndarray:
 def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=None, *, settings=None,
                    eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
                    max_substeps: int = 256, t0: float = 0.0, threads: int | None = None,
-                   precision: str = "float32", stage_batched: bool | None = None) -> BatchTrajectory:
+                   precision: str = "float32", stage_batched: bool | None = None, check_step: bool = True,
+                   strict: bool = False) -> BatchTrajectory:
     """Integrate N rotors (a ``Rotor`` or a sequence of N) in ``model`` from x0, v0 ((2,) or (N, 2)).
 
     Parameters
@@ -579,10 +645,21 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         lockstep loop (one-state kernel); None: stage-batched for batches of at least
         ``STAGE_BATCHED_MIN_N`` trajectories (a surrogate's batched kernel costs ~2 us per call however
         few its states, so a small batch runs faster through the one-state kernel).
+    check_step : bool, default True
+        Refuse a ``dt`` that cannot resolve some trajectory at its start state (``integrate.rk4_step_limit``,
+        each distinct rotor, state and setting), with a ValueError naming ``dt``, the trajectory and the
+        largest safe step; False (experts): no check.  Unlike ``simulate``, the batch is checked at the
+        start only (its loops are not run in chunks).
+    strict : bool, default False
+        Raise ``OutsideDomainError`` where force evaluations of the batch left the model's domain.
 
     Returns
     -------
     BatchTrajectory
+        ``status[p]`` as ``simulate``'s, but the evaluations outside the model's domain are counted per
+        batch: where the count is not zero, every trajectory that reached the end has status
+        "outside-domain: ..." (not ok, ``completed``), naming the batch's count and share and the
+        trajectory's largest recorded eccentricity; the others carry the same note after theirs.
     """
     if not isinstance(model, ForceModel):
         raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel); "
@@ -649,8 +726,16 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     n_evals = np.zeros(n, dtype=np.int64)
     check_precision(precision)
     n_threads = _thread_count(threads, n)
-    model.reset_domain_counter()
+    if not isinstance(check_step, (bool, np.bool_)):
+        raise ValueError(f"check_step must be True or False, got {check_step!r}")
     saved = setting.copy()
+    if check_step:
+        try:
+            _check_batch_step(model, kernel, params, setting, settings_arr, consts, x0, v0, c, float(dt),
+                              float(omega), float(eps_substep), int(max_substeps))
+        finally:
+            setting[:] = saved
+    model.reset_domain_counter()
     t_start = time.perf_counter()
     try:
         if stage_batched is None:
@@ -681,11 +766,7 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         else:
             texts[p] = f"diverged: non-finite state after t={t_stop[p]:.6g} s"
             t_stop_out[p] = t_stop[p]
-    note = model.domain_report()
-    if note:
-        texts = [f"{s}; {note} (whole batch)" for s in texts]
-        warnings.warn(f"{model.name}: {note} during the batch",
-                      RuntimeWarning, stacklevel=2)
+    texts = _domain_texts(model, texts, out_x, out_v, n_rec, c, int(n_evals.sum()), strict)
     return BatchTrajectory(t=t_grid, x=out_x, v=out_v, n_recorded=n_rec, status=texts, t_stop=t_stop_out,
                            n_force_evals=n_evals, wall_time_s=wall,
                            meta={"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every})

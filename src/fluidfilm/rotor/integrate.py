@@ -4,7 +4,7 @@ Equation (paper eq. 4, CONVENTIONS.md):
 
     m dV/dt = F_bearing(X, V) + m_u d w^2 (cos wt, s sin wt) + m (0, g) + F_ext,   dX/dt = V
 
-Scheme: classical fixed-step RK4.  A fixed step means every force model is
+Scheme: classical fixed-step RK4 (or adaptive, ``dt=None``).  A fixed step means every force model is
 evaluated at the same number of states, so comparing the wall time of two
 models compares the models, and comparing their orbits compares their
 forces, not step-size controllers.
@@ -21,6 +21,23 @@ settled orbits converge (tests/test_rotor.py).
 The loop is compiled with numba and calls the model's compiled force kernel
 ``fn(params, x1, x2, v1, v2) -> (F1, F2)`` directly, so the integrator's own
 overhead is a few tens of nanoseconds per step.
+
+Step check (``check_step``): a fixed step must resolve the run.  The film
+rotor system is linearised at the start state (``rk4_step_limit``: K and C by
+central differences of the compiled kernel, the eigenvalues of the 4x4
+system), and a ``dt`` beyond the largest safe step is refused naming both;
+the loop runs in chunks of steps and the check is repeated at each chunk's
+end, where a step that stops resolving the film ends the run "unresolved".
+``dt=None`` instead integrates with an adaptive Dormand-Prince 5(4) pair in a
+compiled loop of its own (``_dp45_run``: error control by ``rtol``/``atol``,
+steps landed on the output times).  The chunks (also the progress bar's)
+do not change a trajectory to the bit: step k's time is t0 + k dt in every
+chunk, and the adaptive loop recomputes its first stage at each chunk start.
+
+Domain: a run whose force evaluations left the model's validity domain ends
+"outside-domain: ..." (not ``ok``; ``completed``), with one warning naming the
+share of evaluations and the largest eccentricity, or ``OutsideDomainError``
+with ``strict=True``.
 
 Stopping: when the eccentricity reaches ``eps_stop`` (the journal touches the
 sleeve, e.g. 0.98) or an RK stage would put the journal outside the
@@ -45,6 +62,25 @@ from fluidfilm.rotor.model import RPM, Rotor, SpeedSchedule, ramped
 _ramped = njit(inline="always")(ramped)
 
 OK, CONTACT, CONTACT_STAGE, NONFINITE = 0, 1, 2, 3
+#: status code of a run stopped by the along-the-run step check (set from Python, never by a loop)
+UNRESOLVED = 4
+#: the status prefix of a run that reached its end time with forces outside the model's domain
+OUTSIDE_DOMAIN = "outside-domain"
+
+#: RK4's stability bound on the negative real axis is |lambda dt| = 2.785 (2.83 on the imaginary axis);
+#: a step is safe where every eigenvalue of the linearised film-rotor system has |lambda| h <= this (a
+#: safety factor of 2), h the (sub)step
+RK4_LAMBDA_DT = 1.4
+#: resolution: at least this many steps per shaft revolution and per period of each oscillating mode
+STEPS_PER_PERIOD = 20
+#: the fixed-step loop runs in chunks of at least this many steps (progress bar, along-the-run check) and
+#: in at most ``MAX_CHUNKS`` chunks
+CHUNK_MIN_STEPS = 1000
+MAX_CHUNKS = 100
+
+
+class OutsideDomainError(RuntimeError):
+    """A run with ``strict=True`` whose force evaluations left the model's validity domain."""
 
 
 @dataclass
@@ -60,8 +96,10 @@ class Trajectory:
     v : ndarray, shape (n, 2)
         Journal velocities [m/s].
     status : str
-        ``"ok"`` (reached the end time, possibly followed by "; <note>"), ``"contact: ..."`` or
-        ``"diverged: ..."``.
+        ``"ok"`` (reached the end time, every force inside the model's domain), ``"outside-domain: ..."``
+        (reached the end time, but some force evaluations left a surrogate's training domain: the share
+        and the largest eccentricity are named), ``"contact: ..."``, ``"diverged: ..."`` or
+        ``"unresolved: ..."`` (the step stopped resolving the film's time scales along the run).
     t_stop : float or None, default None
         Time [s] at which the run stopped; None when it reached the end.
     n_force_evals : int, default 0
@@ -96,8 +134,23 @@ class Trajectory:
 
     @property
     def ok(self) -> bool:
-        """The run reached t_end (a note after "ok;" may say it left a surrogate's training domain)."""
+        """The run reached t_end with every force evaluation inside the model's domain: status "ok".
+
+        A run whose forces left a surrogate's training domain has status "outside-domain: ..." and is not
+        ok (``completed`` is still True); "contact: ...", "diverged: ..." and "unresolved: ..." are not ok.
+        """
         return self.status == "ok" or self.status.startswith("ok;")
+
+    @property
+    def completed(self) -> bool:
+        """The run reached t_end without contact, divergence or an unresolved step, inside the model's domain
+        or not ("ok" or "outside-domain: ...")."""
+        return self.ok or self.status.startswith(OUTSIDE_DOMAIN)
+
+    @property
+    def in_domain(self) -> bool:
+        """No force evaluation of the run left the model's validity domain."""
+        return self.n_outside_domain == 0 and not self.status.startswith(OUTSIDE_DOMAIN)
 
     def eccentricity(self, clearance: float) -> np.ndarray:
         """|X| / ``clearance`` at every recorded time."""
@@ -210,20 +263,28 @@ def _rk4_step(kernel, params, consts, x1, x2, v1, v2, t, t0, step, dt, eps_subst
 
 
 @njit(cache=True)
-def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop, eps_substep,
-             max_substeps, out_t, out_x, out_v):
-    """Integrate; returns (n_recorded, status, t_stop, n_force_evals)."""
+def _rk4_run(kernel, params, consts, x0, v0, t0, dt, step0, step1, record_every, eps_stop, eps_substep,
+             max_substeps, out_t, out_x, out_v, n_rec):
+    """Steps ``step0`` to ``step1 - 1`` from the state x0, v0 at t0 + step0 dt, recording from row ``n_rec``
+    (the caller records row 0, the start).  Step k's time is t0 + k dt whatever the chunk, so a run in
+    chunks equals one call to the bit (``simulate``'s progress bar and along-the-run checks).
+
+    Returns (n_recorded, status, t_stop, n_force_evals, x1, x2, v1, v2, e2max): the state after the last
+    step and the largest |X|^2 reached after a step."""
     stop2 = eps_stop * eps_stop * consts[6]
     x1, x2 = x0[0], x0[1]
     v1, v2 = v0[0], v0[1]
-    t = t0
+    t = t0 + step0 * dt
     n_evals = 0
-    n_rec = _record(out_t, out_x, out_v, 0, t, x1, x2, v1, v2)
+    e2max = 0.0
     status = OK
-    for step in range(n_steps):
+    for step in range(step0, step1):
         x1, x2, v1, v2, t, n, status = _rk4_step(kernel, params, consts, x1, x2, v1, v2, t0 + step * dt, t0, step,
                                                  dt, eps_substep, max_substeps, stop2, True)
         n_evals += n
+        e2 = x1 * x1 + x2 * x2
+        if e2 > e2max:
+            e2max = e2
         if status != OK:
             break
         if (step + 1) % record_every == 0:
@@ -231,7 +292,128 @@ def _rk4_run(kernel, params, consts, x0, v0, t0, dt, n_steps, record_every, eps_
     if status != OK:
         # last valid state, so the trajectory ends where it stopped
         n_rec = _record(out_t, out_x, out_v, n_rec, t, x1, x2, v1, v2)
-    return n_rec, status, t, n_evals
+    return n_rec, status, t, n_evals, x1, x2, v1, v2, e2max
+
+
+# Dormand-Prince 5(4): nodes, stage matrix, 5th-order weights and (5th - 4th)-order error weights
+_DP_C = np.array([0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0])
+_DP_A = np.array([
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [0.2, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+    [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0, 0.0, 0.0],
+    [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0, 0.0],
+    [35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0]])
+_DP_E = np.array([71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0,
+                  -1.0 / 40.0])
+
+
+@njit(cache=True)
+def _deriv(kernel, params, consts, y, t, out):
+    """out = dy/dt of y = (x1, x2, v1, v2) at t; False where the state lies outside the clearance."""
+    a1, a2, inside = _acceleration(kernel, params, y[0], y[1], y[2], y[3], t, consts)
+    out[0] = y[2]
+    out[1] = y[3]
+    out[2] = a1
+    out[3] = a2
+    return inside
+
+
+@njit(cache=True)
+def _dp45_run(kernel, params, consts, x0, v0, t_start, h, j0, j1, out_times, rtol, atol_x, atol_v, eps_stop,
+              h_min, out_t, out_x, out_v, n_rec):
+    """Adaptive Dormand-Prince 5(4) from (x0, v0) at ``t_start`` through the output times ``out_times[j0:j1]``,
+    recording the state at each (the step is shortened to land on it).  Error control per step: the RMS over
+    the four components of err_i / (atol_i + rtol max(|y_i|, |y_new_i|)) at most 1 (atol_x for positions,
+    atol_v for velocities); a rejected step or an RK stage outside the clearance or a non-finite state
+    shortens the step, and a step below ``h_min`` stops the run (CONTACT_STAGE / NONFINITE).  The first
+    stage is recomputed at entry (no first-same-as-last across calls), so a run in chunks equals one call.
+
+    Returns (n_recorded, status, t, n_force_evals, x1, x2, v1, v2, h_next, e2max, n_accepted, n_rejected).
+    """
+    stop2 = eps_stop * eps_stop * consts[6]
+    y = np.empty(4)
+    y[0], y[1], y[2], y[3] = x0[0], x0[1], v0[0], v0[1]
+    k = np.empty((7, 4))
+    ys = np.empty(4)
+    yn = np.empty(4)
+    t = t_start
+    n_evals = 1
+    e2max = 0.0
+    n_acc = 0
+    n_rej = 0
+    status = OK
+    _deriv(kernel, params, consts, y, t, k[0])
+    j = j0
+    while j < j1:
+        target = out_times[j]
+        step = h
+        hit = False
+        if t + step >= target:
+            step = target - t
+            hit = True
+        inside = True
+        for s in range(1, 7):
+            for i in range(4):
+                acc = 0.0
+                for q in range(s):
+                    acc += _DP_A[s, q] * k[q, i]
+                ys[i] = y[i] + step * acc
+            n_evals += 1
+            if not _deriv(kernel, params, consts, ys, t + _DP_C[s] * step, k[s]):
+                inside = False
+                break
+        finite = True
+        err = 0.0
+        if inside:
+            for i in range(4):
+                yn[i] = ys[i]  # stage 7 is evaluated at the 5th-order solution (FSAL)
+                e = 0.0
+                for q in range(7):
+                    e += _DP_E[q] * k[q, i]
+                e *= step
+                sc = (atol_x if i < 2 else atol_v) + rtol * max(abs(y[i]), abs(yn[i]))
+                err += (e / sc) ** 2
+                if not (math.isfinite(yn[i]) and math.isfinite(e)):
+                    finite = False
+            err = math.sqrt(err / 4.0)
+        if not inside or not finite:
+            n_rej += 1
+            h = 0.25 * step
+            if h < h_min:
+                status = CONTACT_STAGE if not inside else NONFINITE
+                break
+            continue
+        if err > 1.0:
+            n_rej += 1
+            h = step * max(0.2, 0.9 * err ** -0.2)
+            if h < h_min:
+                status = NONFINITE
+                break
+            continue
+        n_acc += 1
+        factor = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.9 * err ** -0.2))
+        if not hit:
+            h = step * factor
+        elif step * factor > h:
+            h = step * factor
+        t = target if hit else t + step
+        for i in range(4):
+            y[i] = yn[i]
+            k[0, i] = k[6, i]
+        e2 = y[0] * y[0] + y[1] * y[1]
+        if e2 > e2max:
+            e2max = e2
+        if e2 >= stop2:
+            status = CONTACT
+            break
+        if hit:
+            n_rec = _record(out_t, out_x, out_v, n_rec, t, y[0], y[1], y[2], y[3])
+            j += 1
+    if status != OK:
+        n_rec = _record(out_t, out_x, out_v, n_rec, t, y[0], y[1], y[2], y[3])
+    return n_rec, status, t, n_evals, y[0], y[1], y[2], y[3], h, e2max, n_acc, n_rej
 
 
 @njit
@@ -295,6 +477,9 @@ _rk4_step_uncached = _uncached(_rk4_step, _acceleration=_uncached(_acceleration)
 _rk4_run_uncached = _uncached(_rk4_run, _rk4_step=_rk4_step_uncached)
 # the same loop and step at a scheduled speed: only the acceleration differs (uncached, as above)
 _rk4_run_speed = _uncached(_rk4_run, _rk4_step=_uncached(_rk4_step, _acceleration=_acceleration_speed))
+# the adaptive loop's twins, the same way
+_dp45_run_uncached = _uncached(_dp45_run, _deriv=_uncached(_deriv, _acceleration=_uncached(_acceleration)))
+_dp45_run_speed = _uncached(_dp45_run, _deriv=_uncached(_deriv, _acceleration=_acceleration_speed))
 
 
 def _holds_functions(params) -> bool:
@@ -400,10 +585,179 @@ def _speed_kernel(model: ForceModel, speed: SpeedSchedule | None):
                      "(fluidfilm.core.SpeedScalableModel)")
 
 
-def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *,
+@dataclass(frozen=True)
+class StepLimit:
+    """The largest RK4 step that resolves a run at one state (``rk4_step_limit``).
+
+    Parameters
+    ----------
+    dt_max : float
+        Largest safe step [s] (``inf`` where nothing limits it).
+    rule : str
+        The rule that sets it, in words (with the time scale it resolves).
+    eigenvalues : ndarray, shape (4,)
+        Eigenvalues [1/s] of the linearised film-rotor system at the state.
+    substeps : int
+        The substeps ``simulate`` splits a step into at this eccentricity (``eps_substep``).
+    """
+
+    dt_max: float
+    rule: str
+    eigenvalues: np.ndarray
+    substeps: int
+
+
+def film_eigenvalues(force, x, v, inv_mass: float, clearance: float, omega: float) -> np.ndarray:
+    """Eigenvalues [1/s] of the film-rotor system linearised at the state (x, v).
+
+    K = -dF/dX and C = -dF/dV by central differences of ``force(x1, x2, v1, v2) -> (F1, F2)`` (8 force
+    evaluations, steps 1e-4 c and 1e-4 c max(omega, 1/s)); the system d(X, V)/dt = (V, -(K X + C V)/m).
+
+    Parameters
+    ----------
+    force : callable
+        ``force(x1, x2, v1, v2) -> (F1, F2)`` [N] (a model's compiled kernel with its parameters bound).
+    x, v : array_like, shape (2,)
+        Position [m] and velocity [m/s].
+    inv_mass : float
+        1 / rotor mass [1/kg].
+    clearance : float
+        Radial clearance [m].
+    omega : float
+        Shaft angular speed [rad/s] (scales the velocity step).
+
+    Returns
+    -------
+    ndarray, shape (4,), complex
+    """
+    hx = 1e-4 * clearance
+    hv = hx * max(omega, 1.0)
+    x1, x2 = float(x[0]), float(x[1])
+    v1, v2 = float(v[0]), float(v[1])
+    jac = np.zeros((4, 4))
+    jac[0, 2] = jac[1, 3] = 1.0
+    for j, (dx1, dx2, dv1, dv2, h) in enumerate(((hx, 0.0, 0.0, 0.0, hx), (0.0, hx, 0.0, 0.0, hx),
+                                                  (0.0, 0.0, hv, 0.0, hv), (0.0, 0.0, 0.0, hv, hv))):
+        fp = force(x1 + dx1, x2 + dx2, v1 + dv1, v2 + dv2)
+        fm = force(x1 - dx1, x2 - dx2, v1 - dv1, v2 - dv2)
+        jac[2, j] = (fp[0] - fm[0]) / (2.0 * h) * inv_mass
+        jac[3, j] = (fp[1] - fm[1]) / (2.0 * h) * inv_mass
+    if not np.isfinite(jac).all():
+        return np.full(4, np.nan + 0j)
+    return np.linalg.eigvals(jac)
+
+
+def rk4_step_limit(force, x, v, inv_mass: float, clearance: float, omega_max: float, eps_substep: float = 0.8,
+                   max_substeps: int = 256) -> StepLimit:
+    """The largest RK4 step of ``simulate`` that resolves the run at the state (x, v).
+
+    Three rules, the smallest step wins: (1) RK4 stability with a safety factor of 2, |lambda| h <=
+    ``RK4_LAMBDA_DT`` = 1.4 for every eigenvalue of the linearised film-rotor system (``film_eigenvalues``)
+    with h = dt / k the substep at this eccentricity (``eps_substep``); (2) ``STEPS_PER_PERIOD`` = 20
+    substeps per period 2 pi / |Im lambda| of each oscillating mode; (3) 20 steps per shaft revolution
+    at the largest speed ``omega_max`` (the imbalance's period).
+
+    Parameters
+    ----------
+    force : callable
+        ``force(x1, x2, v1, v2) -> (F1, F2)`` [N].
+    x, v : array_like, shape (2,)
+        The state [m], [m/s].
+    inv_mass : float
+        1 / rotor mass [1/kg].
+    clearance : float
+        Radial clearance [m].
+    omega_max : float
+        Largest shaft angular speed of the run [rad/s] (0: a shaft at rest, no revolution rule).
+    eps_substep, max_substeps
+        As ``simulate``.
+
+    Returns
+    -------
+    StepLimit
+    """
+    lam = film_eigenvalues(force, x, v, inv_mass, clearance, omega_max)
+    e2 = (float(x[0]) ** 2 + float(x[1]) ** 2) / clearance**2
+    k = 1
+    if e2 > eps_substep**2:
+        k = min(int(math.ceil(((1.0 - eps_substep**2) / (1.0 - e2)) ** 1.5)), max_substeps)
+    limits = []
+    if np.isfinite(lam).all():
+        rate = float(np.abs(lam).max())
+        if rate > 0.0:
+            limits.append((k * RK4_LAMBDA_DT / rate, f"RK4 stability |lambda dt| <= {RK4_LAMBDA_DT} (2.8 with a "
+                           f"safety factor 2) for the film's fastest rate |lambda| = {rate:.4g} 1/s"
+                           + (f" in {k} substeps" if k > 1 else "")))
+        osc = float(np.abs(lam.imag).max())
+        if osc > 0.0:
+            limits.append((k * 2.0 * math.pi / (STEPS_PER_PERIOD * osc),
+                           f"{STEPS_PER_PERIOD} steps per period of the film-rotor oscillation at "
+                           f"{osc / (2 * math.pi):.4g} Hz"))
+    if omega_max > 0.0:
+        limits.append((2.0 * math.pi / (STEPS_PER_PERIOD * omega_max),
+                       f"{STEPS_PER_PERIOD} steps per shaft revolution at {omega_max / RPM:.6g} rpm"))
+    if not limits:
+        return StepLimit(math.inf, "nothing limits the step", lam, k)
+    dt_max, rule = min(limits, key=lambda r: r[0])
+    return StepLimit(dt_max, rule, lam, k)
+
+
+def _force_at(kernel, params, speed_kernel, consts_speed, omega_ref):
+    """``force(t) -> force(x1, x2, v1, v2)``: the model's compiled kernel at the speed of time t."""
+    if speed_kernel is None:
+        def at_constant(t):
+            return lambda x1, x2, v1, v2: kernel(params, x1, x2, v1, v2)
+        return at_constant
+    fn, sparams = speed_kernel
+    times, omegas, cum = consts_speed[-3:]
+
+    def at_speed(t):
+        w = schedule_at(times, omegas, cum, omega_ref, t)[0]
+        return lambda x1, x2, v1, v2: fn(sparams, w, x1, x2, v1, v2)
+    return at_speed
+
+
+def _counted(model, fn):
+    """Run ``fn()`` and return (its value, force evaluations it added to the model's domain counter): the
+    step checks' evaluations must not count as the trajectory's."""
+    before = int(model.n_outside_domain)
+    value = fn()
+    return value, int(model.n_outside_domain) - before
+
+
+def _progress_bar(progress, total: int, what: str):
+    """A tqdm bar on stderr, or None.  ``progress`` None: on where stderr is a terminal and ``CI`` is unset,
+    shown only once the run has taken 2 s (tqdm's ``delay``); True: always (still after 2 s); False: off."""
+    import os
+    import sys
+
+    if progress is None:
+        progress = sys.stderr is not None and sys.stderr.isatty() and not os.environ.get("CI")
+    elif not isinstance(progress, (bool, np.bool_)):
+        raise ValueError(f"progress must be True, False or None, got {progress!r}")
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=what, unit="step", delay=2.0, file=sys.stderr, leave=False)
+
+
+def _domain_note(model, n_outside: int, n_evals: int, e2max: float, c: float) -> str | None:
+    """The status note of evaluations outside the model's domain: the count (the words of item 8 in
+    docs/guarantees.md), the share of the run's evaluations and the largest eccentricity reached."""
+    if n_outside <= 0:
+        return model.domain_report()  # a model that reports without counting keeps its own note
+    share = 100.0 * n_outside / max(n_evals, 1)
+    return (f"outside the training domain in {n_outside} force evaluations ({share:.3g} % of {n_evals}), "
+            f"largest eccentricity {math.sqrt(e2max) / c:.4g} (domain eps <= {model.validity.eps_max:g})")
+
+
+def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float | None = 1e-5, x0=None, v0=None, *,
              eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
              max_substeps: int = 256, t0: float = 0.0, speed: SpeedSchedule | None = None,
-             precision: str = "float64", film_content=None) -> Trajectory:
+             precision: str = "float64", check_step: bool = True, rtol: float = 1e-6, atol: float | None = None,
+             record_dt: float | None = None, strict: bool = False, progress: bool | None = None,
+             film_content=None) -> Trajectory:
     """Integrate the rotor in ``model`` (a ``fluidfilm.core.force_model.ForceModel``: its compiled ``force_kernel``).
 
     Fixed-step RK4 of m dV/dt = F_film(X, V) + imbalance + m g (along +X2) + F_ext (module doc);
@@ -419,8 +773,10 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     t_end : float
         The END TIME [s] of the run (absolute, not a duration): the run goes from ``t0`` to
         ``t_end`` in round((t_end - t0) / dt) steps.
-    dt : float, default 1e-5
-        RK4 step [s], at most the run's length.
+    dt : float or None, default 1e-5
+        RK4 step [s], at most the run's length; it must resolve the run (``check_step``).  None: the
+        adaptive Dormand-Prince 5(4) integrator with error control (``rtol``, ``atol``) chooses its
+        steps, recording every ``record_dt``.
     x0, v0 : array_like, shape (2,), optional
         Initial position [m] (eccentricity below ``eps_stop``) and velocity [m/s].
     eps_stop : float, default 0.98
@@ -445,6 +801,27 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         gains stay float64), at constant speed only.  A model without float32 networks (a reference
         solver, an ensemble) computes in float64 either way; the trajectory's ``meta["precision"]`` says
         which ran.
+    check_step : bool, default True
+        Refuse a fixed ``dt`` that cannot resolve the run, with a ValueError naming ``dt`` and the largest
+        safe step (``rk4_step_limit``: RK4 stability for the fastest eigenvalue of the film-rotor system
+        linearised at the start state, 20 steps per period of its oscillations and per shaft revolution),
+        and re-check at the end of every chunk of steps along the run: where the step stops resolving the
+        film, the run ends with status "unresolved: ..." (``traj.ok`` False).  False (for experts, e.g. to
+        study the integrator itself): no check.
+    rtol, atol : float
+        The adaptive integrator's tolerances (``dt=None``): relative, and absolute in units of the
+        clearance c for positions and c omega for velocities (None: ``rtol``); positive and finite.
+    record_dt : float or None, default None
+        The adaptive integrator's output interval [s] (``dt=None``); None: (t_end - t0) / 1000.  The step
+        lands on every output time.
+    strict : bool, default False
+        Raise ``OutsideDomainError`` (naming the share of evaluations and the largest eccentricity) where
+        the run's forces left the model's validity domain, instead of the warning and the
+        "outside-domain: ..." status.
+    progress : bool or None, default None
+        A tqdm bar on stderr (shown once the run has taken 2 s); None: only where stderr is a terminal and
+        the environment variable ``CI`` is unset.  The run goes in chunks of steps either way, and the
+        trajectory does not depend on them to the bit.
     film_content : array_like or None, default None
         A film with memory only (``core.force_model.TransientFilmModel``, mass-conserving cavitation): the
         film content (n_theta, n_z) at t0, e.g. ``meta["film_content"]`` of a previous run to continue it;
@@ -454,8 +831,9 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     Returns
     -------
     Trajectory
-        The recorded states, ``status`` ("ok", "contact: ...", "diverged: ..."), force evaluations
-        and wall time.
+        The recorded states, ``status`` ("ok", "outside-domain: ...", "contact: ...", "diverged: ...",
+        "unresolved: ..."), force evaluations and wall time.  A run whose forces left the model's domain
+        is not ``ok`` (``completed`` is True) and warns once, naming the share and the largest eccentricity.
 
     Raises
     ------
@@ -465,7 +843,10 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
         of the wrong shape, non-finite, or not below ``eps_stop``; a ``speed`` schedule that is not a
         ``SpeedSchedule``, or that leaves the bearing's speed for a model without speed-scaled forces
         (naming the model and the speeds); a ``precision`` other than "float64"/"float32", or "float32"
-        networks with a speed schedule.
+        networks with a speed schedule; a ``dt`` that cannot resolve the run (naming it and the largest
+        safe step, with ``check_step``).
+    OutsideDomainError
+        With ``strict=True``, where force evaluations left the model's domain.
 
     Examples
     --------
@@ -502,7 +883,14 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     bearing = model.bearing
     # an active bearing reports the clearance of its current control setting
     c = float(model.clearance)
-    n_steps = check_run_args(t_end, dt, t0, eps_stop, eps_substep, record_every, max_substeps)
+    adaptive = dt is None
+    if adaptive:
+        record_dt = _check_adaptive_args(t_end, t0, rtol, atol, record_dt)
+        n_steps = check_run_args(t_end, record_dt, t0, eps_stop, eps_substep, record_every, max_substeps)
+    else:
+        n_steps = check_run_args(t_end, dt, t0, eps_stop, eps_substep, record_every, max_substeps)
+    if not isinstance(check_step, (bool, np.bool_)):
+        raise ValueError(f"check_step must be True or False, got {check_step!r}")
     for name, value in (("x0", x0), ("v0", v0)):
         if value is not None and np.shape(value) != (2,):
             raise ValueError(f"{name} must be a pair ({name[0].upper()}1, {name[0].upper()}2), got shape {np.shape(value)}")
@@ -513,10 +901,6 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
     if np.hypot(*x0) >= eps_stop * c:
         raise ValueError(f"initial eccentricity {np.hypot(*x0) / c:.4g} is not below eps_stop={eps_stop}")
     record_every = int(record_every)
-    n_out = n_steps // record_every + 2
-    out_t = np.empty(n_out)
-    out_x = np.empty((n_out, 2))
-    out_v = np.empty((n_out, 2))
     omega = bearing.omega
     u_final = rotor.imbalance if rotor.imbalance_final is None else rotor.imbalance_final
     consts = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega, float(rotor.imbalance_direction),
@@ -524,30 +908,170 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float = 1e-5, x0
               u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0)
     meta: dict = {"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every, "precision": precision}
     speed_kernel = _speed_kernel(model, speed)
-    model.reset_domain_counter()
-    t_start = time.perf_counter()
-    args = (x0, v0, float(t0), float(dt), n_steps, record_every, float(eps_stop), float(eps_substep),
-            int(max_substeps), out_t, out_x, out_v)
-    if speed_kernel is None:
-        n_rec, status, t_stop, n_evals = run_loop(_rk4_run, _rk4_run_uncached, kernel, params, consts, *args)
-    else:
+    run_consts: tuple = consts
+    if speed_kernel is not None:
         assert speed is not None
-        consts_speed = consts + _schedule_arrays(speed, omega)
-        n_rec, status, t_stop, n_evals = _rk4_run_speed(*speed_kernel, consts_speed, *args)
+        run_consts = consts + _schedule_arrays(speed, omega)
         meta["speed"] = {"times": speed.times.tolist(), "omega": speed.omega.tolist()}
-    wall = time.perf_counter() - t_start
+    force_at = _force_at(kernel, params, speed_kernel, run_consts, omega)
+    omega_max = float(omega) if speed is None else float(np.abs(speed.omega).max())
+
+    def limit_at(x, v, t) -> StepLimit:
+        return rk4_step_limit(force_at(t), x, v, consts[0], c, omega_max, eps_substep, max_substeps)
+
+    start_limit = None
+    if check_step or adaptive:
+        start_limit = limit_at(x0, v0, float(t0))
+        if check_step and dt is not None and dt > start_limit.dt_max * (1.0 + 1e-9):
+            raise ValueError(
+                f"dt={dt!r} s cannot resolve this run: the largest safe step is {start_limit.dt_max:.3g} s at the "
+                f"start state (eccentricity {np.hypot(*x0) / c:.3g}; rule: {start_limit.rule}). Use dt <= "
+                f"{start_limit.dt_max:.3g}, dt=None for the adaptive integrator, or check_step=False (experts)")
+    model.reset_domain_counter()
+    if adaptive:
+        assert record_dt is not None and start_limit is not None
+        run = _run_adaptive(model, kernel, params, speed_kernel, run_consts, x0, v0, float(t0), float(t_end),
+                            float(record_dt), float(rtol), float(rtol if atol is None else atol), c,
+                            max(omega_max, 1.0), float(eps_stop), start_limit, progress)
+        meta.update({"method": "dormand-prince-5(4)", "rtol": rtol, "atol": rtol if atol is None else atol,
+                     "record_dt": record_dt, "n_accepted": run["n_acc"], "n_rejected": run["n_rej"]})
+    else:
+        assert dt is not None
+        run = _run_fixed(model, kernel, params, speed_kernel, run_consts, x0, v0, float(t0), float(dt), n_steps,
+                         record_every, float(eps_stop), float(eps_substep), int(max_substeps),
+                         limit_at if check_step else None, progress)
+        meta["method"] = "rk4"
+    status, t_stop, n_evals = run["status"], run["t_stop"], run["n_evals"]
     if status == OK:
         text, t_stop = "ok", None
     elif status in (CONTACT, CONTACT_STAGE):
         text = f"contact: eccentricity reached eps_stop={eps_stop} at t={t_stop:.6g} s"
+    elif status == UNRESOLVED:
+        lim = run["limit"]
+        text = (f"unresolved: at t={t_stop:.6g} s (eccentricity {np.hypot(*run['x_stop']) / c:.3g}) dt={dt!r} s is "
+                f"longer than the largest safe step {lim.dt_max:.3g} s ({lim.rule}); rerun with a shorter dt or "
+                "dt=None (adaptive)")
     else:
         text = f"diverged: non-finite state after t={t_stop:.6g} s"
-    note = model.domain_report()
-    n_outside = int(model.n_outside_domain)
+    n_outside = max(int(model.n_outside_domain) - run["check_outside"], 0)
+    e2max = max(run["e2max"], float(x0 @ x0))
+    if hasattr(model, "check_grid"):  # a reference solver warns once where its grid is too coarse for the run
+        model.check_grid(math.sqrt(e2max) / c)
+    note = _domain_note(model, n_outside, n_evals, e2max, c)
     if note:
-        text = f"{text}; {note}"
-        warnings.warn(f"{model.name}: {note} during the simulation",
-                      RuntimeWarning, stacklevel=2)
+        if strict:
+            raise OutsideDomainError(f"{model.name}: {note} during the simulation (strict=True)")
+        text = f"{OUTSIDE_DOMAIN}: reached the end time; {note}" if text == "ok" and n_outside > 0 else \
+            f"{text}; {note}"
+        warnings.warn(f"{model.name}: {note} during the simulation", RuntimeWarning, stacklevel=2)
+    n_rec = run["n_rec"]
+    out_t, out_x, out_v = run["out"]
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
-                      t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=wall,
+                      t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=run["wall"],
                       meta=meta, n_outside_domain=n_outside)
+
+
+def _check_adaptive_args(t_end, t0, rtol, atol, record_dt) -> float:
+    """The adaptive integrator's own arguments, by name; returns the output interval."""
+    for name, value in (("rtol", rtol), ("atol", atol)):
+        if value is None and name == "atol":
+            continue
+        if not (_is_real(value) and math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{name} must be a positive finite tolerance, got {value!r}")
+    if record_dt is None:
+        if not (_is_real(t_end) and _is_real(t0) and math.isfinite(t_end) and math.isfinite(t0) and t_end > t0):
+            return 1.0  # check_run_args names the bad time
+        return (float(t_end) - float(t0)) / 1000.0
+    if not (_is_real(record_dt) and math.isfinite(record_dt) and record_dt > 0.0):
+        raise ValueError(f"record_dt must be a positive finite time in s, got {record_dt!r}")
+    return float(record_dt)
+
+
+def _run_fixed(model, kernel, params, speed_kernel, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
+               eps_substep, max_substeps, limit_at, progress) -> dict:
+    """The fixed-step RK4 loop in chunks of steps (bit for bit one call): a progress bar between chunks and,
+    with ``limit_at``, the step check at each chunk's end state."""
+    n_out = n_steps // record_every + 2
+    out_t = np.empty(n_out)
+    out_x = np.empty((n_out, 2))
+    out_v = np.empty((n_out, 2))
+    n_rec = _record(out_t, out_x, out_v, 0, t0, x0[0], x0[1], v0[0], v0[1])
+    chunk = max(CHUNK_MIN_STEPS, -(-n_steps // MAX_CHUNKS))
+    bar = _progress_bar(progress, n_steps, "simulate")
+    x, v = x0.copy(), v0.copy()
+    status, t, n_evals, e2max, check_outside, limit = OK, t0, 0, 0.0, 0, None
+    t_start = time.perf_counter()
+    try:
+        for s0 in range(0, n_steps, chunk):
+            s1 = min(s0 + chunk, n_steps)
+            args = (x, v, t0, dt, s0, s1, record_every, eps_stop, eps_substep, max_substeps, out_t, out_x, out_v,
+                    n_rec)
+            if speed_kernel is None:
+                res = run_loop(_rk4_run, _rk4_run_uncached, kernel, params, consts, *args)
+            else:
+                res = _rk4_run_speed(speed_kernel[0], speed_kernel[1], consts, *args)
+            n_rec, status, t, n, x1, x2, v1, v2, e2 = res
+            n_evals += n
+            e2max = max(e2max, e2)
+            x, v = np.array([x1, x2]), np.array([v1, v2])
+            if bar is not None:
+                bar.update(s1 - s0)
+            if status != OK:
+                break
+            if limit_at is not None:
+                limit, extra = _counted(model, lambda: limit_at(x, v, t))
+                check_outside += extra
+                if dt > limit.dt_max * (1.0 + 1e-9):
+                    status = UNRESOLVED
+                    if out_t[n_rec - 1] != t:
+                        n_rec = _record(out_t, out_x, out_v, n_rec, t, x1, x2, v1, v2)
+                    break
+    finally:
+        if bar is not None:
+            bar.close()
+    return {"status": status, "t_stop": t, "n_evals": n_evals, "e2max": e2max, "check_outside": check_outside,
+            "limit": limit, "x_stop": x, "n_rec": n_rec, "out": (out_t, out_x, out_v),
+            "wall": time.perf_counter() - t_start}
+
+
+def _run_adaptive(model, kernel, params, speed_kernel, consts, x0, v0, t0, t_end, record_dt, rtol, atol, c, omega,
+                  eps_stop, start_limit, progress) -> dict:
+    """The adaptive Dormand-Prince loop, in chunks of output times; the first step is the start's safe RK4
+    step (at most one output interval), error control takes over from there."""
+    n_times = max(int(round((t_end - t0) / record_dt)), 1)
+    out_times = t0 + np.arange(1, n_times + 1) * record_dt
+    out_times[-1] = t_end
+    n_out = n_times + 2
+    out_t = np.empty(n_out)
+    out_x = np.empty((n_out, 2))
+    out_v = np.empty((n_out, 2))
+    n_rec = _record(out_t, out_x, out_v, 0, t0, x0[0], x0[1], v0[0], v0[1])
+    h = min(start_limit.dt_max, record_dt)
+    h_min = 1e-12 * (t_end - t0)
+    chunk = max(1, -(-n_times // MAX_CHUNKS))
+    bar = _progress_bar(progress, n_times, "simulate (adaptive)")
+    x, v, t = x0.copy(), v0.copy(), t0
+    status, n_evals, e2max, n_acc, n_rej = OK, 0, 0.0, 0, 0
+    t_start = time.perf_counter()
+    try:
+        for j0 in range(0, n_times, chunk):
+            j1 = min(j0 + chunk, n_times)
+            args = (x, v, t, h, j0, j1, out_times, rtol, atol * c, atol * c * omega, eps_stop, h_min, out_t, out_x,
+                    out_v, n_rec)
+            if speed_kernel is None:
+                res = run_loop(_dp45_run, _dp45_run_uncached, kernel, params, consts, *args)
+            else:
+                res = _dp45_run_speed(speed_kernel[0], speed_kernel[1], consts, *args)
+            n_rec, status, t, n, x1, x2, v1, v2, h, e2, a, r = res
+            n_evals, e2max, n_acc, n_rej = n_evals + n, max(e2max, e2), n_acc + a, n_rej + r
+            x, v = np.array([x1, x2]), np.array([v1, v2])
+            if bar is not None:
+                bar.update(j1 - j0)
+            if status != OK:
+                break
+    finally:
+        if bar is not None:
+            bar.close()
+    return {"status": status, "t_stop": t, "n_evals": n_evals, "e2max": e2max, "check_outside": 0, "limit": None,
+            "x_stop": x, "n_rec": n_rec, "out": (out_t, out_x, out_v), "wall": time.perf_counter() - t_start,
+            "n_acc": n_acc, "n_rej": n_rej}

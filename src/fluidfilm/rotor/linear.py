@@ -73,6 +73,23 @@ class LinearBearing(ReferenceModel):
     def __repr__(self) -> str:
         return f"LinearBearing(bearing={self._bearing!r}, stiffness={self.stiffness!r}, damping={self.damping!r})"
 
+    def with_speed(self, speed_rpm: float) -> "LinearBearing":
+        """The same K and C on the bearing at another shaft speed [rpm] (the spring-damper does not depend on
+        it; the speed sets the imbalance's frequency and the step check's shaft period).
+
+        Parameters
+        ----------
+        speed_rpm : float
+            Shaft speed [rpm], finite and >= 0.
+
+        Returns
+        -------
+        LinearBearing
+        """
+        import dataclasses
+
+        return LinearBearing(dataclasses.replace(self._bearing, speed_rpm=speed_rpm), self.stiffness, self.damping)
+
     @property
     def force_kernel(self):
         return linear_force, LinearParams(float(self.stiffness), float(self.damping))

@@ -47,7 +47,7 @@ def orbit_stats(traj, clearance: float, t_settle: float) -> dict:
     (0.4, 0.4, 0.3, 0.5)
     """
     mask = settled(traj, t_settle)
-    if not traj.ok or mask.sum() < 2:
+    if not traj.completed or mask.sum() < 2:
         return {"span1": math.nan, "span2": math.nan, "span": math.nan, "mean1": math.nan, "mean2": math.nan,
                 "eps_max": float(np.max(traj.eccentricity(clearance))), "settled": False}
     x = traj.x[mask] / clearance
@@ -107,7 +107,7 @@ def compare_orbits(model_traj, ref_traj, clearance: float, t_settle: float) -> d
     if not ref_traj.ok:
         raise ValueError(f"reference trajectory did not finish: {ref_traj.status}")
     mask = settled(ref_traj, t_settle)
-    if not model_traj.ok or model_traj.t[-1] < ref_traj.t[mask][-1] - 1e-12:
+    if not model_traj.completed or model_traj.t[-1] < ref_traj.t[mask][-1] - 1e-12:
         inf = math.inf
         return {"rms_pct": inf, "span_err_pct": inf, "hausdorff_pct": inf, "mean_offset_pct": inf, "shape_pct": inf}
     t = ref_traj.t[mask]

@@ -188,7 +188,7 @@ class OrbitBenchmark:
         for name, case in cases.items():
             ref = self.trajectories[name]
             traj = run_case(model, rotor_cfg, case, integrator_cfg)
-            if traj.ok and (len(traj.t) != len(ref.t) or not np.allclose(traj.t, ref.t)):
+            if traj.completed and (len(traj.t) != len(ref.t) or not np.allclose(traj.t, ref.t)):
                 raise ValueError(f"case {name}: the reference trajectory was recorded with other integrator settings "
                                  f"({len(ref.t)} samples to t = {ref.t[-1]:g} s, this run {len(traj.t)} to "
                                  f"{traj.t[-1]:g} s); use the integrator settings of the reference run")
