@@ -81,6 +81,7 @@ bench: setup
 	$(PY) benchmarks/probe_thread_spread.py
 	$(PY) benchmarks/bench_universal_cost.py
 	$(PY) benchmarks/bench_tanh64.py
+	$(PY) benchmarks/bench_kernel_cache.py
 
 .PHONY: time-tests
 time-tests: setup
