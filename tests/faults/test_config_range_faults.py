@@ -113,3 +113,15 @@ def test_a_multirun_says_where_its_jobs_wrote_and_writes_one_summary_row_per_job
     for row, name in zip(rows, ("grid_20x9", "grid_24x9")):
         assert float(row["force_error_pct_eps_0.5"]) == logged[name]["force_error_pct_eps_0.5"]
         assert float(row["time_per_eval_us"]) > 0
+
+
+def test_a_sweep_with_one_bad_job_is_refused_before_its_parent_run(tmp_path):
+    """Every job of a multirun is checked before the sweep's MLflow parent run is created or any job starts."""
+    db, sweep = tmp_path / "mlflow.db", tmp_path / "sweep"
+    proc = run_entry("grid_sweep", "-m", "solver.n_theta=30,2", *CHEAP_GRID, f"tracking.uri=sqlite:///{db}",
+                     f"hydra.sweep.dir={sweep}")
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "'solver.n_theta=2': must be >= 8" in lines[0], proc.stderr
+    assert "sweep job: solver.n_theta=2" in lines[0]
+    assert not db.exists() and "Launching" not in proc.stdout  # no parent run, no job started

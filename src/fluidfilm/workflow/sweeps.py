@@ -221,6 +221,9 @@ class SweepSummaryCallback:
         import os
         import uuid
 
+        from fluidfilm.workflow.config_check import check_sweep
+
+        check_sweep(config)  # every job's values, before any job starts
         os.environ[SWEEP_ID_ENV] = uuid.uuid4().hex
         sweep = self._sweep_dir(config)
         print(f"multirun: each job writes under {sweep}/<job number>/; the table of all jobs will be "
