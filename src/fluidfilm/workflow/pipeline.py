@@ -308,7 +308,9 @@ def cmd_serve(args: argparse.Namespace) -> int:
         print(f"re-pointed {moved} artifact locations to {Path.cwd()}", flush=True)
     cmd = [str(venv_bin() / "mlflow"), "server", "--backend-store-uri", args.store, "--artifacts-destination",
            args.artifacts, "--host", args.host, "--port", str(args.port), "--workers", "1"]
-    previous = {sig: signal.signal(sig, _raise_stop) for sig in (signal.SIGTERM, signal.SIGHUP)}
+    # a signal this process was started ignoring stays ignored (``nohup make mlflow`` survives the hangup)
+    previous = {sig: signal.signal(sig, _raise_stop) for sig in (signal.SIGTERM, signal.SIGHUP)
+                if signal.getsignal(sig) != signal.SIG_IGN}
     proc = None
     try:
         proc = subprocess.Popen(cmd, start_new_session=True)  # its own group: signals are forwarded, below
