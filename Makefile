@@ -82,6 +82,7 @@ bench: setup
 	$(PY) benchmarks/bench_universal_cost.py
 	$(PY) benchmarks/bench_tanh64.py
 	$(PY) benchmarks/bench_jfo.py
+	$(PY) benchmarks/bench_kernel_cache.py
 
 .PHONY: time-tests
 time-tests: setup

@@ -78,6 +78,50 @@ def write_json(path, obj) -> None:
     write_text(path, json.dumps(obj, indent=2, sort_keys=True) + "\n")
 
 
+#: significant digits (of each column's largest magnitude) that the figure tables keep: the reference solver's
+#: spread across machines (its fastmath kernels compiled for another CPU) is below 1e-14 of a force column's
+#: largest value and 1e-11 of an error column's (docs/workflow.md, "Stage outputs across machines")
+TABLE_DIGITS = 6
+
+
+def round_to_scale(frame, columns, digits: int = TABLE_DIGITS):
+    """A copy of ``frame`` with each of ``columns`` rounded to ``digits`` significant digits of the column's
+    largest finite magnitude (an absolute step per column, so near-zero values that are round-off noise
+    become 0 instead of keeping noisy digits).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table.
+    columns : iterable of str
+        Float columns to round (a column of zeros or non-finite values only is left as it is).
+    digits : int
+        Significant digits kept, relative to the column's largest magnitude.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rounded copy; ``frame`` is not changed.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> round_to_scale(pd.DataFrame({"F": [123.456789, 1.2e-13]}), ["F"], 4)["F"].tolist()
+    [123.5, 0.0]
+    """
+    import numpy as np
+
+    out = frame.copy()
+    for col in columns:
+        values = out[col].to_numpy(dtype=float)
+        finite = np.abs(values[np.isfinite(values)])
+        if finite.size == 0 or finite.max() == 0:
+            continue
+        decimals = digits - 1 - int(np.floor(np.log10(finite.max())))
+        out[col] = np.round(values, decimals) + 0.0  # + 0.0: no negative zero in the table
+    return out
+
+
 def write_csv(path, frame) -> None:
     """Write a pandas DataFrame as CSV atomically."""
     with atomic_path(path) as tmp:

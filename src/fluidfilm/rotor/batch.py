@@ -45,6 +45,7 @@ its parameters when the sleeve moves, so it takes one setting per batch.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import time
@@ -462,6 +463,21 @@ def _first_class_kernel(fn, bp) -> bool:
         type(bp).__module__.split(".")[0] in ("fluidfilm", "builtins") and not _holds_functions(bp)
 
 
+@contextlib.contextmanager
+def _first_class_compile():
+    """Silence exactly numba's "First-class function type feature is experimental" warning while the
+    stage-batched loop compiles: the loop takes the force kernel as a first-class function by design (see
+    ``_stages_loop``), numba prints that warning at every such compilation, and it would land in a user's
+    run as noise about our code, not theirs (``tests/test_batch.py`` holds the loop's trajectories equal to
+    ``simulate``'s).  Any other warning still shows."""
+    from numba.core.errors import NumbaExperimentalFeatureWarning
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*First-class function type feature is experimental",
+                                category=NumbaExperimentalFeatureWarning)
+        yield
+
+
 def _stages_loop(fn, bp, loop_args):
     """``_rk4_stages`` compiled for this kernel, as a callable ``loop(fn, bp, *loop_args)``.
 
@@ -478,7 +494,8 @@ def _stages_loop(fn, bp, loop_args):
     library's types without compiled functions inside (``integrate._holds_functions``: an ensemble's), else
     the uncached twin runs, as it does for kernels from outside the library."""
     def dispatcher_typed(kernel, params, *rest):  # the loop as ``run_loop`` runs it (cached or uncached twin)
-        return run_loop(_rk4_stages, _rk4_stages_uncached, kernel, params, *rest)
+        with _first_class_compile():
+            return run_loop(_rk4_stages, _rk4_stages_uncached, kernel, params, *rest)
 
     if not _first_class_kernel(fn, bp):
         return dispatcher_typed
@@ -488,7 +505,8 @@ def _stages_loop(fn, bp, loop_args):
     loop_types = (nb_types.FunctionType(signature.return_type(*kernel_args)), kernel_args[0]) + \
         tuple(typeof(a) for a in loop_args)
     try:
-        _rk4_stages.compile(loop_types)
+        with _first_class_compile():
+            _rk4_stages.compile(loop_types)
     except ReferenceError as err:  # the cache index held a key it cannot rebuild (``run_loop``)
         if loop_types not in _rk4_stages.overloads:
             warnings.warn(f"numba could not use its on-disk cache of the stage-batched loop ({err}); this process "

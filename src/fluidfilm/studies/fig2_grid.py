@@ -22,13 +22,16 @@ def run(cfg):  # unannotated: models built from a config are typed as unions; th
     solvers = {name: solver_from_cfg(bearing, cfg[name]) for name in ("coarse", "dense", "converged")}
     eps = np.linspace(cfg.eps_min, cfg.eps_max, cfg.n_eps)
     frame = grid_comparison(solvers, eps, cfg.angle_deg, reference="converged")
+    # the table and the figure from values rounded below the solver's spread across machines: the same bytes
+    # from any machine (docs/workflow.md, "Stage outputs across machines"); the logged summary is unrounded
+    table = io.round_to_scale(frame, [c for c in frame.columns if c != "eps"])
     labels = {k: f"{s.n_theta}x{s.n_z}" for k, s in solvers.items()}
     out = Path(cfg.out_dir)
     with io.output_set() as outputs:
-        outputs.write_csv(out / "fig2_grid.csv", frame)
-        outputs.save_figure(plot_grid_comparison(frame, ["coarse", "dense"], labels, "converged"),
+        outputs.write_csv(out / "fig2_grid.csv", table)
+        outputs.save_figure(plot_grid_comparison(table, ["coarse", "dense"], labels, "converged"),
                             out / "fig2_grid.png", dpi=130)
     summary = {f"err_{k}_pct_eps_{e:g}": float(np.interp(e, frame["eps"], frame[f"err_{k}_pct"]))
                for k in ("coarse", "dense") for e in (0.5, 0.9, 0.95, 0.98)}
-    print(frame.iloc[:: max(1, len(frame) // 10)].to_string(index=False))
+    print(table.iloc[:: max(1, len(table) // 10)].to_string(index=False))
     return Logged(summary, [out / "fig2_grid.png"])

@@ -31,6 +31,9 @@ def run(cfg) -> None:
     check(cfg)
     model = reference_from_cfg(bearing_from_cfg(cfg.bearing), cfg.reference)
     frame = velocity_response(model, list(cfg.eccentricities), cfg.v_max, cfg.n_v, cfg.angle_deg)
+    # forces rounded below the solver's spread across machines: the same bytes from any machine
+    # (docs/workflow.md, "Stage outputs across machines")
+    frame = io.round_to_scale(frame, ["F1", "F2"])
     out = Path(cfg.out_dir)
     with io.output_set() as outputs:  # the four files as one set: an interrupted run leaves the old set
         outputs.write_csv(out / "fig3_velocity.csv", frame)

@@ -54,17 +54,21 @@ early exits; the per-unit loops that vectorise are not touched by it).  It
 stays inside the kernel because every caller (``simulate``,
 ``simulate_batch``, the ensemble's members) reports that count.
 
-The generated functions live in no importable module, so numba cannot
+The generated one-state functions live in no importable module, so numba cannot
 cache them on disk: the integrator runs them through its uncached loops
 (``rotor.integrate._library_types`` is False for them).  Compiling the best
 model's shape (five regions, 3-64-2) took 1.5-1.9 s on the 2-core project
 machine under load (``compile_seconds`` records each one-state kernel's), and the
 integrator's uncached loop about 1 s more on the first ``simulate`` of a
 process; a model of a shape already compiled in the process costs neither.
+The batched kernels (``batch_kernel``) are written as modules into a cache folder
+(``kernel_cache_dir``: ``~/.cache/fluidfilm/kernels`` by default) and imported with
+``cache=True``, so a later process loads them instead of compiling them.
 """
 from __future__ import annotations
 
 import math
+import re
 import time
 from typing import Any, NamedTuple
 
@@ -629,16 +633,25 @@ def one_state_function(source: str, label: str, units: dict[str, Any] | None = N
 
 def compiled_kernel(key, precision: str = "float64"):
     """The one-state kernel of a model shape in ``precision``, compiled once per process (``kernel_source``);
-    ``compile_seconds`` records the time under ``key`` (float64) or ``(key, "one-state float32")``."""
+    ``compile_seconds`` records the time under ``key`` (float64) or ``(key, "one-state float32")``.
+
+    As ``batch_kernel``'s, the source is imported from a module in ``kernel_cache_dir()`` with numba's
+    ``cache=True`` (same flags, same bits): a later process loads the compiled code instead of compiling it."""
     check_precision(precision)
     name = key if precision == "float64" else (key, f"one-state {precision}")
     fn = _COMPILED.get(name)
     if fn is None:
-        fn = one_state_function(kernel_source(key, precision), f"<surrogate kernel {len(_COMPILED)}>")
+        source = kernel_source(key, precision)
+        fn = _cached_module_function(source, "state", ["surrogate_kernel"], _ONE_STATE_HEADER,
+                                     'njit(error_model="numpy", fastmath={"contract", "reassoc"}, cache=True)')
+        path = getattr(fn, "__fluidfilm_file__", None)
+        if fn is None or path is None:
+            fn = one_state_function(source, f"<surrogate kernel {len(_COMPILED)}>")
         t0 = time.perf_counter()
         fn.compile((types.float64[::1], types.float64, types.float64, types.float64, types.float64))
         compile_seconds[name] = time.perf_counter() - t0
         _COMPILED[name] = fn
+        kernel_files[name] = path
     return fn
 
 
@@ -1426,11 +1439,147 @@ def _relu(x):
 
 
 _COMPILED_BATCH: dict[tuple, Any] = {}
+#: kernel name (``compiled_kernel``'s, or (shape key, dtype) of a batched one) -> the module file it was
+#: imported from in this process (None: compiled from its source in this process, no on-disk cache:
+#: ``FLUIDFILM_KERNEL_CACHE=off`` or a folder that cannot be written)
+kernel_files: dict[Any, Any] = {}
+batch_kernel_files = kernel_files
+
+#: where the generated kernels are written as modules, numba's cache of each beside it (``kernel_cache_dir``);
+#: "off" (or empty) compiles them in every process, as before the cache existed
+KERNEL_CACHE_ENV = "FLUIDFILM_KERNEL_CACHE"
+_ONE_STATE_HEADER = ["import math", "", "import numpy as np", "from numba import njit", "",
+                     "from fluidfilm.surrogate.kernels import (float32_tail, pade_tanh32, pade_tanh64, sigmoid32, "
+                     "sigmoid64, silu32, silu64,", "                                        tanh32, tanh64)"]
+_UNITS = {"float64": ("tanh64", "silu64", "sigmoid64", "pade_tanh64"),
+          "float32": ("tanh32", "silu32", "sigmoid32", "pade_tanh32")}
+
+
+def kernel_cache_dir():
+    """The folder of the generated kernels' modules: ``$FLUIDFILM_KERNEL_CACHE``, else the user's cache
+    folder (``platformdirs.user_cache_dir("fluidfilm")/kernels``, e.g. ``~/.cache/fluidfilm/kernels``);
+    ``None`` when the variable is ``off`` or empty."""
+    import os
+    from pathlib import Path
+
+    value = os.environ.get(KERNEL_CACHE_ENV)
+    if value is not None:
+        return None if value.strip().lower() in ("", "off", "0", "false", "no") else Path(value)
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("fluidfilm")) / "kernels"
+
+
+def kernel_module_source(source: str, header: list[str], jit_lines: list[str]) -> str:
+    """A generated kernel as the text of an importable module: ``header`` (imports of what ``source`` calls),
+    ``source``, then ``jit_lines`` (the compilation, with the in-process flags plus ``cache=True``).  Its first
+    lines name what the compiled code depends on besides the text (this file's bytes, through the unit
+    functions it inlines, and numba's version), so that the file's name, the hash of the text, changes with
+    them."""
+    import hashlib
+    from pathlib import Path
+
+    import numba
+
+    here = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
+    head = ["# Generated by fluidfilm.surrogate.kernels: the kernel of one surrogate shape. numba caches its",
+            "# compiled code beside this file (cache=True). Do not edit: the name is the hash of this text.",
+            f"# Built against fluidfilm/surrogate/kernels.py sha256 {here}, numba {numba.__version__}."]
+    return "\n".join(head + header + ["", ""]) + source.rstrip("\n") + "\n\n\n" + "\n".join(jit_lines) + "\n"
+
+
+def _import_kernel_module(text: str, folder, prefix: str):
+    """Write ``text`` to ``folder/<prefix>_<hash>.py`` unless a file of that text is there (created atomically:
+    a temporary file hard-linked to the name, so a file once there is never replaced and numba's cache of it
+    stays valid), import it as ``fluidfilm_generated.<prefix>_<hash>`` and return the module and its path."""
+    import contextlib
+    import hashlib
+    import importlib.util
+    import os
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    digest = hashlib.sha256(text.encode()).hexdigest()[:32]
+    folder = Path(folder)
+    path = folder / f"{prefix}_{digest}.py"
+    if not (path.exists() and path.read_text() == text):
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".tmp", dir=folder)
+        try:
+            with os.fdopen(fd, "w") as f:
+                f.write(text)
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; the cache is an ordinary file
+            try:
+                os.link(tmp, path)           # atomic, and never over a file another process made
+            except FileExistsError:
+                if path.read_text() != text:  # damaged: replaced whole (its numba cache is then rebuilt)
+                    os.replace(tmp, path)
+                    tmp = None
+        finally:
+            if tmp is not None:
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(tmp)
+    name = f"fluidfilm_generated.{prefix}_{digest}"
+    module = sys.modules.get(name)
+    if module is None:
+        spec = importlib.util.spec_from_file_location(name, path)
+        assert spec is not None and spec.loader is not None
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[name]
+            raise
+    return module, path
+
+
+def _cached_module_function(source: str, prefix: str, helpers: list[str], header: list[str], jit: str):
+    """The function ``helpers[-1]`` of ``source`` compiled from a module in ``kernel_cache_dir()`` (``helpers``:
+    the source's functions to compile, each on its own, the last one returned; ``jit``: the decorator
+    expression), with its file in ``__fluidfilm_file__``; ``None`` without a usable cache folder."""
+    folder = kernel_cache_dir()
+    if folder is None:
+        return None
+    jit_lines = [f"_jit = {jit}"] + [f"{name} = _jit({name})" for name in helpers]
+    try:
+        module, path = _import_kernel_module(kernel_module_source(source, header, jit_lines), folder, prefix)
+    except OSError:  # a read-only or full disk: the caller compiles in this process instead
+        return None
+    fn = getattr(module, helpers[-1])
+    fn.__fluidfilm_file__ = path
+    return fn
+
+
+def _exec_batch_kernel(key, dtype: str):
+    """The batched kernel compiled from its source in this process only (no on-disk cache)."""
+    source = batch_kernel_source(key, dtype)
+    f32 = dtype == "float32"
+    namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np,
+                                 "tanh_n": tanh32 if f32 else tanh64, "relu_n": _relu,
+                                 "silu_n": silu32 if f32 else silu64,
+                                 "sigmoid_n": sigmoid32 if f32 else sigmoid64,
+                                 "pade_tanh_n": pade_tanh32 if f32 else pade_tanh64}
+    exec(compile(source, f"<surrogate batch kernel {len(_COMPILED_BATCH)}>", "exec"), namespace)
+    jit = njit(error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)
+    # the passes, each compiled on its own, and the block that calls them
+    for name in [k for k in namespace if k.startswith(("_pass", "_states_block"))]:
+        namespace[name] = jit(namespace[name])
+    return jit(namespace["batch_kernel"])
 
 
 def batch_kernel(key, dtype: str = "float64"):
     """The batched kernel of a model shape (``batch_shape_key``) with its networks in ``dtype``, compiled
     once per process (``batch_kernel_source``); numba compiles it on its first call.
+
+    The source is written as a module into ``kernel_cache_dir()`` (named by the hash of its text, written
+    atomically) and imported from there with numba's ``cache=True``: the first call in a later process loads
+    the compiled code instead of compiling it (seconds), with the same flags and so the same bits.  Where
+    the folder cannot be written (or ``FLUIDFILM_KERNEL_CACHE=off``) the source is compiled in the process,
+    as before the cache existed.
 
     Parameters
     ----------
@@ -1447,17 +1596,19 @@ def batch_kernel(key, dtype: str = "float64"):
     fn = _COMPILED_BATCH.get((key, dtype))
     if fn is None:
         source = batch_kernel_source(key, dtype)
-        f32 = dtype == "float32"
-        namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np,
-                                     "tanh_n": tanh32 if f32 else tanh64, "relu_n": _relu,
-                                     "silu_n": silu32 if f32 else silu64,
-                                     "sigmoid_n": sigmoid32 if f32 else sigmoid64,
-                                     "pade_tanh_n": pade_tanh32 if f32 else pade_tanh64}
-        exec(compile(source, f"<surrogate batch kernel {len(_COMPILED_BATCH)}>", "exec"), namespace)
-        jit = njit(error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)
-        # the passes, each compiled on its own, and the block that calls them
-        for name in [k for k in namespace if k.startswith(("_pass", "_states_block"))]:
-            namespace[name] = jit(namespace[name])
-        fn = jit(namespace["batch_kernel"])
+        units = _UNITS[dtype]
+        header = ["import math", "", "import numpy as np", "from numba import njit", "",
+                  "from fluidfilm.surrogate.kernels import _relu as relu_n",
+                  f"from fluidfilm.surrogate.kernels import {units[0]} as tanh_n, {units[1]} as silu_n",
+                  f"from fluidfilm.surrogate.kernels import {units[2]} as sigmoid_n, {units[3]} as pade_tanh_n"]
+        # the passes, each compiled on its own, then the block that calls them and the kernel (as below)
+        helpers = [name for name in re.findall(r"^def (\w+)\(", source, flags=re.M)
+                   if name.startswith(("_pass", "_states_block"))] + ["batch_kernel"]
+        fn = _cached_module_function(source, "batch", helpers, header, 'njit(error_model="numpy", '
+                                     'fastmath={"contract", "reassoc"}, nogil=True, cache=True)')
+        path = getattr(fn, "__fluidfilm_file__", None)
+        if fn is None or path is None:
+            fn = _exec_batch_kernel(key, dtype)
         _COMPILED_BATCH[(key, dtype)] = fn
+        kernel_files[(key, dtype)] = path
     return fn

@@ -153,3 +153,45 @@ def check_config(cfg, exit_on_error: bool = True) -> None:
             print(f"error: {message}", file=sys.stderr, flush=True)
             raise SystemExit(2)
         raise ConfigError(message)
+
+
+def sweep_job_overrides(config) -> list[list[str]] | None:
+    """Every job's overrides of the multirun ``config`` (Hydra's own expansion, ``BasicSweeper``), or ``None``
+    where another sweeper decides the jobs as it goes (an optimiser)."""
+    from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    target = str(config.hydra.sweeper.get("_target_", ""))
+    if not target.endswith("BasicSweeper"):
+        return None
+    overrides = OverridesParser.create().parse_overrides(list(config.hydra.overrides.task))
+    return [list(job) for batch in BasicSweeper.split_arguments(overrides, None) for job in batch]
+
+
+def check_sweep(config) -> None:
+    """Before a multirun starts anything (its MLflow parent run included): each job's config against the
+    schemas (types, unknown keys, ranges); the first bad job's problems in one line on stderr, exit status 2.
+
+    Called from the sweep callbacks' ``on_multirun_start`` (``tracking.MlflowSweepCallback``,
+    ``sweeps.SweepSummaryCallback``), while Hydra is initialised; once per multirun."""
+    import os
+    import sys
+
+    from hydra import compose
+
+    marker = f"{os.getpid()}:{config.hydra.sweep.dir}"  # both callbacks call it: the second one skips
+    if os.environ.get(_SWEEP_CHECKED_ENV) == marker:
+        return
+    os.environ[_SWEEP_CHECKED_ENV] = marker
+    register_schemas()
+    jobs = sweep_job_overrides(config) or []
+    for job in jobs:
+        cfg = compose(config_name=config.hydra.job.config_name, overrides=job, return_hydra_config=True)
+        problems = schema_problems(cfg, cfg.hydra.runtime.choices)
+        if problems:
+            print("error: configuration refused before any work: " + "; ".join(problems) +
+                  f" (sweep job: {' '.join(job)})", file=sys.stderr, flush=True)
+            raise SystemExit(2)
+
+
+_SWEEP_CHECKED_ENV = "FLUIDFILM_SWEEP_CHECKED"

@@ -189,6 +189,21 @@ def _overrides_with_own_dirs(argv: list[str], study: str) -> list[str]:
     return [*argv, f"hydra.run.dir=outputs/{study}/{stamp}", f"hydra.sweep.dir=multirun/{study}/{stamp}"]
 
 
+SUMMARY_CALLBACK = "hydra.callbacks.fluidfilm_sweep_summary._target_=fluidfilm.workflow.sweeps.SweepSummaryCallback"
+
+
+def _with_sweep_summary(argv: list[str]) -> list[str]:
+    """A multirun (``-m``) gets ``sweeps.SweepSummaryCallback``: it says where the jobs write and ends with
+    ``<sweep dir>/summary.csv`` (one row per job: its overrides and metrics).  Added on the command line, so
+    that no config file (which DVC hashes) changes and every entry point has it."""
+    args = argv[1:]
+    if not any(a in ("-m", "--multirun") for a in args) or any(a in ("--help", "-h", "--hydra-help") for a in args):
+        return argv
+    if any(SUMMARY_CALLBACK.split("=", 1)[0] in a for a in args):
+        return argv
+    return [*argv, "+" + SUMMARY_CALLBACK]
+
+
 def _job(study: str) -> Job:
     from hydra.core.hydra_config import HydraConfig
     from hydra.types import RunMode
@@ -218,6 +233,7 @@ def _task(study: ModuleType, name: str, root: Path) -> Callable:
         written = outputs(cfg) if callable(outputs) else getattr(study, "OUTPUTS", {})
         for line in guard_outputs(cfg, written, job, root):
             print(line, flush=True)
+        out_paths = {key: _values(cfg, key) for key in written}  # after any redirection
         run_spec = getattr(study, "tracking_run", None)
         try:
             if run_spec is None or "tracking" not in cfg:
@@ -230,6 +246,11 @@ def _task(study: ModuleType, name: str, root: Path) -> Callable:
                         tracking.log_record(record)
         except ConfigError as err:  # a study's own check of its keys: one line, as check_config's
             _refuse(f"configuration refused: {err}")
+        if job.multirun:  # for the sweep's summary table (sweeps.SweepSummaryCallback)
+            from fluidfilm.workflow.sweeps import write_job_record
+
+            write_job_record(job.output_dir, job.task_overrides,
+                             record.metrics if isinstance(record, tracking.Logged) else record, out_paths)
         if isinstance(record, tracking.Logged):
             return record.value if record.value is not None else dict(record.metrics)
         return record
@@ -254,6 +275,6 @@ def main(study: ModuleType, what: str, resume: str = "run the same command again
     conf = root / "conf"
     if not (conf / f"{name}.yaml").exists():
         raise FileNotFoundError(f"no config {conf / name}.yaml for the study {study.__name__}")
-    sys.argv = _overrides_with_own_dirs(sys.argv, name)
+    sys.argv = _with_sweep_summary(_overrides_with_own_dirs(sys.argv, name))
     entry = hydra.main(config_path=str(conf), config_name=name, version_base="1.3")(_task(study, name, root))
     io.run_interruptible(entry, what, resume)

@@ -244,8 +244,62 @@ def runs_table_addresses(url: str, experiment: str) -> str:
     return "\n".join(lines)
 
 
+class _StopRequested(Exception):
+    """SIGTERM (or SIGHUP) reached ``serve``: stop the server's process group, then exit."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_stop(signum, frame):
+    raise _StopRequested(signum)
+
+
+def group_alive(pgid: int) -> bool:
+    """Whether any process of the process group ``pgid`` exists (a zombie not yet reaped counts)."""
+    try:
+        os.killpg(pgid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # a process of the group exists, owned by someone else
+        return True
+    return True
+
+
+def stop_process_group(proc: subprocess.Popen, timeout: float = 15.0) -> None:
+    """Stop ``proc`` and every process of its group (``proc`` leads it: started with ``start_new_session``).
+
+    SIGTERM to the group, then wait until none of it is left (``proc`` reaped here; workers that outlive it
+    are reparented and reaped by init); whatever is left after ``timeout`` gets SIGKILL.
+
+    Parameters
+    ----------
+    proc : subprocess.Popen
+        The group's leader (its pid is the group's id).
+    timeout : float
+        Seconds the group gets to stop on SIGTERM.
+    """
+    pgid = proc.pid
+    for sig, wait in ((signal.SIGTERM, timeout), (signal.SIGKILL, 10.0)):
+        try:
+            os.killpg(pgid, sig)
+        except ProcessLookupError:
+            pass
+        deadline = time.monotonic() + wait
+        while time.monotonic() < deadline:
+            proc.poll()  # reap the leader, so that its zombie does not keep the group alive
+            if not group_alive(pgid):
+                return
+            time.sleep(0.1)
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
-    """The MLflow UI on this workspace's store; artifacts served by the server (portable links)."""
+    """The MLflow UI on this workspace's store; artifacts served by the server (portable links).
+
+    The server (``mlflow server``: gunicorn or uvicorn and their workers) runs in its own process group;
+    Ctrl-C, SIGTERM and SIGHUP to this process stop that whole group and wait until none of it is left
+    (nothing stays listening on the port), then this process exits 0."""
     from fluidfilm.workflow.tracking import relocate_artifacts
 
     url = f"http://{args.host}:{args.port}"
@@ -254,9 +308,14 @@ def cmd_serve(args: argparse.Namespace) -> int:
         print(f"re-pointed {moved} artifact locations to {Path.cwd()}", flush=True)
     cmd = [str(venv_bin() / "mlflow"), "server", "--backend-store-uri", args.store, "--artifacts-destination",
            args.artifacts, "--host", args.host, "--port", str(args.port), "--workers", "1"]
-    print(f"starting MLflow on {url} (store {args.store}); Ctrl-C stops it", flush=True)
-    proc = subprocess.Popen(cmd, start_new_session=True)  # Ctrl-C is forwarded once, below
+    # a signal this process was started ignoring stays ignored (``nohup make mlflow`` survives the hangup)
+    previous = {sig: signal.signal(sig, _raise_stop) for sig in (signal.SIGTERM, signal.SIGHUP)
+                if signal.getsignal(sig) != signal.SIG_IGN}
+    proc = None
     try:
+        proc = subprocess.Popen(cmd, start_new_session=True)  # its own group: signals are forwarded, below
+        print(f"starting MLflow on {url} (store {args.store}, process group {proc.pid}); Ctrl-C stops it",
+              flush=True)
         deadline = time.time() + 120
         while time.time() < deadline and proc.poll() is None:
             try:
@@ -266,15 +325,18 @@ def cmd_serve(args: argparse.Namespace) -> int:
                 break
             except OSError:
                 time.sleep(1)
-        return proc.wait()
-    except KeyboardInterrupt:
-        os.killpg(proc.pid, signal.SIGTERM)  # the server and its gunicorn/uvicorn workers
-        try:
-            proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-        print("MLflow stopped", flush=True)
+        code = proc.wait()
+        stop_process_group(proc)  # workers the server left behind, if it ended by itself
+        return code
+    except (KeyboardInterrupt, _StopRequested) as stop:
+        if proc is not None:
+            stop_process_group(proc)  # the server and its gunicorn/uvicorn workers
+        why = signal.Signals(stop.signum).name if isinstance(stop, _StopRequested) else "Ctrl-C"
+        print(f"MLflow stopped ({why})", flush=True)
         return 0
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 def main(argv: list[str] | None = None) -> int:

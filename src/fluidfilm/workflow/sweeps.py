@@ -98,3 +98,152 @@ def guard_tracked(path, root, multirun: bool) -> None:
         if p == t or t in p.parents or p in t.parents:
             raise ValueError(f"sweep job output {path} would overwrite {t}, an output of the DVC pipeline; "
                              "give the sweep its own out_dir (e.g. out_dir=multirun_models) or a distinct name")
+
+
+# --- what a multirun says and leaves behind: where each job wrote, and one table of all jobs ----------------
+
+#: set by ``SweepSummaryCallback.on_multirun_start`` in the launching process (jobs inherit it): the jobs
+#: of this sweep, told apart from a former sweep's records in a reused ``hydra.sweep.dir``
+SWEEP_ID_ENV = "FLUIDFILM_SWEEP_ID"
+JOB_RECORD = "job_result.json"
+SUMMARY_CSV = "summary.csv"
+
+
+def _scalar_metrics(metrics) -> dict[str, float]:
+    if not isinstance(metrics, Mapping):
+        return {}
+    return {str(k): float(v) for k, v in metrics.items()
+            if isinstance(v, (int, float)) and not isinstance(v, bool)}
+
+
+def write_job_record(job_dir, task_overrides: Iterable[str], metrics, outputs: Mapping[str, list[str]]) -> Path:
+    """Record a finished sweep job in ``job_dir/job_result.json``: its overrides, its numeric metrics and
+    the paths its output keys point at (atomic; the sweep's summary reads it).
+
+    Parameters
+    ----------
+    job_dir : path
+        The job's own Hydra output folder (``<sweep dir>/<job number>``).
+    task_overrides : iterable of str
+        The job's overrides, ``key=value``.
+    metrics : mapping
+        What the study returned; numbers (bools excluded) are kept.
+    outputs : mapping
+        Output key -> the path(s) it writes (after any redirection).
+
+    Returns
+    -------
+    Path
+        The record written.
+    """
+    import os
+
+    from fluidfilm import io
+
+    path = Path(job_dir) / JOB_RECORD
+    io.write_json(path, {"sweep_id": os.environ.get(SWEEP_ID_ENV, ""), "job_dir": str(Path(job_dir).resolve()),
+                         "overrides": list(task_overrides), "metrics": _scalar_metrics(metrics),
+                         "outputs": {k: list(v) for k, v in outputs.items()}})
+    return path
+
+
+def read_job_records(sweep_dir, sweep_id: str | None = None) -> list[dict]:
+    """The records of a sweep's jobs (``<sweep_dir>/<job>/job_result.json``), in job-number order; only
+    those of ``sweep_id`` when given."""
+    import json
+
+    def order(p: Path):
+        name = p.parent.name
+        return (0, int(name), "") if name.isdigit() else (1, 0, name)
+
+    records = []
+    for f in sorted(Path(sweep_dir).glob(f"*/{JOB_RECORD}"), key=order):
+        rec = json.loads(f.read_text())
+        if sweep_id and rec.get("sweep_id") != sweep_id:
+            continue
+        rec["job"] = f.parent.name
+        records.append(rec)
+    return records
+
+
+def summary_rows(records: Iterable[Mapping]) -> list[dict]:
+    """One row per job: ``job``, each override's key as a column (its value), then each metric."""
+    rows = []
+    for rec in records:
+        row: dict = {"job": rec["job"]}
+        for o in rec.get("overrides", []):
+            key, _, value = o.partition("=")
+            row[key.lstrip("+~")] = re.sub(r"\\(.)", r"\1", value)  # Hydra's escapes (``\:``) undone
+        row.update(rec.get("metrics", {}))
+        rows.append(row)
+    return rows
+
+
+def write_summary_csv(records: list[dict], path) -> Path:
+    """``summary_rows(records)`` as a CSV (columns: the union over jobs, in first-seen order; blank where a
+    job lacks one), written atomically."""
+    import csv
+    import io as _io
+
+    from fluidfilm import io
+
+    rows = summary_rows(records)
+    columns: list[str] = []
+    for row in rows:
+        columns += [c for c in row if c not in columns]
+    buf = _io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({c: (repr(v) if isinstance(v, float) else v) for c, v in row.items()})
+    io.write_text(path, buf.getvalue())
+    return Path(path)
+
+
+class SweepSummaryCallback:
+    """Hydra callback (duck-typed, no Hydra import) that every entry point's multirun gets
+    (``fluidfilm.workflow.entry`` adds it on the command line).
+
+    ``on_multirun_start`` says where the jobs will write (``<sweep dir>/<job number>/``) and where the table
+    will be; each job records its overrides, metrics and output paths (``write_job_record``);
+    ``on_multirun_end`` prints each job's folder and outputs and writes ``<sweep dir>/summary.csv``, one row per
+    job: its overrides and its metrics.
+    """
+
+    def __init__(self, **_):
+        pass
+
+    @staticmethod
+    def _sweep_dir(config) -> Path:
+        return Path(str(config.hydra.sweep.dir))
+
+    def on_multirun_start(self, config, **kwargs):
+        import os
+        import uuid
+
+        from fluidfilm.workflow.config_check import check_sweep
+
+        check_sweep(config)  # every job's values, before any job starts
+        os.environ[SWEEP_ID_ENV] = uuid.uuid4().hex
+        sweep = self._sweep_dir(config)
+        print(f"multirun: each job writes under {sweep}/<job number>/; the table of all jobs will be "
+              f"{sweep / SUMMARY_CSV}", flush=True)
+
+    def on_multirun_end(self, config, **kwargs):
+        import os
+
+        sweep = self._sweep_dir(config)
+        records = read_job_records(sweep, os.environ.get(SWEEP_ID_ENV))
+        for rec in records:
+            outs = "; ".join(f"{k}={', '.join(v)}" for k, v in rec.get("outputs", {}).items() if v)
+            print(f"  job {rec['job']}: {rec['job_dir']}" + (f" (outputs: {outs})" if outs else ""), flush=True)
+        csv_path = write_summary_csv(records, sweep / SUMMARY_CSV)
+        print(f"multirun: {len(records)} job(s) done; summary (overrides and metrics per job): {csv_path}",
+              flush=True)
+
+    # the other hooks Hydra calls
+    def on_run_start(self, config, **kwargs): ...
+    def on_run_end(self, config, **kwargs): ...
+    def on_job_start(self, config, **kwargs): ...
+    def on_job_end(self, config, job_return, **kwargs): ...
+    def on_compose_config(self, config, **kwargs): ...

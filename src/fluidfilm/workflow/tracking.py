@@ -395,7 +395,10 @@ class MlflowSweepCallback:
         self.failed_jobs = 0
 
     def on_multirun_start(self, config, **kwargs):
+        from fluidfilm.workflow.config_check import check_sweep
         from fluidfilm.workflow.sweeps import SWEEP_KEYS_ENV, swept_keys
+
+        check_sweep(config)  # every job's values, before the parent run exists
 
         # which keys the sweep varies, for the jobs' names (jobs inherit the environment)
         task = list(config.hydra.overrides.task) if "hydra" in config else []
