@@ -236,3 +236,17 @@ def test_the_blocker_does_block():
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
     proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode != 0 and "blocked:" in proc.stderr, proc.stderr[-3000:]
+
+
+def test_the_ross_element_without_ross_names_the_extra():
+    """``fluidfilm.interop.ross.FluidFilmBearingElement`` is a ROSS BearingElement built on first use; where ROSS
+    is not installed, making one says how to get it, and nothing is an instance of it."""
+    import importlib.util
+
+    if importlib.util.find_spec("ross") is not None:
+        pytest.skip("ROSS is installed here: tests/test_ross_adapter.py checks the element itself")
+    from fluidfilm.interop import ross as fr
+
+    assert not isinstance(object(), fr.FluidFilmBearingElement)
+    with pytest.raises(ImportError, match=r'pip install "fluidfilm\[ross\]"'):
+        fr.FluidFilmBearingElement(n=0, model=None, load=(0.0, -100.0))

@@ -643,6 +643,11 @@ class FluidFilmBearingElement(metaclass=_RossElementType):
     __doc__ = _ELEMENT_DOC
 
 
+def _film_elements(rotor) -> list[Any]:
+    """The rotor's ``FluidFilmBearingElement``s (ROSS objects: typed Any)."""
+    return [b for b in rotor.bearing_elements if isinstance(b, FluidFilmBearingElement)]
+
+
 def static_loads(rotor) -> dict[int, tuple[float, float]]:
     """The static loads ROSS's own static analysis (``rotor.run_static()``, its gravity) puts on the rotor's bearings.
 
@@ -686,10 +691,9 @@ def film_static_forces(rotor, t) -> np.ndarray:
     t = np.asarray(t, dtype=float)
     out = np.zeros((t.size, int(rotor.ndof)))
     nd = int(rotor.number_dof)
-    for b in rotor.bearing_elements:
-        if isinstance(b, FluidFilmBearingElement):
-            out[:, nd * int(b.n)] -= b.load[0]
-            out[:, nd * int(b.n) + 1] -= b.load[1]
+    for b in _film_elements(rotor):
+        out[:, nd * int(b.n)] -= b.load[0]
+        out[:, nd * int(b.n) + 1] -= b.load[1]
     return out
 
 
@@ -742,7 +746,7 @@ def run_nonlinear_response(rotor, speed: float, t, F=None, start: str = "centre"
     if start == "equilibrium" and not weight:
         raise ValueError("start='equilibrium' needs weight=True: the films there carry the rotor's weight, and "
                          "without it they would push the journals up")
-    films = [b for b in rotor.bearing_elements if isinstance(b, FluidFilmBearingElement)]
+    films = _film_elements(rotor)
     if not films:
         raise ValueError("the rotor has no FluidFilmBearingElement: place fluidfilm.interop.ross."
                          "FluidFilmBearingElement(n=..., model=..., load=...) among its bearing elements")
