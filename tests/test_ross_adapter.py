@@ -363,3 +363,29 @@ def test_the_element_and_its_response_refuse_bad_input(element_rotor):
         fr.run_nonlinear_response(base, model.bearing.omega, t)
     with pytest.raises(ValueError, match="turns at"):  # the adapter's speed check
         fr.run_nonlinear_response(rotor, 2.0 * model.bearing.omega, t)
+
+
+def test_the_element_tabulated_over_speed_for_ross_analyses_over_speed():
+    """With ``speeds`` (a model with ``with_speed``: the universal surrogate), the element holds at each speed the
+    film's K, C at that speed's equilibrium: equal to an element made at that speed, for ROSS's Campbell and the
+    other analyses over speed; refused for a model without ``with_speed`` or bad speeds."""
+    from fluidfilm import JournalBearing, universal_bearing
+
+    model = universal_bearing(JournalBearing(speed_rpm=6000.0, **BEARING))
+    rpms = (3000.0, 6000.0, 9000.0)
+    speeds = [r * math.pi / 30.0 for r in rpms]
+    el = fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -500.0), speeds=speeds)
+    assert np.allclose(el.speed, speeds, rtol=0, atol=0)
+    for rpm, omega in zip(rpms, speeds):
+        single = fr.FluidFilmBearingElement(n=0, model=model.with_speed(rpm), load=(0.0, -500.0))
+        assert np.allclose(el.K(omega)[:2, :2], single.K(omega)[:2, :2], rtol=1e-12, atol=0)
+        assert np.allclose(el.C(omega)[:2, :2], single.C(omega)[:2, :2], rtol=1e-12, atol=0)
+    # the element itself (equilibrium, nonlinear model) is at the model's speed
+    assert np.array_equal(el.x0, fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -500.0)).x0)
+    with pytest.raises(TypeError, match="with_speed"):
+        fr.FluidFilmBearingElement(n=0, model=_solver(6000.0), load=(0.0, -500.0), speeds=speeds)
+    for bad in ([600.0], [600.0, 300.0], [0.0, 300.0], [np.nan, 300.0]):
+        with pytest.raises(ValueError, match="speeds must be"):
+            fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -500.0), speeds=bad)
+    with pytest.raises(TypeError, match="coefficients"):
+        fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -500.0), speed=speeds)

@@ -523,6 +523,19 @@ def _check_load(load) -> np.ndarray:
     return w
 
 
+def _check_speeds(speeds, model) -> np.ndarray:
+    """``FluidFilmBearingElement``'s ``speeds`` [rad/s], checked: at least two, finite, positive, increasing, and a
+    model that can be moved to them (``with_speed``)."""
+    sp = np.asarray(speeds, dtype=float).ravel() if not isinstance(speeds, (str, bytes)) else np.array([np.nan])
+    if sp.size < 2 or not np.all(np.isfinite(sp)) or np.any(sp <= 0) or np.any(np.diff(sp) <= 0):
+        raise ValueError(f"speeds must be two or more increasing rotor speeds > 0 [rad/s]; got {speeds!r}")
+    if not callable(getattr(model, "with_speed", None)):
+        raise TypeError(f"speeds needs a model with with_speed(speed_rpm) (e.g. universal_bearing(...)); {model!r} "
+                        f"has none: leave speeds out (coefficients at the model's own speed) or make one element "
+                        f"per speed")
+    return sp
+
+
 @functools.lru_cache(maxsize=None)
 def _element_class() -> type:
     """The ROSS ``BearingElement`` subclass behind ``FluidFilmBearingElement`` (built on first use: ROSS is
@@ -536,8 +549,8 @@ def _element_class() -> type:
     class FluidFilmBearingElement(rs.BearingElement):
         __doc__ = _ELEMENT_DOC
 
-        def __init__(self, n, model, load, h_rel: float = 1e-4, tag=None, n_link=None, scale_factor=1,
-                     **kwargs):
+        def __init__(self, n, model, load, h_rel: float = 1e-4, speeds=None, tag=None, n_link=None,
+                     scale_factor=1, **kwargs):
             given = sorted(set(kwargs) & set(_COEFFICIENT_KWARGS))
             if given:
                 raise TypeError(f"FluidFilmBearingElement computes its coefficients from the film model; got {given}")
@@ -546,14 +559,29 @@ def _element_class() -> type:
             w = _check_load(load)
             # the load on the journal in fluidfilm's frame (X2 along gravity); the equilibrium raises, naming the
             # load, where the film cannot carry it
-            x0 = np.asarray(_static.equilibrium(model, tuple(float(v) for v in to_ross(w)))["X"], dtype=float)
-            kc = _coef.coefficients(model, x0, h_rel)
-            K, C = np.asarray(kc["K"], dtype=float), np.asarray(kc["C"], dtype=float)
-            k, c = matrix_to_ross(K), matrix_to_ross(C)
+            w_film = tuple(float(v) for v in to_ross(w))
+
+            def linearise(m):
+                x = np.asarray(_static.equilibrium(m, w_film)["X"], dtype=float)
+                kc = _coef.coefficients(m, x, h_rel)
+                return x, np.asarray(kc["K"], dtype=float), np.asarray(kc["C"], dtype=float)
+
+            x0, K, C = linearise(model)
+            if speeds is None:
+                k, c = matrix_to_ross(K), matrix_to_ross(C)
+                table: dict[str, Any] = {}
+            else:
+                table = {"speed": _check_speeds(speeds, model)}
+                ks, cs = [], []
+                for omega in table["speed"]:
+                    _, Ks, Cs = linearise(model.with_speed(float(omega) * 30.0 / math.pi))
+                    ks.append(matrix_to_ross(Ks))
+                    cs.append(matrix_to_ross(Cs))
+                k, c = np.moveaxis(np.array(ks), 0, -1), np.moveaxis(np.array(cs), 0, -1)
             super().__init__(n=n, kxx=k[0, 0], kxy=k[0, 1], kyx=k[1, 0], kyy=k[1, 1], cxx=c[0, 0], cxy=c[0, 1],
                              cyx=c[1, 0], cyy=c[1, 1], tag=tag if tag is not None else f"fluidfilm_{n}",
                              n_link=n_link, scale_factor=scale_factor,
-                             radial_clearance=float(model.bearing.clearance), **kwargs)
+                             radial_clearance=float(model.bearing.clearance), **table, **kwargs)
             self.model = model
             self.load = w
             self.h_rel = float(h_rel)
@@ -591,13 +619,18 @@ _ELEMENT_DOC = """A fluidfilm bearing as a ROSS bearing element: place it in ``r
         The shaft node.
     model : force model
         Any fluidfilm force model (``ReynoldsSolver``, ``universal_bearing(...)``, the grooved solvers, a
-        surrogate); its bearing's speed is the operating speed (the coefficients are those at that speed; ROSS's
-        analyses at other speeds keep them, as for any constant ``BearingElement``).
+        surrogate); its bearing's speed is the operating speed (without ``speeds`` the coefficients are those at
+        that speed and ROSS's analyses at other speeds keep them, as for any constant ``BearingElement``).
     load : tuple of float
         (Fx, Fy) [N], ROSS's frame (y up): the static load the bearing carries, e.g. ``(0, -W)`` for its share
         W of a horizontal rotor's weight (``static_loads(rotor)`` gives ROSS's own).
     h_rel : float, default 1e-4
         Relative step of the linearisation (``characteristics.coefficients.coefficients``).
+    speeds : array_like or None, default None
+        Rotor speeds [rad/s] (two or more, increasing) to tabulate the coefficients at, each at the equilibrium
+        under ``load`` at that speed, for ROSS's analyses over speed (``run_campbell``; ROSS interpolates between
+        them); needs a model with ``with_speed`` (``universal_bearing``). None: the model's speed only (constant
+        coefficients). The nonlinear response always runs the model itself, at its speed.
     tag, n_link, scale_factor, **kwargs
         As for ``ross.BearingElement`` (its coefficients come from the film: passing any is a TypeError).
 
@@ -619,9 +652,11 @@ _ELEMENT_DOC = """A fluidfilm bearing as a ROSS bearing element: place it in ``r
     Raises
     ------
     ValueError
-        For a load that is not two finite numbers, or one the film cannot carry (named by the equilibrium).
+        For a load that is not two finite numbers, or one the film cannot carry (named by the equilibrium); for
+        bad ``speeds``.
     TypeError
-        For a model that is not a force model, or coefficients passed by hand.
+        For a model that is not a force model, coefficients passed by hand, or ``speeds`` with a model that has
+        no ``with_speed``.
     """
 
 
