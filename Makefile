@@ -41,14 +41,15 @@ MLFLOW_PORT ?= 5000
 setup: $(STAMP)
 
 # torch first and pinned: 2.13.0 is the CPU build that lies on disk here;
-# any other spec would pull gigabytes of CUDA wheels.
+# any other spec would pull gigabytes of CUDA wheels. Then the project with every extra the workspace uses
+# (`all` = workspace, learn, test; `pip install fluidfilm` alone is the lean library core).
 # The environment is created once; a changed pyproject.toml reinstalls into it. (Re-running `venv`
 # over an existing one with another `python3` on PATH would mix two interpreters' standard libraries.)
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check --upgrade pip
 	$(PY) -m pip install --quiet --disable-pip-version-check torch==2.13.0
-	$(PY) -m pip install --quiet --disable-pip-version-check -e ".[test]"
+	$(PY) -m pip install --quiet --disable-pip-version-check -e ".[all]"
 	touch $(STAMP)
 
 reproduce: setup
@@ -113,7 +114,8 @@ clean-venv:
 # Optional external peer and host: ROSS 3.1 (ross-rotordynamics, Python >= 3.13) in its own environment,
 # .venv-ross, never a dependency of the workspace. It is built from benchmarks/ross_peer_constraints.txt (the
 # versions it was measured with, pytest included) and rebuilt when that file changes; fluidfilm goes into it
-# editable and without its dependencies (its physics imports no torch; ROSS brings numpy, scipy, numba).
+# editable and without its dependencies (the core's numpy, scipy, numba and pandas are among those pins). A ROSS
+# user's own environment needs none of this: `pip install "fluidfilm[ross]"` on Python >= 3.13.
 # The base interpreter: ROSS_BASE_PY if given, else pyenv's 3.13, else python3.13 on PATH.
 ROSS_VENV       ?= .venv-ross
 ROSS_BASE_PY    ?= $(firstword $(wildcard $(HOME)/.pyenv/versions/3.13*/bin/python3.13) $(shell command -v python3.13 2>/dev/null))
@@ -188,7 +190,7 @@ $(ROSS_STAMP): $(ROSS_PINS)
 	touch $(ROSS_STAMP)
 
 $(ROSS_FF_STAMP): $(ROSS_STAMP) pyproject.toml
-	$(ROSS_VENV)/bin/pip install --quiet --disable-pip-version-check --no-deps --ignore-requires-python -e .
+	$(ROSS_VENV)/bin/pip install --quiet --disable-pip-version-check --no-deps -e .
 	touch $(ROSS_FF_STAMP)
 
 ross-env: $(ROSS_FF_STAMP)

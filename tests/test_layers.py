@@ -164,3 +164,89 @@ def test_ross_is_imported_by_the_interop_adapter_alone_and_lazily():
     users = [m for layer in PHYSICS + LEARNING + ABOVE_LEARNING for m in _modules(layer)
              if any(d.startswith("fluidfilm.interop") for d in closure(m))]
     assert not users, f"modules that import fluidfilm.interop (it sits on top, for users): {users}"
+
+
+#: what `pip install fluidfilm` (the lean core) does not install: the extras' packages (learn, workspace, ross)
+HEAVY = ("torch", "lightning", "pytorch_lightning", "mlflow", "dvc", "hydra", "omegaconf", "dask", "distributed",
+         "gymnasium", "stable_baselines3", "pyarrow", "matplotlib", "ross")
+
+# run in a subprocess: a meta-path finder makes every import of HEAVY raise ModuleNotFoundError (as in a core-only
+# install), then the core is imported and used; sys.modules is checked afterwards
+_CORE_USE = """
+import sys
+
+HEAVY = {heavy!r}
+
+
+class Blocker:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in HEAVY:
+            raise ModuleNotFoundError(f"blocked: {{name}} is not part of the lean core", name=name)
+        return None
+
+
+sys.meta_path.insert(0, Blocker())
+import fluidfilm
+import fluidfilm.characteristics
+import fluidfilm.rotor
+import fluidfilm.surrogate.universal
+from fluidfilm import JournalBearing, ReynoldsSolver, Rotor, equilibrium, simulate, universal_bearing
+from fluidfilm.characteristics import bearing_characteristics, threshold_speed
+
+b = JournalBearing(length=0.025, diameter=0.05, clearance=50e-6, speed_rpm=6000.0, viscosity=0.02)
+solver = ReynoldsSolver(b, n_theta=20, n_z=10)
+W = Rotor(mass=50.0).static_load()
+eq = equilibrium(solver, W)
+op = bearing_characteristics(solver, W)
+traj = simulate(solver, Rotor(mass=50.0), t_end=0.002, x0=[eq["X1"], eq["X2"]])
+model = universal_bearing(b)
+assert model.forces([0.0, 20e-6], [0.0, 0.0]).shape == (2,)
+assert threshold_speed(model, mass=50.0, load=W)["speed_rpm"] > 0
+fluidfilm.equilibrium_locus(model, [100.0, 200.0])
+assert traj.status == "ok", traj.status
+loaded = sorted({{m.split(".")[0] for m in sys.modules}} & set(HEAVY))
+assert not loaded, loaded
+print("core ok")
+"""
+
+
+def test_the_core_runs_with_the_heavy_packages_blocked():
+    """``pip install fluidfilm`` is the lean core: the package, the rotor, the characteristics and the shipped
+    universal surrogate import and run with torch, Lightning, MLflow, DVC, Hydra, Dask, gymnasium,
+    stable-baselines3, pyarrow, matplotlib and ROSS unimportable (a meta-path blocker makes them raise), and
+    none of them ends up in ``sys.modules``. ``.ci/wheel_check`` does the same from the built wheel in a fresh
+    Python 3.13 environment (the README's library blocks)."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, "-c", _CORE_USE.format(heavy=HEAVY)], env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert proc.returncode == 0 and "core ok" in proc.stdout, proc.stderr[-3000:]
+
+
+def test_the_blocker_does_block():
+    """It can fail: with the blocker in place, importing a workspace module that needs torch raises."""
+    import os
+    import subprocess
+    import sys
+
+    code = _CORE_USE.format(heavy=HEAVY).split("import fluidfilm\n")[0] + "import fluidfilm.surrogate.training\n"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=600)
+    assert proc.returncode != 0 and "blocked:" in proc.stderr, proc.stderr[-3000:]
+
+
+def test_the_ross_element_without_ross_names_the_extra():
+    """``fluidfilm.interop.ross.FluidFilmBearingElement`` is a ROSS BearingElement built on first use; where ROSS
+    is not installed, making one says how to get it, and nothing is an instance of it."""
+    import importlib.util
+
+    if importlib.util.find_spec("ross") is not None:
+        pytest.skip("ROSS is installed here: tests/test_ross_adapter.py checks the element itself")
+    from fluidfilm.interop import ross as fr
+
+    assert not isinstance(object(), fr.FluidFilmBearingElement)
+    with pytest.raises(ImportError, match=r'pip install "fluidfilm\[ross\]"'):
+        fr.FluidFilmBearingElement(n=0, model=None, load=(0.0, -100.0))

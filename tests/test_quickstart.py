@@ -79,3 +79,22 @@ def test_citation_and_licence_agree_with_pyproject():
     assert paper["doi"] == "10.1007/978-3-031-40455-9_18"
     assert [a["family-names"] for a in paper["authors"]] == ["Kazakov", "Stebakov", "Shutin", "Savin"]
     assert paper["doi"] in (ROOT / "README.md").read_text()
+
+
+def test_the_wheel_check_runs_the_readme_library_blocks():
+    """``.ci/wheel_check`` (run by ``.ci/run`` before ``make test``) runs the README's "Your bearing" and "Any
+    plain bearing" blocks in a fresh Python 3.13 environment holding the core wheel alone; the script it extracts
+    them with finds the same first block as this test, and the second."""
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = subprocess.run([sys.executable, str(ROOT / ".ci" / "readme_blocks.py"), tmp], capture_output=True,
+                             text=True, timeout=60)
+        assert out.returncode == 0, out.stderr
+        assert (Path(tmp) / "your_bearing.py").read_text() == quickstart_block()
+        assert "universal_bearing(" in (Path(tmp) / "any_plain_bearing.py").read_text()
+    run = (ROOT / ".ci" / "run").read_text()
+    assert run.index(".ci/wheel_check") < run.index("make test")
+    check = (ROOT / ".ci" / "wheel_check").read_text()
+    assert "universal_weights" in check and "3.13" in check

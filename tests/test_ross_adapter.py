@@ -217,3 +217,175 @@ def test_compiled_callback_equals_the_python_loop(setup):
                 film(1, disp_resp=q, velc_resp=np.zeros(film.ndof))
             messages.append(str(err.value))
         assert messages[0] == messages[1] and "node 4" in messages[0]
+
+
+# ------------------------------------------------------------------ the ROSS bearing element
+G_ROSS = 9.8065  # ROSS's gravity (Rotor.gravitational_force)
+
+
+@pytest.fixture(scope="module")
+def element_rotor():
+    """The Jeffcott rotor on two FluidFilmBearingElements (reference solver, 6000 rpm) carrying ROSS's static
+    reactions of its own gravity."""
+    base = fr.jeffcott_rotor()
+    loads = fr.static_loads(base)
+    model = _solver(6000.0)
+    elements = [fr.FluidFilmBearingElement(n=n, model=model, load=loads[n]) for n in (0, 4)]
+    return base, loads, model, ross.Rotor(base.shaft_elements, base.disk_elements, elements)
+
+
+def test_static_loads_are_ross_own_reactions_of_its_gravity(element_rotor):
+    base, loads, _, _ = element_rotor
+    w = float(base.m) * G_ROSS / 2.0
+    assert sorted(loads) == [0, 4]
+    for n in (0, 4):
+        assert loads[n][0] == 0.0 and math.isclose(loads[n][1], -w, rel_tol=1e-9)
+
+
+def test_the_element_is_a_ross_bearing_element_with_the_films_k_and_c_at_equilibrium(element_rotor):
+    """A ``ross.BearingElement`` placed in ``rs.Rotor``; its coefficients are the film's K, C at the static
+    equilibrium under its load, mapped into ROSS's frame; the film carries the load there."""
+    from fluidfilm.characteristics import coefficients as coef
+    from fluidfilm.characteristics import static
+
+    _, loads, model, rotor = element_rotor
+    for el in rotor.bearing_elements:
+        assert isinstance(el, ross.BearingElement) and isinstance(el, fr.FluidFilmBearingElement)
+        assert type(el).__name__ == "FluidFilmBearingElement" and el.tag == f"fluidfilm_{el.n}"
+        x0 = static.equilibrium(model, tuple(fr.to_ross(loads[el.n])))["X"]
+        assert np.array_equal(el.x0, x0) and np.array_equal(el.equilibrium_position, fr.to_ross(x0))
+        kc = coef.coefficients(model, x0)
+        for m, mat in (("k", kc["K"]), ("c", kc["C"])):
+            ours = np.array([[float(np.ravel(getattr(el, f"{m}{i}{j}"))[0]) for j in "xy"] for i in "xy"])
+            assert np.array_equal(ours, fr.matrix_to_ross(mat)), m
+        # the film force at the equilibrium, in ROSS's frame, balances the load on the journal
+        f = fr.to_ross(model.forces(el.x0, np.zeros(2)))
+        assert np.abs(f + el.load).max() < 1e-6 * np.abs(el.load).max()
+    assert not isinstance(object(), fr.FluidFilmBearingElement)
+
+
+@pytest.mark.parametrize("weight", [500.0, 2000.0])
+def test_the_element_agrees_with_ross_cylindrical_bearing_and_sinks_along_gravity(weight):
+    """An independent check of the frame and of the load's direction: ROSS's own plain bearing element
+    (``CylindricalBearing``, short-bearing theory, gravity along -y) on the same bearing and weight. Every one
+    of the eight coefficients has ROSS's sign and lies within 20 % of its matrix's scale (finite length against
+    the short-bearing limit at L/D 0.5); the journal sits below the centre (y < 0), displaced from -y towards +x,
+    the way ROSS's shaft turns (+x towards +y)."""
+    model = _solver(6000.0)
+    b = model.bearing
+    el = fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -weight))
+    cyl = ross.CylindricalBearing(n=0, speed=[b.omega], weight=weight, bearing_length=b.length,
+                                  journal_diameter=b.diameter, radial_clearance=b.clearance, oil_viscosity=b.viscosity)
+    for m in "kc":
+        ours = np.array([[float(np.ravel(getattr(el, f"{m}{i}{j}"))[0]) for j in "xy"] for i in "xy"])
+        theirs = np.array([[float(np.ravel(getattr(cyl, f"{m}{i}{j}"))[0]) for j in "xy"] for i in "xy"])
+        assert np.array_equal(np.sign(ours), np.sign(theirs)), (m, ours, theirs)
+        assert np.abs(ours - theirs).max() < 0.2 * np.abs(theirs).max(), (m, ours, theirs)
+    x, y = el.equilibrium_position
+    assert y < 0.0 < x
+    assert abs(el.eccentricity - float(np.ravel(cyl.eccentricity)[0])) < 0.1
+
+
+def test_ross_linear_analyses_run_on_the_element(element_rotor):
+    """ROSS's modal analysis of the rotor on the elements equals ``min_log_dec`` (the films' K, C at the same
+    equilibria through plain BearingElements), to round-off."""
+    base, loads, model, rotor = element_rotor
+    modal = rotor.run_modal(model.bearing.omega, num_modes=12)
+    ref = fr.min_log_dec(base, {0: model, 4: model}, loads)
+    assert math.isclose(float(np.min(modal.log_dec)), ref["log_dec"], rel_tol=1e-9)
+    # ROSS deep-copies elements in some analyses: the copy keeps its coefficients and shares the model
+    import copy
+
+    el = rotor.bearing_elements[0]
+    twin = copy.deepcopy(el)
+    assert twin == el and twin.model is el.model and np.array_equal(twin.equilibrium_position, el.equilibrium_position)
+
+
+def test_nonlinear_response_honours_ross_gravity_the_journal_sinks_along_it(element_rotor):
+    """From the bearing centres with ROSS's weight on, the journals first fall along -y (gravity in ROSS's frame),
+    then settle at the films' static equilibria; without the weight they stay at the centre."""
+    _, _, model, rotor = element_rotor
+    t = np.arange(3001) * 2e-5
+    out = fr.run_nonlinear_response(rotor, model.bearing.omega, t)
+    c = model.bearing.clearance
+    for n in (0, 4):
+        p = out["positions_ross"][n]
+        assert np.array_equal(p, out["orbits_ross"][n])  # start="centre": ROSS's displacements are the positions
+        k = int(np.argmax(np.hypot(*p.T) > 0.02 * c))
+        assert k > 0 and p[k, 1] < 0.0 and abs(p[k, 0]) < 0.5 * abs(p[k, 1]), p[k]  # first motion: down
+        eq = rotor.bearing_elements[[b.n for b in rotor.bearing_elements].index(n)].equilibrium_position
+        assert np.hypot(*(p[-1] - eq)) < 0.02 * c, (p[-1], eq)
+    still = fr.run_nonlinear_response(rotor, model.bearing.omega, t[:501], weight=False)
+    assert max(np.abs(still["positions_ross"][n]).max() for n in (0, 4)) < 1e-9 * c
+
+
+def test_nonlinear_response_from_equilibrium_beside_ross_linear_response(element_rotor):
+    """Started at the equilibria with ROSS's weight on and a push on the disc: the same run as ``FilmBearings``
+    measured from the equilibria without ROSS's gravity, fed the weight and the films' static forces as external
+    forces (to round-off); and within 5 % of ROSS's own linear response of the same rotor (its elements' K, C) to
+    the same forces (the orbits reach about 3 % of c: ROSS applies the weight at once and the disc falls onto its
+    static sag)."""
+    base, loads, model, rotor = element_rotor
+    t = np.arange(1001) * 2e-5
+    F = _push(rotor, t, 2.0)
+    out = fr.run_nonlinear_response(rotor, model.bearing.omega, t, F, start="equilibrium")
+    statics = fr.film_static_forces(rotor, t)
+    linear = np.asarray(rotor.run_time_response(model.bearing.omega, F + statics, t, method="newmark",
+                                                weight=True).yout)
+    film = fr.FilmBearings(base, {0: model, 4: model}, loads)
+    same = fr.run_time_response(film, model.bearing.omega, t, F + statics + rotor.gravitational_force()[None, :])
+    for n in (0, 4):
+        dofs = out["film"].dofs[n]
+        assert _rel(out["orbits_ross"][n], same["orbits_ross"][n]) < 1e-10
+        assert np.allclose(out["positions_ross"][n], out["orbits_ross"][n] + fr.to_ross(out["film"].origin[n]))
+        assert _rel(out["orbits_ross"][n], linear[:, dofs]) < 0.05
+        assert np.abs(out["orbits_ross"][n]).max() < 0.05 * model.bearing.clearance
+    assert np.array_equal(statics[:, 1], -np.full(t.size, loads[0][1]))
+
+
+def test_the_element_and_its_response_refuse_bad_input(element_rotor):
+    base, loads, model, rotor = element_rotor
+    for bad in ([0.0, 0.0], [1.0, 2.0, 3.0], "heavy", [np.nan, -1.0]):
+        with pytest.raises(ValueError, match="load must be"):
+            fr.FluidFilmBearingElement(n=0, model=model, load=bad)
+    with pytest.raises(ValueError, match="load"):  # beyond the film's capacity: the equilibrium names it
+        fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -1e9))
+    with pytest.raises(TypeError, match="coefficients"):
+        fr.FluidFilmBearingElement(n=0, model=model, load=loads[0], kxx=1e8)
+    with pytest.raises(TypeError, match="force model"):
+        fr.FluidFilmBearingElement(n=0, model=object(), load=loads[0])
+    t = np.arange(11) * 2e-5
+    with pytest.raises(ValueError, match="start"):
+        fr.run_nonlinear_response(rotor, model.bearing.omega, t, start="top")
+    with pytest.raises(ValueError, match="weight=True"):
+        fr.run_nonlinear_response(rotor, model.bearing.omega, t, start="equilibrium", weight=False)
+    with pytest.raises(ValueError, match="no FluidFilmBearingElement"):
+        fr.run_nonlinear_response(base, model.bearing.omega, t)
+    with pytest.raises(ValueError, match="turns at"):  # the adapter's speed check
+        fr.run_nonlinear_response(rotor, 2.0 * model.bearing.omega, t)
+
+
+def test_the_element_tabulated_over_speed_for_ross_analyses_over_speed():
+    """With ``speeds`` (a model with ``with_speed``: the universal surrogate), the element holds at each speed the
+    film's K, C at that speed's equilibrium: equal to an element made at that speed, for ROSS's Campbell and the
+    other analyses over speed; refused for a model without ``with_speed`` or bad speeds."""
+    from fluidfilm import JournalBearing, universal_bearing
+
+    model = universal_bearing(JournalBearing(speed_rpm=6000.0, **BEARING))
+    rpms = (3000.0, 6000.0, 9000.0)
+    speeds = [r * math.pi / 30.0 for r in rpms]
+    el = fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -500.0), speeds=speeds)
+    assert np.allclose(el.speed, speeds, rtol=0, atol=0)
+    for rpm, omega in zip(rpms, speeds):
+        single = fr.FluidFilmBearingElement(n=0, model=model.with_speed(rpm), load=(0.0, -500.0))
+        assert np.allclose(el.K(omega)[:2, :2], single.K(omega)[:2, :2], rtol=1e-12, atol=0)
+        assert np.allclose(el.C(omega)[:2, :2], single.C(omega)[:2, :2], rtol=1e-12, atol=0)
+    # the element itself (equilibrium, nonlinear model) is at the model's speed
+    assert np.array_equal(el.x0, fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -500.0)).x0)
+    with pytest.raises(TypeError, match="with_speed"):
+        fr.FluidFilmBearingElement(n=0, model=_solver(6000.0), load=(0.0, -500.0), speeds=speeds)
+    for bad in ([600.0], [600.0, 300.0], [0.0, 300.0], [np.nan, 300.0]):
+        with pytest.raises(ValueError, match="speeds must be"):
+            fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -500.0), speeds=bad)
+    with pytest.raises(TypeError, match="coefficients"):
+        fr.FluidFilmBearingElement(n=0, model=model, load=(0.0, -500.0), speed=speeds)

@@ -1,5 +1,14 @@
 """fluidfilm force models at the bearing nodes of a ROSS rotor (ROSS 3.1, ``ross-rotordynamics``).
 
+Two ways in.  ``FluidFilmBearingElement(n=..., model=..., load=...)`` is a ROSS ``BearingElement`` a ROSS user
+places in ``rs.Rotor(...)`` like any other: it holds the film's stiffness and damping at its static equilibrium
+under ``load`` (ROSS's frame), so ROSS's linear analyses (modal, Campbell, stability, unbalance and linear time
+responses) run on it as they are; ``run_nonlinear_response(rotor, speed, t, F)`` then runs ROSS's Newmark time
+response with the films' nonlinear forces, ROSS's gravity on (``weight=True``), orbits in ROSS's frame.  ROSS 3.1
+has no per-element force hook for time responses (its only one, ``add_to_RHS`` of ``Rotor.run_time_response``,
+is an argument of the run; magnetic bearings are special-cased), hence the function beside the element.
+``FilmBearings`` is the lower-level route: the callback itself, for any rotor and models, by node.
+
 ROSS integrates a finite-element rotor with the Newmark method; nonlinear forces enter through the
 ``add_to_RHS`` callback of ``Rotor.run_time_response``, called at every step with the displacements and
 velocities of all degrees of freedom.  ``FilmBearings`` is that callback for any fluidfilm force model
@@ -33,9 +42,12 @@ ROSS is imported inside the functions that need it, so ``fluidfilm.interop.ross`
 """
 from __future__ import annotations
 
+import copy
+import functools
 import math
 import time
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -43,12 +55,14 @@ from fluidfilm.characteristics import coefficients as _coef
 from fluidfilm.characteristics import static as _static
 from fluidfilm.core.force_model import ForceModel
 
-__all__ = ["FilmBearings", "LinearisedFilm", "to_ross", "matrix_to_ross", "run_time_response", "film_bearing_rotor",
+__all__ = ["FluidFilmBearingElement", "run_nonlinear_response", "static_loads", "film_static_forces", "FilmBearings", "LinearisedFilm", "to_ross", "matrix_to_ross", "run_time_response", "film_bearing_rotor",
            "min_log_dec", "stability_threshold", "growth_rate", "jeffcott_rotor"]
 
 #: fluidfilm (X1, X2) -> ROSS (x, y) and back: x = X1, y = -X2
 _T = np.array([1.0, -1.0])
 LINEAR_PARTS = ("implicit", "none")
+#: where ``run_nonlinear_response`` starts the journals: the bearing centre, or each film's static equilibrium
+STARTS = ("centre", "equilibrium")
 
 
 def _node_step(i, j, origin, f_origin, k, c, c2, fn):
@@ -496,6 +510,300 @@ def run_time_response(film: FilmBearings, speed: float, t, F=None, newmark_type:
     orbits = {n: film.origin[n] + to_ross(orbits_ross[n]) for n in film.nodes}
     return {"t": t, "orbits": orbits, "orbits_ross": orbits_ross, "seconds": seconds,
             "film_seconds": film.seconds, "film_calls": film.calls, "response": res}
+
+
+_COEFFICIENT_KWARGS = ("kxx", "kxy", "kyx", "kyy", "cxx", "cxy", "cyx", "cyy", "speed", "frequency")
+
+
+def _check_load(load) -> np.ndarray:
+    w = np.asarray(load, dtype=float) if not isinstance(load, (str, bytes)) else np.array([np.nan])
+    if w.shape != (2,) or not np.all(np.isfinite(w)) or not np.any(w):
+        raise ValueError(f"load must be the static load (Fx, Fy) [N] on the bearing in ROSS's frame (y up; the "
+                         f"weight share of a horizontal rotor is (0, -W)), two finite numbers not both zero; got {load!r}")
+    return w
+
+
+def _check_speeds(speeds, model) -> np.ndarray:
+    """``FluidFilmBearingElement``'s ``speeds`` [rad/s], checked: at least two, finite, positive, increasing, and a
+    model that can be moved to them (``with_speed``)."""
+    sp = np.asarray(speeds, dtype=float).ravel() if not isinstance(speeds, (str, bytes)) else np.array([np.nan])
+    if sp.size < 2 or not np.all(np.isfinite(sp)) or np.any(sp <= 0) or np.any(np.diff(sp) <= 0):
+        raise ValueError(f"speeds must be two or more increasing rotor speeds > 0 [rad/s]; got {speeds!r}")
+    if not callable(getattr(model, "with_speed", None)):
+        raise TypeError(f"speeds needs a model with with_speed(speed_rpm) (e.g. universal_bearing(...)); {model!r} "
+                        f"has none: leave speeds out (coefficients at the model's own speed) or make one element "
+                        f"per speed")
+    return sp
+
+
+@functools.lru_cache(maxsize=None)
+def _element_class() -> type:
+    """The ROSS ``BearingElement`` subclass behind ``FluidFilmBearingElement`` (built on first use: ROSS is
+    imported here, not when this module is)."""
+    try:
+        import ross as rs
+    except ImportError as exc:
+        raise ImportError(f"FluidFilmBearingElement needs ROSS 3.1 (ross-rotordynamics, Python >= 3.13): "
+                          f"pip install \"fluidfilm[ross]\" ({exc})") from exc
+
+    class FluidFilmBearingElement(rs.BearingElement):
+        __doc__ = _ELEMENT_DOC
+
+        def __init__(self, n, model, load, h_rel: float = 1e-4, speeds=None, tag=None, n_link=None,
+                     scale_factor=1, **kwargs):
+            given = sorted(set(kwargs) & set(_COEFFICIENT_KWARGS))
+            if given:
+                raise TypeError(f"FluidFilmBearingElement computes its coefficients from the film model; got {given}")
+            if not hasattr(model, "forces") or not hasattr(model, "bearing"):
+                raise TypeError(f"model must be a fluidfilm force model (forces(X, V), bearing); got {model!r}")
+            w = _check_load(load)
+            # the load on the journal in fluidfilm's frame (X2 along gravity); the equilibrium raises, naming the
+            # load, where the film cannot carry it
+            w_film = tuple(float(v) for v in to_ross(w))
+
+            def linearise(m):
+                x = np.asarray(_static.equilibrium(m, w_film)["X"], dtype=float)
+                kc = _coef.coefficients(m, x, h_rel)
+                return x, np.asarray(kc["K"], dtype=float), np.asarray(kc["C"], dtype=float)
+
+            x0, K, C = linearise(model)
+            if speeds is None:
+                k, c = matrix_to_ross(K), matrix_to_ross(C)
+                table: dict[str, Any] = {}
+            else:
+                table = {"speed": _check_speeds(speeds, model)}
+                ks, cs = [], []
+                for omega in table["speed"]:
+                    _, Ks, Cs = linearise(model.with_speed(float(omega) * 30.0 / math.pi))
+                    ks.append(matrix_to_ross(Ks))
+                    cs.append(matrix_to_ross(Cs))
+                k, c = np.moveaxis(np.array(ks), 0, -1), np.moveaxis(np.array(cs), 0, -1)
+            super().__init__(n=n, kxx=k[0, 0], kxy=k[0, 1], kyx=k[1, 0], kyy=k[1, 1], cxx=c[0, 0], cxy=c[0, 1],
+                             cyx=c[1, 0], cyy=c[1, 1], tag=tag if tag is not None else f"fluidfilm_{n}",
+                             n_link=n_link, scale_factor=scale_factor,
+                             radial_clearance=float(model.bearing.clearance), **table, **kwargs)
+            self.model = model
+            self.load = w
+            self.h_rel = float(h_rel)
+            self.x0 = x0                                   # fluidfilm's frame
+            self.equilibrium_position = to_ross(x0)       # ROSS's frame, from the bearing centre
+            self.eccentricity = float(np.hypot(*x0) / float(model.bearing.clearance))
+            self.K_film, self.C_film = K, C                # fluidfilm's frame
+            self.operating_speed = float(model.bearing.omega)  # [rad/s]: where K and C hold
+
+        def __deepcopy__(self, memo):
+            # ROSS deep-copies elements in some analyses; the film model (compiled kernels) is shared, not copied
+            new = copy.copy(self)
+            memo[id(self)] = new
+            for key, value in self.__dict__.items():
+                if key != "model":
+                    setattr(new, key, copy.deepcopy(value, memo))
+            return new
+
+    FluidFilmBearingElement.__module__ = __name__
+    FluidFilmBearingElement.__qualname__ = "FluidFilmBearingElement"
+    return FluidFilmBearingElement
+
+
+_ELEMENT_DOC = """A fluidfilm bearing as a ROSS bearing element: place it in ``rs.Rotor(...)`` like ``rs.BearingElement``.
+
+    It is a ``ross.BearingElement`` (ROSS is imported when the first one is made) holding the film's stiffness
+    and damping at its static equilibrium under ``load``, mapped into ROSS's frame (``matrix_to_ross``), so every
+    linear analysis of ROSS (``run_modal``, ``run_campbell``, ``run_unbalance_response``, a linear
+    ``run_time_response``) uses it as it is. ``run_nonlinear_response`` runs the rotor's time response with the
+    film's nonlinear force instead, with ROSS's gravity.
+
+    Parameters
+    ----------
+    n : int
+        The shaft node.
+    model : force model
+        Any fluidfilm force model (``ReynoldsSolver``, ``universal_bearing(...)``, the grooved solvers, a
+        surrogate); its bearing's speed is the operating speed (without ``speeds`` the coefficients are those at
+        that speed and ROSS's analyses at other speeds keep them, as for any constant ``BearingElement``).
+    load : tuple of float
+        (Fx, Fy) [N], ROSS's frame (y up): the static load the bearing carries, e.g. ``(0, -W)`` for its share
+        W of a horizontal rotor's weight (``static_loads(rotor)`` gives ROSS's own).
+    h_rel : float, default 1e-4
+        Relative step of the linearisation (``characteristics.coefficients.coefficients``).
+    speeds : array_like or None, default None
+        Rotor speeds [rad/s] (two or more, increasing) to tabulate the coefficients at, each at the equilibrium
+        under ``load`` at that speed, for ROSS's analyses over speed (``run_campbell``; ROSS interpolates between
+        them); needs a model with ``with_speed`` (``universal_bearing``). None: the model's speed only (constant
+        coefficients). The nonlinear response always runs the model itself, at its speed.
+    tag, n_link, scale_factor, **kwargs
+        As for ``ross.BearingElement`` (its coefficients come from the film: passing any is a TypeError).
+
+    Attributes
+    ----------
+    model, load, h_rel
+        As given (``load`` as an array).
+    equilibrium_position : numpy.ndarray
+        The journal centre at equilibrium [m], ROSS's frame, from the bearing centre (y < 0 under a load along -y).
+    x0 : numpy.ndarray
+        The same in fluidfilm's frame (X2 along gravity).
+    eccentricity : float
+        Its eccentricity ratio.
+    K_film, C_film : numpy.ndarray
+        The film's K [N/m] and C [N s/m] there, fluidfilm's frame (the element's ``kxx``... are them in ROSS's).
+    operating_speed : float
+        The model's speed [rad/s].
+
+    Raises
+    ------
+    ValueError
+        For a load that is not two finite numbers, or one the film cannot carry (named by the equilibrium); for
+        bad ``speeds``.
+    TypeError
+        For a model that is not a force model, coefficients passed by hand, or ``speeds`` with a model that has
+        no ``with_speed``.
+    """
+
+
+class _RossElementType(type):
+    """``FluidFilmBearingElement`` without importing ROSS here: calling it builds (once) and instantiates the
+    ``ross.BearingElement`` subclass; ``isinstance`` asks that class."""
+
+    def __call__(cls, *args, **kwargs) -> Any:
+        return _element_class()(*args, **kwargs)
+
+    def __instancecheck__(cls, obj) -> bool:
+        try:
+            return isinstance(obj, _element_class())
+        except ImportError:  # no ROSS here: nothing is one
+            return False
+
+
+class FluidFilmBearingElement(metaclass=_RossElementType):
+    __doc__ = _ELEMENT_DOC
+
+
+def _film_elements(rotor) -> list[Any]:
+    """The rotor's ``FluidFilmBearingElement``s (ROSS objects: typed Any)."""
+    return [b for b in rotor.bearing_elements if isinstance(b, FluidFilmBearingElement)]
+
+
+def static_loads(rotor) -> dict[int, tuple[float, float]]:
+    """The static loads ROSS's own static analysis (``rotor.run_static()``, its gravity) puts on the rotor's bearings.
+
+    Parameters
+    ----------
+    rotor : ross.Rotor
+        The rotor, on any bearings (e.g. placeholders: the reactions of a rotor on two bearings do not depend on
+        them; with more, they do).
+
+    Returns
+    -------
+    dict
+        ``{node: (0, -R)}`` [N], ROSS's frame: the load each bearing carries (``FluidFilmBearingElement``'s
+        ``load``, ``FilmBearings``' ``loads``).
+    """
+    forces = rotor.run_static().bearing_forces
+    return {int(b.n): (0.0, -float(forces[f"node_{int(b.n)}"])) for b in rotor.bearing_elements}
+
+
+def film_static_forces(rotor, t) -> np.ndarray:
+    """The films' static forces on the journals, as ROSS force rows: for ROSS's linear response about the equilibria.
+
+    ROSS's linear time response of a rotor on ``FluidFilmBearingElement``s, with its weight, starts at the bearing
+    centres' linearisation; adding these forces (each element's film force at its equilibrium, -``load``, at its
+    node's x, y) makes it the linear response about the films' equilibria, the linear counterpart of
+    ``run_nonlinear_response(..., start="equilibrium")``:
+    ``rotor.run_time_response(speed, F + film_static_forces(rotor, t), t, method="newmark", weight=True)``.
+
+    Parameters
+    ----------
+    rotor : ross.Rotor
+        The rotor.
+    t : array_like
+        Time points [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        (len(t), ndof) [N], ROSS's frame.
+    """
+    t = np.asarray(t, dtype=float)
+    out = np.zeros((t.size, int(rotor.ndof)))
+    nd = int(rotor.number_dof)
+    for b in _film_elements(rotor):
+        out[:, nd * int(b.n)] -= b.load[0]
+        out[:, nd * int(b.n) + 1] -= b.load[1]
+    return out
+
+
+def run_nonlinear_response(rotor, speed: float, t, F=None, start: str = "centre", weight: bool = True,
+                           newmark_type: str = "simple", **kwargs) -> dict:
+    """ROSS's Newmark time response of a rotor on ``FluidFilmBearingElement``s, with the films' nonlinear forces.
+
+    ROSS's gravity is on (``weight=True``, ROSS's ``Rotor.gravitational_force``): the films carry the rotor's
+    weight. The linear part of each film (the element's K and C) stays in ROSS's implicit step and the rest goes
+    through ``add_to_RHS`` (``FilmBearings``, ``linear_part="implicit"``), so the run is stable at any step.
+
+    Parameters
+    ----------
+    rotor : ross.Rotor
+        The rotor; its ``FluidFilmBearingElement``s are the films (other bearings stay linear).
+    speed : float
+        Rotor speed [rad/s]; every film model's bearing must turn at it.
+    t : array_like
+        Time points [s].
+    F : array_like or None, default None
+        External forces, (len(t), ndof) [N], ROSS's frame (None: zero; the weight is added by ROSS).
+    start : {"centre", "equilibrium"}, default "centre"
+        Where ROSS's displacements are measured from and the journals start at rest: ``"centre"``: the bearing
+        centres (ROSS's own convention: the journals fall under gravity and settle at the films' equilibria);
+        ``"equilibrium"``: each film's static equilibrium under its element's ``load`` (no fall; the loads must
+        be the reactions of ROSS's gravity, ``static_loads``).
+    weight : bool, default True
+        ROSS's gravity. ``start="equilibrium"`` needs it (the films there carry the weight).
+    newmark_type : {"simple", "robust"}, default "simple"
+        As for ``run_time_response``.
+    **kwargs
+        Passed to ``Rotor.run_time_response`` (e.g. ``tol``).
+
+    Returns
+    -------
+    dict
+        ``run_time_response``'s (``orbits``: absolute journal positions [m] in fluidfilm's frame, ``orbits_ross``:
+        ROSS's displacements at the film nodes, ``response``: ROSS's result, ...) and ``positions_ross``
+        {node: (len(t), 2) journal positions [m] in ROSS's frame, from the bearing centre}, ``film`` (the
+        ``FilmBearings`` it ran), ``start``.
+
+    Raises
+    ------
+    ValueError
+        For a rotor without ``FluidFilmBearingElement``s, an unknown ``start``, ``start="equilibrium"`` without
+        the weight, elements with different ``h_rel``, or a model whose speed is not ``speed``.
+    """
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+    if start == "equilibrium" and not weight:
+        raise ValueError("start='equilibrium' needs weight=True: the films there carry the rotor's weight, and "
+                         "without it they would push the journals up")
+    films = _film_elements(rotor)
+    if not films:
+        raise ValueError("the rotor has no FluidFilmBearingElement: place fluidfilm.interop.ross."
+                         "FluidFilmBearingElement(n=..., model=..., load=...) among its bearing elements")
+    h_rel = {b.h_rel for b in films}
+    if len(h_rel) > 1:
+        raise ValueError(f"the film elements were linearised with different h_rel {sorted(h_rel)}: use one")
+    film = FilmBearings(rotor, {int(b.n): b.model for b in films}, {int(b.n): tuple(b.load) for b in films},
+                        linear_part="implicit", h_rel=h_rel.pop())
+    for n in film.nodes:
+        # the callback returns the film's whole force (it carries ROSS's weight), measured from the chosen origin;
+        # the elements' K and C (at the equilibrium) stay in ROSS's step and are added back by the callback
+        film.f_origin[n] = np.zeros(2)
+        if start == "centre":
+            film.origin[n] = np.zeros(2)
+    film.refresh()
+    t = np.asarray(t, dtype=float)
+    # a copy: ROSS adds the weight into the force array it is given
+    F = np.zeros((t.size, film.ndof)) if F is None else np.array(F, dtype=float)
+    out = run_time_response(film, speed, t, F, newmark_type=newmark_type, weight=bool(weight), **kwargs)
+    out["positions_ross"] = {n: to_ross(out["orbits"][n]) for n in film.nodes}
+    out["film"], out["start"] = film, start
+    return out
 
 
 def min_log_dec(rotor, models: Mapping[int, ForceModel], loads: Mapping[int, tuple], num_modes: int = 12) -> dict:
