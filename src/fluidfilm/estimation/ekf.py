@@ -244,6 +244,8 @@ def run_filter(kernel, params, y, omega, phase, dt, mass, sgn, nsub, z0, P0, q, 
             if inflate_thr > 0.0 and ema > inflate_thr and k - last >= inflate_cooldown:
                 for i in range(n):
                     P[i, i] += p_inflate[i]
+                    if store:   # the smoother sees the inflation as this step's process noise
+                        Ppred_all[k, i, i] += p_inflate[i]
                 last = k
                 out_inflated[k] = True
                 # the update below uses the inflated covariance

@@ -41,8 +41,8 @@ class EstimatorSettings:
     lsb: float = 0.1e-6
     nsub: int = 2
     q_v: float = 2.0e-3
-    q_load: float = 0.05
-    q_imbalance: float = 0.05
+    q_load: float = 0.02
+    q_imbalance: float = 0.02
     q_viscosity: float = 0.1
     p0_load: float = 0.5
     p0_imbalance: float = 1.0
@@ -52,7 +52,7 @@ class EstimatorSettings:
     nis_threshold: float = 1.3
     persist_s: float = 0.08
     flag_after_s: float = 0.1
-    inflate_threshold: float = 4.0
+    inflate_threshold: float = 2.5
     inflate_tau_s: float = 0.005
     inflate_cooldown_s: float = 0.02
     inflate_fraction: float = 0.3
