@@ -990,6 +990,69 @@ def render_controller_training(reports: Path) -> str:
               f" ({c['note']}).\n")
 
 
+def _pct(x) -> str:
+    return _num(100.0 * x, ".2f", " %")
+
+
+def render_online_assessment(reports: Path) -> str:
+    """The estimator against the reference plant and the centreline baseline, per scenario (docs/online_assessment.md)."""
+    oa = _load(reports, "online_assessment.json")
+    rows = []
+    for name, r in oa["scenarios"].items():
+        f = r.get("filter", {})
+        fl = r["flags"]
+        flag = ("mismatch" if fl["mismatch_first_s"] is not None else "") + \
+            (" out of domain" if fl["out_of_domain_first_s"] is not None else "")
+        role = "made to trip: " + r["trip"].replace("_", " ") if r.get("trip") else (
+            "blind spot" if r.get("blind_spot") else "")
+        rows.append([f"`{name}`" + (f" ({role})" if role else ""), _pct(f.get("load_rel_err")),
+                     _pct(f.get("imbalance_rel_err")), _num(f.get("imbalance_phase_err_deg"), ".2f", "°"),
+                     _pct(f.get("viscosity_rel_err")), _pct(r["sd_end"]["viscosity_rel"]),
+                     _pct(r["baseline"]["load_rel_err"]), flag.strip() or "none", _num(r["us_per_sample"], ".1f")])
+    m = oa["metrics"]
+    met = oa["goals_met"]
+    goals = oa["goals"]
+    keys = (f"Keys: load {_pct(m['estimator_load_rel_err'])} (goal {_pct(goals['load_rel_err'])}), imbalance "
+            f"{_pct(m['estimator_imbalance_rel_err'])} (goal {_pct(goals['imbalance_rel_err'])}), viscosity "
+            f"{_pct(m['estimator_viscosity_rel_err'])} (goal {_pct(goals['viscosity_rel_err'])}); "
+            f"{m['estimator_us_per_sample']:.1f} µs per sample (median; goal {goals['us_per_sample']:g}; the worst "
+            f"scenario {m['estimator_us_per_sample_worst']:.0f} µs); {m['estimator_vs_centreline_load_err_ratio']:.2f}x "
+            f"the centreline baseline's accuracy at the least (goal {goals['vs_centreline']:g}x); false flags "
+            f"{_pct(m['estimator_false_flag_rate'])} of the samples, trip scenarios caught "
+            f"{m['estimator_trip_flag_rate']:.0%}. Goals met: "
+            + ", ".join(k.replace("_", " ") for k, v in met.items() if v) + "; missed: "
+            + (", ".join(k.replace("_", " ") for k, v in met.items() if not v) or "none")
+            + f". Measured on {oa['machine']}.")
+    return (_table(["scenario", "load", "imbalance", "phase", "viscosity", "viscosity 1σ at the end (filter's own)",
+                    "centreline baseline, load", "flags", "µs per sample"], rows) + "\n\n" + keys)
+
+
+def render_online_assessment_summary(reports: Path) -> str:
+    """One sentence for the README: what the estimator estimates and how well, beside the baseline."""
+    oa = _load(reports, "online_assessment.json")
+    sc = oa["scenarios"]
+    normal = [n for n, r in sc.items() if not r.get("trip") and not r.get("blind_spot")]
+    good = [n for n in normal if n != oa["worst_scenario"]["load_rel_err"]]
+    worst = oa["worst_scenario"]["load_rel_err"]
+    mx = lambda names, k: max(sc[n]["filter"][k] for n in names)   # noqa: E731
+    base = lambda names: min(sc[n]["baseline"]["load_rel_err"] for n in names)   # noqa: E731
+    m = oa["metrics"]
+    return (f"From two probes and a speed signal the on-line estimator (the universal surrogate in a compiled "
+            f"extended Kalman filter) tracks the static load, the imbalance and the oil's viscosity of a rotor simulated "
+            f"with the reference solver within {_pct(mx(good, 'load_rel_err'))}, {_pct(mx(good, 'imbalance_rel_err'))} "
+            f"and {_pct(mx(good, 'viscosity_rel_err'))} after 0.2 s on {len(good)} scenarios ("
+            + ", ".join(f"`{n}`" for n in good) + "), where the plants' centreline-to-Sommerfeld estimate misses the load "
+            f"by {_pct(base([n for n in good if sc[n]['dynamic']]))} or more; on `{worst}`, whose film outweighs the "
+            f"rotor's inertia, it misses by {_pct(sc[worst]['filter']['load_rel_err'])} (the baseline, told the right "
+            f"viscosity, {_pct(sc[worst]['baseline']['load_rel_err'])}). {m['estimator_us_per_sample']:.0f} µs per "
+            f"sample on one core; the mismatch and out-of-domain flags "
+            + ("fire on the scenarios made to trip them and on no other" if m["estimator_false_flag_rate"] == 0.0
+               and m["estimator_trip_flag_rate"] == 1.0 else
+               f"catch {m['estimator_trip_flag_rate']:.0%} of the scenarios made to trip them and flag "
+               f"{_pct(m['estimator_false_flag_rate'])} of the others' samples")
+            + " ([docs/online_assessment.md](docs/online_assessment.md)).")
+
+
 RENDERERS: dict[str, Callable[[Path], str]] = {
     "train_time": render_train_time,
     "train_time_ci": render_train_time_ci,
@@ -1021,6 +1084,8 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "surrogate_goals": render_surrogate_goals,
     "control": render_control,
     "figures": render_figures,
+    "online_assessment": render_online_assessment,
+    "online_assessment_summary": render_online_assessment_summary,
 }
 
 

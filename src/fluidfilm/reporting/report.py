@@ -55,6 +55,7 @@ class ReportInputs:
     runup: dict | None = None         # reports/runup.json, where that stage ran
     cavitation_rules: dict | None = None  # reports/cavitation_rules.json, where that stage ran
     universal: dict | None = None     # reports/universal.json, where that stage ran
+    online_assessment: dict | None = None  # reports/online_assessment.json, where that stage ran
     # reports/reproduce_timing.json: each stage's last wall time, written by `make reproduce` as stages finish
     # (not a DVC dependency: it is the pipeline's own record, and changes while the pipeline runs)
     reproduce_timing: dict | None = None
@@ -94,6 +95,7 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         paper_scale_beyond=tuple(_load(rd / name) for name in PAPER_SCALE_REPORTS[1:] if (rd / name).exists()),
         runup=optional(rd / "runup.json"), cavitation_rules=optional(rd / "cavitation_rules.json"),
         universal=optional(rd / "universal.json"),
+        online_assessment=optional(rd / "online_assessment.json"),
         reproduce_timing=optional(rd / "reproduce_timing.json"), dvc_stages=pipeline_stages(rd))
 
 
@@ -229,6 +231,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
         metrics.update(inp.cavitation_rules["metrics"])
     if inp.universal is not None:  # the universal plain-bearing surrogate on bearings it never saw
         metrics.update(universal_metrics(inp.universal))
+    if inp.online_assessment is not None:  # the on-line estimator against the reference plant and the baseline
+        metrics.update(inp.online_assessment["metrics"])
     for study in ("grading_study", "ablation"):
         summary = getattr(inp, study)
         if summary is not None:

@@ -1,0 +1,183 @@
+"""Synthetic plant data the estimator never sees the inside of: the rotor in the *reference* solver, probes.
+
+``simulate_plant(model, scenario)`` integrates the rotor (paper eq. 4) in any force model with a speed kernel
+(the pipeline passes ``ReynoldsSolver`` on a converged grid, not the surrogate), with the load, imbalance and
+viscosity following the scenario's piecewise-linear schedules; the viscosity enters as F = (mu/mu0) F(mu0),
+exact for a plain film without supply pressure. ``probe_signals`` turns the true orbit into what two proximity
+probes and a speed pickup record: sampled at ``fs``, mechanical/electrical runout (a once-per-rev pattern with
+a 2x harmonic), white noise, quantisation to the digitiser's step.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from numba import njit
+
+#: schedule columns: static load W1, W2 [N], imbalance a, b [kg m] (m_u d (cos phi, sin phi)), viscosity ratio s
+SCHEDULE_COLUMNS = ("W1", "W2", "a", "b", "s")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One synthetic plant record.
+
+    ``times`` (K,) [s] and ``values`` (K, 5) [W1, W2, a, b, s]: the true parameters, linear between the knots
+    and held outside; ``speed_rpm`` the (steady) shaft speed; ``mass`` the rotor mass per bearing [kg];
+    ``t_end`` [s] of record after ``t_warm`` [s] of settling (not recorded); probe settings: ``fs`` [Hz],
+    ``noise`` [m] (standard deviation), ``lsb`` [m] (quantisation step), ``runout`` [m] per axis as
+    ((c1, s1), (c2, s2)) harmonics of the shaft angle; ``runout_known_error``: the fraction of the runout the
+    slow-roll vector handed to the estimator misses (the rest it subtracts); ``force_2x`` [N]: a twice-per-rev
+    force (a misaligned coupling, a cracked shaft) in the plant alone: a model mismatch.
+    """
+
+    name: str
+    times: tuple
+    values: tuple
+    speed_rpm: float
+    mass: float
+    t_end: float = 0.5
+    t_warm: float = 0.05
+    fs: float = 10000.0
+    noise: float = 1.0e-6
+    lsb: float = 0.1e-6
+    runout: tuple = (((3.0e-6, 1.0e-6), (0.5e-6, 0.0)), ((1.0e-6, -2.0e-6), (0.0, 0.5e-6)))
+    runout_known_error: float = 0.05
+    sgn: int = 1
+    force_2x: float = 0.0                         # N, a twice-per-rev force the estimator's model lacks
+    bearing: dict = field(default_factory=dict)   # overrides of the description's bearing (the plant's own)
+    description: str = ""
+
+    def truth(self, t) -> np.ndarray:
+        """(len(t), 5): the true W1, W2, a, b, s at times t [s]."""
+        tt = np.asarray(self.times, dtype=float)
+        vv = np.asarray(self.values, dtype=float)
+        return np.stack([np.interp(t, tt, vv[:, j]) for j in range(vv.shape[1])], axis=-1)
+
+
+@njit(cache=True, inline="always")
+def _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t, x1, x2, v1, v2):
+    W1 = np.interp(t, kt, kv[:, 0])
+    W2 = np.interp(t, kt, kv[:, 1])
+    ua = np.interp(t, kt, kv[:, 2])
+    ub = np.interp(t, kt, kv[:, 3])
+    s = np.interp(t, kt, kv[:, 4])
+    f1, f2 = kernel(params, omega, x1, x2, v1, v2)
+    w2 = omega * omega
+    cp = math.cos(omega * t)
+    sp = math.sin(omega * t)
+    c2p = math.cos(2.0 * omega * t)
+    s2p = math.sin(2.0 * omega * t)
+    return ((s * f1 + W1 + w2 * (ua * cp - ub * sp) + f2x * c2p) * inv_m,
+            (s * f2 + W2 + sgn * w2 * (ua * sp + ub * cp) + f2x * s2p) * inv_m)
+
+
+@njit(cache=True)
+def _plant_loop(kernel, params, omega, mass, sgn, f2x, dt, n_steps, record_every, t0, x0, v0, kt, kv, clear2, out):
+    """RK4 at fixed dt from t0; ``out`` rows: x1, x2, v1, v2 at t0 and every ``record_every`` steps after.
+    Returns the rows written (fewer where the journal reached the sleeve: the run stops there)."""
+    x1, x2, v1, v2 = x0[0], x0[1], v0[0], v0[1]
+    inv_m = 1.0 / mass
+    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = x1, x2, v1, v2
+    n = 1
+    for step in range(n_steps):
+        t = t0 + step * dt
+        h = dt
+        a1, a2 = _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t, x1, x2, v1, v2)
+        b1, b2 = _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t + 0.5 * h, x1 + 0.5 * h * v1, x2 + 0.5 * h * v2,
+                      v1 + 0.5 * h * a1, v2 + 0.5 * h * a2)
+        kx1 = v1 + 0.5 * h * a1
+        kx2 = v2 + 0.5 * h * a2
+        c1, c2 = _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t + 0.5 * h, x1 + 0.5 * h * kx1, x2 + 0.5 * h * kx2,
+                      v1 + 0.5 * h * b1, v2 + 0.5 * h * b2)
+        lx1 = v1 + 0.5 * h * b1
+        lx2 = v2 + 0.5 * h * b2
+        d1, d2 = _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t + h, x1 + h * lx1, x2 + h * lx2,
+                      v1 + h * c1, v2 + h * c2)
+        mx1 = v1 + h * c1
+        mx2 = v2 + h * c2
+        x1 += h / 6.0 * (v1 + 2.0 * kx1 + 2.0 * lx1 + mx1)
+        x2 += h / 6.0 * (v2 + 2.0 * kx2 + 2.0 * lx2 + mx2)
+        v1 += h / 6.0 * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
+        v2 += h / 6.0 * (a2 + 2.0 * b2 + 2.0 * c2 + d2)
+        if not (math.isfinite(x1) and math.isfinite(x2)) or x1 * x1 + x2 * x2 >= clear2:
+            break
+        if (step + 1) % record_every == 0:
+            out[n, 0], out[n, 1], out[n, 2], out[n, 3] = x1, x2, v1, v2
+            n += 1
+    return n
+
+
+@dataclass
+class PlantRecord:
+    """A synthetic record: ``frame`` what the probes and the speed pickup recorded (the probe-file columns
+    ``time, x, y, speed``: s, m, m, rpm), ``truth`` (N, 5) the true W1, W2, a, b, s at each sample, ``x_true``
+    (N, 4) the journal's true state, ``runout_supplied``: the slow-roll runout vector handed to the estimator
+    (the part of the true runout it knows), and the plant's wall time [s]."""
+
+    scenario: Scenario
+    frame: pd.DataFrame
+    truth: np.ndarray
+    x_true: np.ndarray
+    runout_supplied: tuple
+    wall_s: float
+    stopped_early: bool
+
+
+def runout_signal(runout, phase) -> np.ndarray:
+    """(len(phase), 2) [m]: sum over orders k = 1, 2, ... of c_k cos(k p) + s_k sin(k p), per axis."""
+    phase = np.asarray(phase, dtype=float)
+    out = np.zeros((phase.size, 2))
+    for axis in range(2):
+        for k, (c, s) in enumerate(runout[axis], start=1):
+            out[:, axis] += c * np.cos(k * phase) + s * np.sin(k * phase)
+    return out
+
+
+def simulate_plant(model, scenario: Scenario, dt: float = 5e-6, seed: int = 0) -> PlantRecord:
+    """The scenario's rotor in ``model`` (a force model with a speed kernel; the pipeline's reference solver),
+    recorded through the probes. Starts at the static equilibrium of the first knot's load and viscosity,
+    settles for ``t_warm`` (not recorded), then records ``t_end`` s at ``fs``."""
+    import time
+
+    from fluidfilm.characteristics.static import equilibrium
+
+    sk = model.speed_kernel()
+    if sk is None:
+        raise ValueError(f"{model.name}: the plant needs a force model with a speed kernel")
+    kernel, params = sk
+    omega = scenario.speed_rpm * 2.0 * math.pi / 60.0
+    omega_ref = model.bearing.speed_rpm * 2.0 * math.pi / 60.0
+    vals = np.asarray(scenario.values, dtype=float)
+    w0 = vals[0, :2] / vals[0, 4] * (omega_ref / omega)   # the load the model at its own speed and mu0 sees
+    eq = equilibrium(model, tuple(w0))
+    x0 = np.array([eq["X1"], eq["X2"]])
+    record_every = int(round(1.0 / (scenario.fs * dt)))
+    if abs(record_every * dt * scenario.fs - 1.0) > 1e-9:
+        raise ValueError(f"fs = {scenario.fs} Hz is not a whole number of plant steps of {dt} s")
+    t0 = -scenario.t_warm
+    n_steps = int(round((scenario.t_end + scenario.t_warm) / dt))
+    kt = np.asarray(scenario.times, dtype=float)
+    out = np.zeros((n_steps // record_every + 1, 4))
+    tic = time.perf_counter()
+    n = _plant_loop(kernel, params, omega, scenario.mass, float(scenario.sgn), float(scenario.force_2x), dt, n_steps, record_every, t0, x0,
+                    np.zeros(2), kt, vals, model.clearance ** 2, out)
+    wall = time.perf_counter() - tic
+    t_all = t0 + np.arange(n) * record_every * dt
+    keep = t_all >= -1e-12
+    t = t_all[keep]
+    xs = out[:n][keep]
+    rng = np.random.default_rng(seed)
+    phase = omega * t
+    ro = runout_signal(scenario.runout, phase)
+    meas = xs[:, :2] + ro + rng.normal(0.0, scenario.noise, size=(t.size, 2))
+    if scenario.lsb > 0.0:
+        meas = np.round(meas / scenario.lsb) * scenario.lsb
+    frame = pd.DataFrame({"time": t, "x": meas[:, 0], "y": meas[:, 1],
+                          "speed": np.full(t.size, scenario.speed_rpm)})
+    known = tuple(tuple((c * (1.0 - scenario.runout_known_error), s * (1.0 - scenario.runout_known_error))
+                        for c, s in axis) for axis in scenario.runout)
+    return PlantRecord(scenario, frame, scenario.truth(t), xs, known, wall,
+                       stopped_early=bool(t[-1] < scenario.t_end - 2.0 / scenario.fs) if t.size else True)
