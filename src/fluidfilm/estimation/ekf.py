@@ -212,8 +212,8 @@ def run_filter(kernel, params, y, omega, phase, dt, mass, sgn, nsub, z0, P0, q, 
             for i in range(n):
                 for j in range(n):
                     acc = 0.0
-                    for l in range(n):
-                        acc += T1[i, l] * Phi[j, l]
+                    for col in range(n):
+                        acc += T1[i, col] * Phi[j, col]
                     T2[i, j] = acc
             for i in range(n):
                 for j in range(n):
@@ -280,7 +280,6 @@ def run_smoother(out_z, out_P, Phi_all, Ppred_all, zpred_all, zs, Ps):
     """Rauch-Tung-Striebel: the smoothed means (N, 9) and covariances (N, 9, 9) of the whole window from the
     filter's stored pass (``run_filter(..., store=True)``)."""
     N = out_z.shape[0]
-    n = out_z.shape[1]
     zs[N - 1] = out_z[N - 1]
     Ps[N - 1] = out_P[N - 1]
     for k in range(N - 2, -1, -1):

@@ -85,7 +85,7 @@ class Estimates:
         """The estimates as a table: load [N], imbalance [kg m] and phase [rad], viscosity [Pa s], each with its
         2-sigma band (``*_lo``, ``*_hi``), the position [m], the flags and the baseline's load."""
         z, sd = (self.zs, self.sds) if smoothed else (self.z, self.sd)
-        if z is None:
+        if z is None or sd is None:
             raise ValueError("no smoothed estimates: run estimate(..., settings with smooth=True)")
         out = {"time": self.t, "x1": z[:, 0], "x2": z[:, 1]}
         for name, val, err in (("load", *_magnitude(z[:, 4], z[:, 5], sd[:, 4], sd[:, 5])),

@@ -95,7 +95,7 @@ def check_probe_frame(raw: pd.DataFrame, clearance: float, name: str = "record",
         raise ProbeFileError(f"{name}: the speed signal (column 'speed', rpm) is missing; the estimator needs the "
                              f"shaft speed for the imbalance's phase (or pass a steady speed_rpm)")
     out = pd.DataFrame({"time": raw["time"], "x": raw[cx], "y": raw[cy],
-                        "speed": raw["speed"] if "speed" in raw.columns else float(speed_rpm)})
+                        "speed": raw["speed"] if "speed" in raw.columns else float(speed_rpm or 0.0)})
     if len(out) < 10:
         raise ProbeFileError(f"{name}: {len(out)} samples; at least 10 needed")
     for col, src in (("time", "time"), ("x", cx), ("y", cy), ("speed", "speed")):

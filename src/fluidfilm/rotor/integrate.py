@@ -873,6 +873,9 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float | None = 1
 
         if precision not in ("float64", "float32"):
             raise ValueError(f"precision must be 'float64' or 'float32', got {precision!r}")
+        if dt is None:
+            raise ValueError("dt=None (the adaptive integrator) does not carry a film's content; give a film with "
+                             "memory a fixed dt")
         return simulate_film(model, rotor, t_end, dt, x0, v0, eps_stop=eps_stop, record_every=record_every,
                              eps_substep=eps_substep, max_substeps=max_substeps, t0=t0, speed=speed,
                              film_content=film_content)

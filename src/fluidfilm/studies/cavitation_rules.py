@@ -226,7 +226,7 @@ def mass_balance(bearing: JournalBearing, grid, s, eps: float, whirl_rad_s: floa
     worst = 0.0
     for k in range(n_steps):
         xo, xn = x(k * dt), x((k + 1) * dt)
-        ea.commit_film(ep, ep.k_omega, *xo, *xn, dt, th_n, content, p, th)
+        ea.commit_film(ep, ep.k_omega, xo[0], xo[1], xn[0], xn[1], dt, th_n, content, p, th)
         ea.journal_gap(ep, xn[0] / c, xn[1] / c, h, hf)
         change, inflow, scale = ea.flow_balance(ep, ep.k_omega, h, hf, 1.0 / dt, content, p, th)
         worst = max(worst, abs(change - inflow) / scale)

@@ -1505,18 +1505,19 @@ def _import_kernel_module(text: str, folder, prefix: str):
     path = folder / f"{prefix}_{digest}.py"
     if not (path.exists() and path.read_text() == text):
         folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".tmp", dir=folder)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".tmp", dir=folder)
+        tmp: str | None = tmp_name
         try:
             with os.fdopen(fd, "w") as f:
                 f.write(text)
             umask = os.umask(0)
             os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; the cache is an ordinary file
+            os.chmod(tmp_name, 0o666 & ~umask)  # mkstemp makes 0600; the cache is an ordinary file
             try:
-                os.link(tmp, path)           # atomic, and never over a file another process made
+                os.link(tmp_name, path)           # atomic, and never over a file another process made
             except FileExistsError:
                 if path.read_text() != text:  # damaged: replaced whole (its numba cache is then rebuilt)
-                    os.replace(tmp, path)
+                    os.replace(tmp_name, path)
                     tmp = None
         finally:
             if tmp is not None:

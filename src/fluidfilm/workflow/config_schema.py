@@ -93,10 +93,10 @@ def ranged(*, optional_key: bool = False, **bounds: Any) -> Any:
 
 #: the values the library admits, read from it (one place of truth) where it says them without heavy imports
 _CAVITATION = tuple(CAVITATION_MODELS)
-_POS = {"gt": 0}                      # a positive physical quantity
-_COUNT = {"ge": 1}                    # a count
-_FRACTION = {"ge": 0, "le": 1}
-_ECC = {"ge": 0, "lt": 1, "why": "an eccentricity, 0 <= eps < 1"}
+_POS: dict[str, Any] = {"gt": 0}                      # a positive physical quantity
+_COUNT: dict[str, Any] = {"ge": 1}                    # a count
+_FRACTION: dict[str, Any] = {"ge": 0, "le": 1}
+_ECC: dict[str, Any] = {"ge": 0, "lt": 1, "why": "an eccentricity, 0 <= eps < 1"}
 
 
 # --- bearing -----------------------------------------------------------------------------------
