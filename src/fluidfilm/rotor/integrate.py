@@ -717,11 +717,32 @@ def _force_at(kernel, params, speed_kernel, consts_speed, omega_ref):
     return at_speed
 
 
-def _counted(model, fn):
-    """Run ``fn()`` and return (its value, force evaluations it added to the model's domain counter): the
-    step checks' evaluations must not count as the trajectory's."""
+def _integer_arrays(params, out: list) -> list:
+    """Every integer ndarray inside ``params`` (tuples and named tuples, nested): a model's counters."""
+    if isinstance(params, np.ndarray):
+        if params.dtype.kind in "iu":
+            out.append(params)
+    elif isinstance(params, tuple):
+        for p in params:
+            _integer_arrays(p, out)
+    return out
+
+
+def _counted(model, fn, *param_sets):
+    """Run ``fn()`` with the model's counters kept as they were, and return (its value, force evaluations it
+    added to the model's domain counter, 0 where the counters live in ``param_sets``): the step checks'
+    evaluations must count neither as the trajectory's domain evaluations nor as an ensemble's or a hybrid's
+    evaluations, flags and fallbacks.  The counters are the integer arrays of the kernels' parameters
+    (evaluating a kernel changes no other integer array, so restoring them all restores the counts)."""
+    arrays = _integer_arrays(param_sets, [])
+    saved = [a.copy() for a in arrays]
     before = int(model.n_outside_domain)
-    value = fn()
+    try:
+        value = fn()
+    finally:
+        for a, keep in zip(arrays, saved):
+            a[...] = keep
+    # what is still counted after the restore (a model whose counter lives outside its kernel's parameters)
     return value, int(model.n_outside_domain) - before
 
 
@@ -1022,7 +1043,8 @@ def _run_fixed(model, kernel, params, speed_kernel, consts, x0, v0, t0, dt, n_st
             if status != OK:
                 break
             if limit_at is not None:
-                limit, extra = _counted(model, lambda: limit_at(x, v, t))
+                limit, extra = _counted(model, lambda: limit_at(x, v, t), params,
+                                        speed_kernel[1] if speed_kernel is not None else ())
                 check_outside += extra
                 if dt > limit.dt_max * (1.0 + 1e-9):
                     status = UNRESOLVED

@@ -90,6 +90,11 @@ CAPTIONS: dict[str, str] = {
         "Sub-synchronous amplitude (top, log scale) and whirl frequency ratio (bottom) against shaft speed on the "
         "run-up (solid) and run-down (dashed), per force model; dotted: the onset from each transient, dashed: "
         "Lund's linear threshold, star: Lund's whirl ratio there. The gap between the curves is the hysteresis."),
+    "figures/online_assessment.png": (
+        "On-line assessment from two probes (stage online_assessment), one column per scenario (a load step, a "
+        "warm-up, a blade loss, a misalignment the model lacks): the EKF's static load, imbalance and viscosity "
+        "against time with their 2-sigma bands, the offline RTS smoother, the reference plant's true values and "
+        "the centreline baseline's load; bottom: the innovation test and where the mismatch flag fires."),
     "figures/cavitation_rules_orbits.png": (
         "The paper's seven cases (Fig. 4 a-g) under three cavitation rules on one grid, one feed (a groove at "
         "the top) and one solver: settled orbits in units of c, gravity down the page; black: the mass-conserving "
