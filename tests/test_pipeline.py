@@ -203,13 +203,14 @@ def test_readme_tables_are_generated_from_the_reports():
     for path in readme.pages(ROOT / "README.md"):
         text = path.read_text()
         assert readme.fill(text, ROOT / "reports", strict=True) == text, f"{path} is stale: python -m fluidfilm.reporting.readme"
-    # the README shows the headline and three generated sentences (the universal model's accuracy, what decides the
-    # paper's verdicts, the on-line estimator) only; the results page every table of the renderers (bench_* aside)
+    # the README shows the headline and four generated sentences (the universal model's accuracy, what decides the
+    # paper's verdicts, the cavitation rules against the mass-conserving film, the on-line estimator) only; the results page every table of the renderers (bench_* aside)
     readme_blocks = [m["name"] for m in readme.BLOCK.finditer((ROOT / "README.md").read_text())]
     assert readme_blocks == ["commands", "universal_summary", "headline", "paper_scale_mechanism",
-                             "online_assessment_summary"]
+                             "cavitation_rules_summary", "online_assessment_summary"]
     results = {m["name"] for m in readme.BLOCK.finditer((ROOT / "docs" / "results.md").read_text())}
-    readme_only = {"commands", "universal_summary", "paper_scale_mechanism", "online_assessment_summary"}
+    readme_only = {"commands", "universal_summary", "paper_scale_mechanism", "online_assessment_summary",
+                   "cavitation_rules_summary"}
     assert set(readme.RENDERERS) - readme_only <= results, set(readme.RENDERERS) - readme_only - results
 
 
