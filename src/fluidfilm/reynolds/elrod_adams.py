@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit
 
 from fluidfilm.core.bearing import JournalBearing
-from fluidfilm.core.force_model import WHOLE_FILM, ValidityDomain
+from fluidfilm.core.force_model import ReferenceModel
 from fluidfilm.core.states import as_state_pairs
 from fluidfilm.reynolds.mesh import FilmMesh
 
@@ -649,7 +649,7 @@ def quasi_static_force_at_speed(sp, omega, x1, x2, v1, v2):
     return quasi_static_force((ep, k_ref * (omega / w_ref), dt_inst), x1, x2, v1, v2)
 
 
-class ElrodAdamsSolver:
+class ElrodAdamsSolver(ReferenceModel):
     """Mass-conserving (JFO) cavitation: the Elrod-Adams p-theta film of a fed journal bearing.
 
     The same grid, scaling and force integration as ``ReynoldsSolver`` (module doc for the scheme).  As a
@@ -769,27 +769,7 @@ class ElrodAdamsSolver:
     def name(self) -> str:
         return "ElrodAdamsSolver" if self.cavitation == "jfo" else f"ElrodAdamsSolver[{self.cavitation}]"
 
-    @property
-    def bearing(self) -> JournalBearing:
-        return self._bearing
-
-    @property
-    def clearance(self) -> float:
-        return float(self._c)
-
-    @property
-    def validity(self) -> ValidityDomain:
-        return WHOLE_FILM
-
-    def reset_domain_counter(self) -> None:
-        """Nothing is counted: a physics-based model is valid wherever the film exists."""
-
-    def domain_report(self) -> str | None:
-        return None
-
-    @property
-    def n_outside_domain(self) -> int:
-        return 0
+    # bearing, clearance, validity (the whole film) and the empty domain report: ``ReferenceModel``
 
     @property
     def n_theta(self) -> int:
