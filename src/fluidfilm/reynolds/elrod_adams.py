@@ -109,10 +109,16 @@ def journal_gap(ep, e1, e2, h, hf):
 
 
 @njit(cache=True, inline="always")
-def _coefficients(ep, h, hf, k_omega, aw, ae, an, ap, cout, cin):
-    """Per angle: the diffusive coefficients (as ``kernels.node_equations``) and the Couette coefficients
-    K_omega H_face / dtheta of the node's outflow and of its west neighbour's inflow."""
+def _coefficients(ep, h, hf, k_omega):
+    """Per angle (aw, ae, an, ap, cout, cin): the diffusive coefficients (as ``kernels.node_equations``) and the
+    Couette coefficients K_omega H_face / dtheta of the node's outflow and of its west neighbour's inflow."""
     n = ep.n_theta
+    aw = np.empty(n)
+    ae = np.empty(n)
+    an = np.empty(n)
+    ap = np.empty(n)
+    cout = np.empty(n)
+    cin = np.empty(n)
     for i in range(n):
         im = i - 1 if i > 0 else n - 1
         h3w = hf[im] * hf[im] * hf[im]
@@ -123,6 +129,7 @@ def _coefficients(ep, h, hf, k_omega, aw, ae, an, ap, cout, cin):
         ap[i] = aw[i] + ae[i] + 2.0 * an[i]
         cout[i] = k_omega * hf[i] * ep.inv_dtheta
         cin[i] = k_omega * hf[im] * ep.inv_dtheta
+    return aw, ae, an, ap, cout, cin
 
 
 @njit(cache=True, error_model="numpy")
@@ -362,13 +369,7 @@ def ea_sweeps(ep, k_omega, h, hf, inv_dt, content, p, th, tol, max_sweeps):
     """
     n = ep.n_theta
     nz = ep.n_z
-    aw = np.empty(n)
-    ae = np.empty(n)
-    an = np.empty(n)
-    ap = np.empty(n)
-    cout = np.empty(n)
-    cin = np.empty(n)
-    _coefficients(ep, h, hf, k_omega, aw, ae, an, ap, cout, cin)
+    aw, ae, an, ap, cout, cin = _coefficients(ep, h, hf, k_omega)
     w = ep.sor_omega
     tk = ep.kvc * inv_dt
     if inv_dt == 0.0:
@@ -567,13 +568,7 @@ def flow_balance(ep, k_omega, h, hf, inv_dt, content, p, th):
     residuals: a mass-conserving solution closes it to round-off."""
     n = ep.n_theta
     nz = ep.n_z
-    aw = np.empty(n)
-    ae = np.empty(n)
-    an = np.empty(n)
-    ap = np.empty(n)
-    cout = np.empty(n)
-    cin = np.empty(n)
-    _coefficients(ep, h, hf, k_omega, aw, ae, an, ap, cout, cin)
+    aw, ae, an, ap, cout, cin = _coefficients(ep, h, hf, k_omega)
     tk = ep.kvc * inv_dt
     change = 0.0
     inflow = 0.0
