@@ -23,6 +23,7 @@ GROUPS = {
     "metrics": ("compare", "metrics"), "controller": ("train_controller", "controller"), "protocol": ("train_surrogate", "protocol"),
     "characteristics": ("characteristics", "characteristics"), "runup": ("runup", "runup"),
     "cavitation_rules": ("cavitation_rules", "cavitation_rules"),
+    "jfo_surrogate": ("jfo_surrogate", "jfo_surrogate"),
 }
 
 

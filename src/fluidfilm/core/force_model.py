@@ -274,7 +274,7 @@ class TransientFilmModel(Protocol):
     ``transient_kernels()`` -> ``(stage, commit, flows, params)``, compiled: ``stage(params, K_omega, x1, x2, v1,
     v2, dt, tol, th_n, content, p, th) -> (F1, F2, sweeps, status)``, ``commit(params, K_omega, x1_old, x2_old,
     x1, x2, dt, th_n, content, p, th) -> (sweeps, status)`` and ``flows(params, omega, e1, e2, p, th) -> (side
-    flow, friction power)``; ``steady_field(x, omega)`` -> (p, content) at rest.
+    flow, friction power, F1, F2)`` (the film's force of the field); ``steady_field(x, omega)`` -> (p, content) at rest.
 
     Examples
     --------

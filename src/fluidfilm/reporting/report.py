@@ -56,6 +56,7 @@ class ReportInputs:
     cavitation_rules: dict | None = None  # reports/cavitation_rules.json, where that stage ran
     universal: dict | None = None     # reports/universal.json, where that stage ran
     online_assessment: dict | None = None  # reports/online_assessment.json, where that stage ran
+    jfo_surrogate: dict | None = None  # reports/jfo_surrogate.json, where that stage ran
     # reports/reproduce_timing.json: each stage's last wall time, written by `make reproduce` as stages finish
     # (not a DVC dependency: it is the pipeline's own record, and changes while the pipeline runs)
     reproduce_timing: dict | None = None
@@ -95,7 +96,7 @@ def load_inputs(report_dir: Path | str, models_dir: Path | str, dataset_dir: Pat
         paper_scale_beyond=tuple(_load(rd / name) for name in PAPER_SCALE_REPORTS[1:] if (rd / name).exists()),
         runup=optional(rd / "runup.json"), cavitation_rules=optional(rd / "cavitation_rules.json"),
         universal=optional(rd / "universal.json"),
-        online_assessment=optional(rd / "online_assessment.json"),
+        online_assessment=optional(rd / "online_assessment.json"), jfo_surrogate=optional(rd / "jfo_surrogate.json"),
         reproduce_timing=optional(rd / "reproduce_timing.json"), dvc_stages=pipeline_stages(rd))
 
 
@@ -233,6 +234,8 @@ def headline_metrics(inp: ReportInputs) -> dict:
         metrics.update(universal_metrics(inp.universal))
     if inp.online_assessment is not None:  # the on-line estimator against the reference plant and the baseline
         metrics.update(inp.online_assessment["metrics"])
+    if inp.jfo_surrogate is not None:  # the mass-conserving film's surrogate with memory against its reference
+        metrics.update(inp.jfo_surrogate["metrics"])
     for study in ("grading_study", "ablation"):
         summary = getattr(inp, study)
         if summary is not None:

@@ -527,7 +527,7 @@ def commit_film(ep, k_omega, x1_old, x2_old, x1, x2, dt, th_n, content, p, th):
 
 @njit(cache=True)
 def film_flows(ep, omega, e1, e2, p, th):
-    """(side flow [m^3/s], friction power [W]) of a film at position e = X/c and shaft speed omega.
+    """(side flow [m^3/s], friction power [W], F1, F2 [N]) of a film at position e = X/c and shaft speed omega.
 
     Side flow: the pressure flow out through both ends, h^3/(12 mu) dp/dz on the end faces (the scheme's own
     face fluxes).  Friction: the shear on the journal, tau = phi mu omega R / h + (h / 2R) dp/dtheta (the liquid
@@ -556,7 +556,8 @@ def film_flows(ep, omega, e1, e2, p, th):
             power += tau * omega * r * r * dth * ep.w_z[j]
             if pj < -1e300:  # keeps pj used under every rule (numba types it alike)
                 power = np.nan
-    return q, power
+    f1, f2 = ea_force(ep, p)
+    return q, power, f1, f2
 
 
 @njit(cache=True)
@@ -821,8 +822,9 @@ class ElrodAdamsSolver(ReferenceModel):
     def flows(self, x, p, th, omega: float | None = None) -> tuple[float, float]:
         """(side flow [m^3/s], friction power [W]) of a field (p, th) at position x [m] (``film_flows``)."""
         w = self._bearing.omega if omega is None else float(omega)
-        return film_flows(self.params, w, x[0] / self._c, x[1] / self._c, np.ascontiguousarray(p),
-                          np.ascontiguousarray(th))
+        q, power, _, _ = film_flows(self.params, w, x[0] / self._c, x[1] / self._c, np.ascontiguousarray(p),
+                                    np.ascontiguousarray(th))
+        return q, power
 
     def integrate(self, p) -> np.ndarray:
         """Force [N] of a pressure field on this grid by Simpson integration."""

@@ -19,12 +19,14 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 
 import numpy as np
 from numba import njit
 
-from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, Trajectory, _ramped,
-                                       _schedule_arrays, check_run_args, schedule_at)
+from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, OUTSIDE_DOMAIN, OutsideDomainError,
+                                       Trajectory, _domain_note,
+                                       _ramped, _schedule_arrays, check_run_args, schedule_at)
 from fluidfilm.rotor.model import RPM, Rotor, SpeedSchedule
 
 #: a film solve did not converge (status of the loop)
@@ -51,12 +53,21 @@ def _film_acceleration(stage, ep, k_ref, x1, x2, v1, v2, t, h, tol, th_n, conten
             True, sweeps, status == 0)
 
 
+@njit(inline="always")
+def _record_film(out_film, n, values):
+    q, power, f1, f2 = values
+    out_film[n, 0] = q
+    out_film[n, 1] = power
+    out_film[n, 2] = f1
+    out_film[n, 3] = f2
+
+
 @njit
 def _film_run(stage, commit, flows, ep, k_ref, tol, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
               eps_substep, max_substeps, th_n, p, th, out_t, out_x, out_v, out_film, stats):
     """Integrate; returns (n_recorded, status, t_stop, n_force_evals).  ``th_n``, ``p``, ``th``: the committed
     content and the working fields (warm starts), updated in place.  ``out_film``: (side flow [m^3/s], friction
-    power [W]) of the film at each record (``flows``).  ``stats``: [stage sweeps, commit sweeps, stage solves, commit solves]."""
+    power [W], film force F1, F2 [N]) of the committed film at each record (``flows``).  ``stats``: [stage sweeps, commit sweeps, stage solves, commit solves]."""
     c2 = consts[6]
     w_ref = consts[2]
     times, omegas, cum = consts[9], consts[10], consts[11]
@@ -73,9 +84,7 @@ def _film_run(stage, commit, flows, ep, k_ref, tol, consts, x0, v0, t0, dt, n_st
     out_v[0, 1] = v2
     w = schedule_at(times, omegas, cum, w_ref, t)[0]
     inv_c = 1.0 / math.sqrt(c2)
-    q, pw = flows(ep, w, x1 * inv_c, x2 * inv_c, p, th)
-    out_film[0, 0] = q
-    out_film[0, 1] = pw
+    _record_film(out_film, 0, flows(ep, w, x1 * inv_c, x2 * inv_c, p, th))
     n_rec = 1
     status = OK
     for step in range(n_steps):
@@ -146,9 +155,7 @@ def _film_run(stage, commit, flows, ep, k_ref, tol, consts, x0, v0, t0, dt, n_st
             out_x[n_rec, 1] = x2
             out_v[n_rec, 0] = v1
             out_v[n_rec, 1] = v2
-            q, pw = flows(ep, w, x1 * inv_c, x2 * inv_c, p, th)
-            out_film[n_rec, 0] = q
-            out_film[n_rec, 1] = pw
+            _record_film(out_film, n_rec, flows(ep, w, x1 * inv_c, x2 * inv_c, p, th))
             n_rec += 1
     if status != OK:
         out_t[n_rec] = t
@@ -156,21 +163,21 @@ def _film_run(stage, commit, flows, ep, k_ref, tol, consts, x0, v0, t0, dt, n_st
         out_x[n_rec, 1] = x2
         out_v[n_rec, 0] = v1
         out_v[n_rec, 1] = v2
-        out_film[n_rec, 0] = np.nan
-        out_film[n_rec, 1] = np.nan
+        out_film[n_rec, :] = np.nan
         n_rec += 1
     return n_rec, status, t, n_evals
 
 
 def simulate_film(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, v0=None, *, eps_stop: float = 0.98,
                   record_every: int = 1, eps_substep: float = 0.8, max_substeps: int = 256, t0: float = 0.0,
-                  speed: SpeedSchedule | None = None, film_content=None) -> Trajectory:
+                  speed: SpeedSchedule | None = None, film_content=None, strict: bool = False) -> Trajectory:
     """Integrate the rotor in a transient film with memory (``simulate`` calls it for such a model).
 
     As ``rotor.integrate.simulate`` (the same arguments, checks and status texts), with the film content
     carried from step to step (module doc).  ``film_content``: the content phi (n_theta, n_z) at t0; None:
     the steady film at x0.  The returned trajectory's ``meta`` holds ``film_content`` at the end (to continue
-    the run), ``side_flow_m3s`` and ``friction_power_W`` at every record, the sweeps per stage and per commit,
+    the run), ``side_flow_m3s``, ``friction_power_W`` and ``film_force_N`` (the committed film's force, (n, 2))
+    at every record, the sweeps per stage and per commit,
     and the speed schedule if any.
     """
     if not isinstance(rotor, Rotor):
@@ -194,9 +201,15 @@ def simulate_film(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, 
     elif not isinstance(speed, SpeedSchedule):
         raise ValueError(f"speed must be a SpeedSchedule (SpeedSchedule.ramp, .table or .constant), got "
                          f"{type(speed).__name__}")
+    if getattr(model, "fixed_speed", False) and not bool((speed.omega == omega).all()):
+        raise ValueError(f"{model.name} holds one shaft speed ({bearing.speed_rpm:g} rpm, its training data's): "
+                         f"a speed schedule cannot run in it")
     w0 = float(schedule_at(*_schedule_arrays(speed, omega), omega, t0)[0])
     if film_content is None:
         p, th = model.steady_field(x0, omega=w0)
+    elif hasattr(model, "check_film_state"):  # a model whose carried state is not a content field
+        p, th = model.steady_field(x0, omega=w0)
+        th = model.check_film_state(film_content)
     else:
         th = np.array(film_content, dtype=float)
         if th.shape != (model.n_theta, model.n_z) or not np.isfinite(th).all() or th.min() < 0.0 or th.max() > 1.0:
@@ -211,13 +224,14 @@ def simulate_film(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, 
     out_t = np.empty(n_out)
     out_x = np.empty((n_out, 2))
     out_v = np.empty((n_out, 2))
-    out_film = np.empty((n_out, 2))
+    out_film = np.empty((n_out, 4))
     stats = np.zeros(4, dtype=np.int64)
     u_final = rotor.imbalance if rotor.imbalance_final is None else rotor.imbalance_final
     consts = (1.0 / rotor.mass, rotor.imbalance * omega**2, omega, float(rotor.imbalance_direction),
               rotor.external_force[0], rotor.external_force[1] + rotor.mass * rotor.gravity, c * c,
               u_final * omega**2, rotor.ramp_time if rotor.imbalance_final is not None else 0.0) \
         + _schedule_arrays(speed, omega)
+    model.reset_domain_counter()
     t_start = time.perf_counter()
     n_rec, status, t_stop, n_evals = _film_run(stage, commit, flows, ep, float(ep.k_omega), float(ep.tol), consts, x0, v0,
                                                float(t0), float(dt), n_steps, record_every, float(eps_stop),
@@ -232,13 +246,22 @@ def simulate_film(model, rotor: Rotor, t_end: float, dt: float = 1e-5, x0=None, 
         text = (f"diverged: the film solve did not converge within max_sweeps={ep.max_sweeps} after t={t_stop:.6g} s")
     else:
         text = f"diverged: non-finite state after t={t_stop:.6g} s"
+    # a surrogate counts its stages outside its training domain: "ok" is not promised there (rotor.integrate)
+    n_outside = int(model.n_outside_domain)
+    e_max = float(np.max(np.hypot(out_x[:n_rec, 0], out_x[:n_rec, 1])))
+    note = _domain_note(model, n_outside, int(n_evals), e_max * e_max, c) if n_outside else None
+    if note:
+        if strict:
+            raise OutsideDomainError(f"{model.name}: {note} during the simulation (strict=True)")
+        text = f"{OUTSIDE_DOMAIN}: reached the end time; {note}" if text == "ok" else f"{text}; {note}"
+        warnings.warn(f"{model.name}: {note} during the simulation", RuntimeWarning, stacklevel=3)
     meta = {"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every, "precision": "float64",
             "film_content": th_n.copy(), "side_flow_m3s": out_film[:n_rec, 0].copy(),
-            "friction_power_W": out_film[:n_rec, 1].copy(),
+            "friction_power_W": out_film[:n_rec, 1].copy(), "film_force_N": out_film[:n_rec, 2:].copy(),
             "sweeps_per_stage": float(stats[0]) / max(int(stats[2]), 1),
             "sweeps_per_commit": float(stats[1]) / max(int(stats[3]), 1),
             "film_solves": int(stats[2] + stats[3])}
     if not bool((speed.omega == omega).all()):
         meta["speed"] = {"times": speed.times.tolist(), "omega": speed.omega.tolist()}
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
-                      t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=wall, meta=meta, n_outside_domain=0)
+                      t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=wall, meta=meta, n_outside_domain=n_outside)

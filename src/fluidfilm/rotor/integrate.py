@@ -899,7 +899,7 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float | None = 1
                              "memory a fixed dt")
         return simulate_film(model, rotor, t_end, dt, x0, v0, eps_stop=eps_stop, record_every=record_every,
                              eps_substep=eps_substep, max_substeps=max_substeps, t0=t0, speed=speed,
-                             film_content=film_content)
+                             film_content=film_content, strict=strict)
     # precision: what the networks actually run in (a model without float32 networks computes in float64)
     kernel, params, precision = one_state_kernel(model, precision)
     if precision == "float32" and speed is not None:

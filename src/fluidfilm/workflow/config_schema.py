@@ -477,6 +477,51 @@ class CavitationRulesSchema:
     cost_repeats: int = MISSING
 
 
+@dataclass
+class JfoRangesSchema:
+    mass: list[float] = MISSING
+    imbalance: list[float] = MISSING
+    force_max: float = ranged(ge=0)
+    eps0_max: float = ranged(**_ECC)
+
+
+@dataclass
+class JfoFitSchema:
+    width: int = ranged(**_COUNT)
+    depth: int = ranged(**_COUNT)
+    activation: str = ranged(choices=MODEL_ACTIVATIONS)
+    gain_power: float = ranged(ge=0)
+    lr: float = ranged(**_POS)
+    batch_size: int = ranged(**_COUNT)
+    max_epochs: int = ranged(**_COUNT)
+
+
+@dataclass
+class JfoSurrogateSchema:
+    grid: list[int] = ranged(grid=True)
+    groove_angle_deg: float = MISSING
+    tol: float = ranged(**_POS)
+    tol_commit: float = ranged(**_POS)
+    n_paths: int = ranged(ge=2, why="one path at least for training and one for validation")
+    seed: int = MISSING
+    ranges: JfoRangesSchema = MISSING
+    path_t_end: float = ranged(**_POS)
+    cache_dir: str = MISSING
+    val_fraction: float = ranged(gt=0, lt=1)
+    lag_dt: float = ranged(**_POS)
+    n_lags: int = ranged(**_COUNT)
+    fit: JfoFitSchema = MISSING
+    cases: list[str] = MISSING
+    t_end: float = ranged(**_POS)
+    t_settle: float = ranged(ge=0)
+    dt: float = ranged(**_POS)
+    record_every: int = ranged(**_COUNT)
+    threshold_pct: float = ranged(**_POS)
+    timing_repeats: int = ranged(**_COUNT)
+    timing_t_end: float = ranged(**_POS)
+    workers: int = ranged(**_COUNT)
+
+
 #: group -> schema, or -> (key, {value of key: schema}) where the options differ in shape
 GROUPS: dict[str, Any] = {
     "bearing": ("kind", {"journal": JournalBearingSchema, "conical": ConicalBearingSchema}),
@@ -498,6 +543,7 @@ GROUPS: dict[str, Any] = {
     "characteristics": CharacteristicsSchema,
     "runup": RunupSchema,
     "cavitation_rules": CavitationRulesSchema,
+    "jfo_surrogate": JfoSurrogateSchema,
 }
 #: the value of the selecting key when an option leaves it out
 _SELECTOR_FALLBACK = {"bearing": "journal"}
