@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -85,7 +86,7 @@ def run_scenario(name: str, sc: dict, cfg: dict, seeds) -> dict:
     from fluidfilm.reynolds import ReynoldsSolver
     from fluidfilm.surrogate.universal import universal_bearing
 
-    seeds = [int(seeds)] if np.isscalar(seeds) else [int(x) for x in seeds]
+    seeds = [int(x) for x in (seeds if isinstance(seeds, (list, tuple)) else [seeds])]
     plant = cfg["plant"]
     descr = _descr(cfg["description"], sc.get("bearing"))
     keys = ("length", "diameter", "clearance", "speed_rpm", "viscosity", "mass", "cavitation")
@@ -176,7 +177,7 @@ def _score_seed(orbit, seed: int, sc: dict, cfg: dict, model, told) -> tuple[dic
     if win.sum() < 10:   # a record too short for the window (the small profile): its last fifth
         t_eval = float(t[-1] - 0.2 * (t[-1] - t[0]))
         win = t >= t_eval
-    res = {"seed": int(seed), "n_samples": int(t.size), "t_eval_s": t_eval, "n_eval": int(win.sum()),
+    res: dict[str, Any] = {"seed": int(seed), "n_samples": int(t.size), "t_eval_s": t_eval, "n_eval": int(win.sum()),
            "estimate_s": est_s, "us_per_sample": est.us_per_sample}
     for label, z in (("filter", est.z), ("smoother", est.zs)):
         if z is None or not win.any():
