@@ -182,3 +182,48 @@ def test_the_description_refuses_an_unknown_key():
     with pytest.raises(ValueError, match="unknown key"):
         BearingDescription.from_mapping({"length": 0.03, "diameter": 0.06, "clearance": 8e-5, "speed_rpm": 6000.0,
                                          "viscosity": 0.02, "mass": 50.0, "viscosty": 1.0})
+
+
+# ----------------------------------------------------------------------------- the stage's noise seeds
+def test_noise_seeds_redraw_the_probes_and_not_the_plant(reference):
+    from fluidfilm.estimation.plant import plant_orbit, probe_record
+
+    sc = _scenario(t_end=0.02)
+    orbit = plant_orbit(reference, sc, dt=2e-5)
+    a, b = probe_record(orbit, 1), probe_record(orbit, 2)
+    assert np.array_equal(a.x_true, b.x_true) and np.array_equal(a.truth, b.truth)
+    resid = (a.frame[["x", "y"]].to_numpy() - b.frame[["x", "y"]].to_numpy())
+    # two independent draws of 1 um noise (plus quantisation): their difference has a spread of sqrt(2) um
+    assert 1.2e-6 < resid.std() < 1.6e-6
+    same = simulate_plant(reference, sc, dt=2e-5, seed=1)
+    assert np.array_equal(same.frame.to_numpy(), a.frame.to_numpy())
+
+
+def test_the_keys_are_the_worst_scenarios_median_over_seeds():
+    from fluidfilm.studies.online_assessment import aggregate, scenario_seeds, summarise
+
+    assert scenario_seeds({"seed": 0, "n_seeds": 3}, 2) == [2, 102, 202]
+
+    def seed(load, base=0.2, mismatch=None):
+        errs = {"load_rel_err": load, "imbalance_rel_err": load / 2, "imbalance_phase_err_deg": 1.0,
+                "viscosity_rel_err": load}
+        return {"filter": errs, "baseline": {"load_rel_err": base, "viscosity_assumed": 0.02},
+                "sd_end": {"viscosity_rel": 0.01}, "us_per_sample": 5.0, "estimate_s": 0.1,
+                "flags": {"mismatch_fraction": 0.0 if mismatch is None else 0.5, "out_of_domain_fraction": 0.0,
+                          "mismatch_first_s": mismatch, "out_of_domain_first_s": None, "nis_mean_median": 1.0}}
+
+    results = {}
+    for name, loads, extra in (("a", [0.01, 0.02, 0.09], {}), ("b", [0.03, 0.04, 0.05], {}),
+                               ("trip", [0.3, 0.3, 0.3], {"trip": "mismatch"})):
+        per = [seed(x, mismatch=0.2 if extra else None) for x in loads]
+        results[name] = {"dynamic": True, "trip": extra.get("trip"), "blind_spot": False, "per_seed": per,
+                         **aggregate(per)}
+    goals = {"load_rel_err": 0.01, "imbalance_rel_err": 0.03, "viscosity_rel_err": 0.02, "us_per_sample": 50.0,
+             "vs_centreline": 5.0, "false_flag_rate": 0.01}
+    m = summarise(results, {"goals": goals})["metrics"]
+    assert m["estimator_load_rel_err"] == pytest.approx(0.04)          # b's median beats a's (0.02)
+    assert m["estimator_load_rel_err_worst"] == pytest.approx(0.09)    # a's worst seed
+    assert m["estimator_vs_centreline_load_err_ratio"] == pytest.approx(0.2 / 0.04)
+    assert m["estimator_vs_centreline_load_err_ratio_worst"] == pytest.approx(0.2 / 0.09)
+    assert m["estimator_false_flag_rate"] == 0.0 and m["estimator_trip_flag_rate"] == 1.0
+    assert m["estimator_noise_seeds"] == 3

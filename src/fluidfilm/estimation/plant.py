@@ -139,7 +139,25 @@ def runout_signal(runout, phase) -> np.ndarray:
 def simulate_plant(model, scenario: Scenario, dt: float = 5e-6, seed: int = 0) -> PlantRecord:
     """The scenario's rotor in ``model`` (a force model with a speed kernel; the pipeline's reference solver),
     recorded through the probes. Starts at the static equilibrium of the first knot's load and viscosity,
-    settles for ``t_warm`` (not recorded), then records ``t_end`` s at ``fs``."""
+    settles for ``t_warm`` (not recorded), then records ``t_end`` s at ``fs``. ``seed`` draws the probes' noise
+    alone: ``probe_record(plant_orbit(...), seed)`` with other seeds records the same orbit again."""
+    return probe_record(plant_orbit(model, scenario, dt), seed)
+
+
+@dataclass
+class PlantOrbit:
+    """The plant's true motion at the probes' samples: ``t`` (N,) [s], ``x_true`` (N, 4) the journal's state,
+    the plant's wall time [s] and whether the journal reached the sleeve before ``t_end``."""
+
+    scenario: Scenario
+    t: np.ndarray
+    x_true: np.ndarray
+    wall_s: float
+    stopped_early: bool
+
+
+def plant_orbit(model, scenario: Scenario, dt: float = 5e-6) -> PlantOrbit:
+    """The plant's physics (no noise): the rotor in ``model`` under the scenario's schedules, sampled at ``fs``."""
     import time
 
     from fluidfilm.characteristics.static import equilibrium
@@ -168,9 +186,15 @@ def simulate_plant(model, scenario: Scenario, dt: float = 5e-6, seed: int = 0) -
     t_all = t0 + np.arange(n) * record_every * dt
     keep = t_all >= -1e-12
     t = t_all[keep]
-    xs = out[:n][keep]
+    return PlantOrbit(scenario, t, out[:n][keep], wall,
+                      stopped_early=bool(t[-1] < scenario.t_end - 2.0 / scenario.fs) if t.size else True)
+
+
+def probe_record(orbit: PlantOrbit, seed: int = 0) -> PlantRecord:
+    """What the probes and the speed pickup record of ``orbit``: runout, noise drawn from ``seed``, quantisation."""
+    scenario, t, xs = orbit.scenario, orbit.t, orbit.x_true
     rng = np.random.default_rng(seed)
-    phase = omega * t
+    phase = scenario.speed_rpm * 2.0 * math.pi / 60.0 * t
     ro = runout_signal(scenario.runout, phase)
     meas = xs[:, :2] + ro + rng.normal(0.0, scenario.noise, size=(t.size, 2))
     if scenario.lsb > 0.0:
@@ -179,5 +203,4 @@ def simulate_plant(model, scenario: Scenario, dt: float = 5e-6, seed: int = 0) -
                           "speed": np.full(t.size, scenario.speed_rpm)})
     known = tuple(tuple((c * (1.0 - scenario.runout_known_error), s * (1.0 - scenario.runout_known_error))
                         for c, s in axis) for axis in scenario.runout)
-    return PlantRecord(scenario, frame, scenario.truth(t), xs, known, wall,
-                       stopped_early=bool(t[-1] < scenario.t_end - 2.0 / scenario.fs) if t.size else True)
+    return PlantRecord(scenario, frame, scenario.truth(t), xs, known, orbit.wall_s, orbit.stopped_early)
