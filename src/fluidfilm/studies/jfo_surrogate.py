@@ -50,17 +50,22 @@ def reference_film(bearing: JournalBearing, s) -> ElrodAdamsSolver:
 
 
 # ------------------------------------------------------------------------------------------- 1. training paths
-def training_rotors(n: int, seed: int, ranges) -> list[dict]:
-    """``n`` random rotors per bearing (mass, imbalance, external force) and starting points, from ``ranges``."""
-    rng = np.random.default_rng(seed)
+def training_rotors(n: int, seed: int, ranges, n_static: int = 0) -> list[dict]:
+    """``n`` random rotors per bearing (mass, imbalance, external force) and starting points, from ``ranges``;
+    then ``n_static`` more without imbalance (drawn from ``seed + 1``): transients that settle at static
+    equilibria over the whole range of loads, where the cases a, f and g end."""
     out = []
-    for _ in range(n):
-        f = rng.uniform(0.0, float(ranges["force_max"]))
-        a = rng.uniform(0.0, 2.0 * math.pi)
-        e0 = float(ranges["eps0_max"]) * math.sqrt(rng.uniform())
-        b = rng.uniform(0.0, 2.0 * math.pi)
-        out.append({"mass": float(rng.uniform(*ranges["mass"])), "imbalance": float(rng.uniform(*ranges["imbalance"])),
-                    "external_force": [f * math.cos(a), f * math.sin(a)], "eps0": [e0 * math.cos(b), e0 * math.sin(b)]})
+    for count, s, static in ((n, seed, False), (n_static, seed + 1, True)):
+        rng = np.random.default_rng(s)
+        for _ in range(count):
+            f = rng.uniform(0.0, float(ranges["force_max"]))
+            a = rng.uniform(0.0, 2.0 * math.pi)
+            e0 = float(ranges["eps0_max"]) * math.sqrt(rng.uniform())
+            b = rng.uniform(0.0, 2.0 * math.pi)
+            mass = float(rng.uniform(*ranges["mass"]))
+            imbalance = 0.0 if static else float(rng.uniform(*ranges["imbalance"]))
+            out.append({"mass": mass, "imbalance": imbalance, "external_force": [f * math.cos(a), f * math.sin(a)],
+                        "eps0": [e0 * math.cos(b), e0 * math.sin(b)]})
     return out
 
 
@@ -78,14 +83,35 @@ def _path_job(job: dict) -> dict:
             "status": traj.status, "wall_s": time.perf_counter() - t0}
 
 
-def training_paths(bearing: JournalBearing, s, cache_dir: Path, workers: int) -> list[dict]:
-    """The training paths, each cached in ``cache_dir`` as ``path_<i>.npz`` when it finishes (a rerun
-    computes only the missing ones)."""
-    cache_dir.mkdir(parents=True, exist_ok=True)
-    rotors = training_rotors(int(s["n_paths"]), int(s["seed"]), s["ranges"])
-    jobs = [{"bearing": bearing.to_dict(), "s": dict(s), "rotor": r, "t_end": float(s["path_t_end"]),
+def _reference_settings(s) -> dict:
+    """What the reference film is built from (``reference_film``): the part of the settings a path depends on."""
+    return {k: (list(s[k]) if k == "grid" else float(s[k])) for k in ("grid", "groove_angle_deg", "tol", "tol_commit")}
+
+
+def path_jobs(bearing: JournalBearing, s) -> list[dict]:
+    """One job per training path: everything its trajectory depends on, and nothing else."""
+    rotors = training_rotors(int(s["n_paths"]), int(s["seed"]), s["ranges"], int(s["n_static_paths"]))
+    return [{"bearing": bearing.to_dict(), "s": _reference_settings(s), "rotor": r, "t_end": float(s["path_t_end"]),
              "dt": float(s["dt"]), "record_every": int(s["record_every"])} for r in rotors]
-    files = [cache_dir / f"path_{i:03d}.npz" for i in range(len(jobs))]
+
+
+def path_file(cache_dir: Path, job: dict) -> Path:
+    """The cache file of a path, named by the hash of its job: a changed setting never reuses a stale path."""
+    import hashlib
+    import json
+
+    key = hashlib.sha256(json.dumps(job, sort_keys=True).encode()).hexdigest()[:16]
+    return cache_dir / f"path_{key}.npz"
+
+
+def training_paths(bearing: JournalBearing, s, cache_dir: Path, workers: int) -> list[dict]:
+    """The training paths, each cached in ``cache_dir`` when it finishes (under the hash of what it depends on:
+    a rerun computes only the missing ones)."""
+    from fluidfilm import io
+
+    cache_dir.mkdir(parents=True, exist_ok=True)
+    jobs = path_jobs(bearing, s)
+    files = [path_file(cache_dir, job) for job in jobs]
     todo = [i for i, f in enumerate(files) if not f.is_file()]
     print(f"jfo_surrogate: {len(jobs) - len(todo)} of {len(jobs)} training paths cached in {cache_dir}", flush=True)
     done = 0
@@ -94,8 +120,6 @@ def training_paths(bearing: JournalBearing, s, cache_dir: Path, workers: int) ->
             futures = {i: pool.submit(_path_job, jobs[i]) for i in todo}
             for i, fut in futures.items():
                 res = fut.result()
-                from fluidfilm import io
-
                 with io.atomic_path(files[i]) as tmp:
                     np.savez(tmp, t=res["t"], x=res["x"], v=res["v"], F=res["F"], status=np.array(res["status"]),
                              wall_s=res["wall_s"])
@@ -249,8 +273,10 @@ def run(cfg):
     paths = training_paths(bearing, s, Path(s["cache_dir"]), workers)
     z, F, idx = path_table(paths, bearing, float(s["lag_dt"]), int(s["n_lags"]))
     eps = np.hypot(z[:, 0], z[:, 1])
-    n_val = max(1, int(round(float(s["val_fraction"]) * len(paths))))
-    is_val = idx >= len(paths) - n_val  # the last paths: whole trajectories held out
+    # every k-th path held out whole (random and static paths alike): validation on trajectories never seen
+    every = max(2, int(round(1.0 / float(s["val_fraction"]))))
+    is_val = idx % every == every - 1
+    n_val = len(paths) // every
 
     # the reference cases start now, beside the fit (the worker pool runs them while the network trains)
     cases = [str(c) for c in s["cases"]]

@@ -503,6 +503,7 @@ class JfoSurrogateSchema:
     tol: float = ranged(**_POS)
     tol_commit: float = ranged(**_POS)
     n_paths: int = ranged(ge=2, why="one path at least for training and one for validation")
+    n_static_paths: int = ranged(ge=0)
     seed: int = MISSING
     ranges: JfoRangesSchema = MISSING
     path_t_end: float = ranged(**_POS)
