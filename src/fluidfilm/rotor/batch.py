@@ -36,6 +36,13 @@ with more substeps: it ends the trajectory as a contact):
   (``integrate._rk4_step``), serially (the surrogates' one-state kernels
   keep scratch rows in their parameters, which threads would share).
 
+Chunks, as ``simulate``'s: both loops run steps ``steps[0]`` to ``steps[1] - 1`` per call, the running
+state carried between calls in a packed (N, 5) array (position, velocity, largest |X|^2) beside the status
+and time arrays, so a run in chunks equals one call to the bit.  Between chunks ``simulate_batch`` moves the
+progress bar and re-checks the step of every running trajectory (``_StepCheck``).  Each loop counts every
+trajectory's force evaluations outside the model's validity domain in column 1 of ``evals`` (column 0: all
+its evaluations), by the one-state kernels' rule (``integrate.outside_domain``).
+
 Per-trajectory control settings (``settings``): a surrogate of the active
 bearing reads its sleeve position from a small mutable array in its kernel
 parameters; with ``settings`` (N, k) the lockstep loop writes trajectory p's
@@ -225,15 +232,15 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
     copied out to the scratch rows s* and the states inside gathered back, in order.
 
     With an active domain table ``dom`` (``integrate.domain_rule``), each entry's evaluations outside the
-    model's domain are counted in ``NE[j, 1]`` (``integrate.outside_domain``, the states inside the
+    model's domain are counted in ``NE[1, j]`` (``integrate.outside_domain``, the states inside the
     clearance: those whose forces are evaluated)."""
     r = 0
     inside = 0
-    if dom[0, 2] > 0.0:
+    if dom[0, 1] < math.inf:
         for i in range(m):
             j = i if ident else act[i]
-            if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j]:
-                NE[j, 1] += outside_domain(dom, C[10, j], qx1[i], qx2[i], qv1[i], qv2[i])
+            evaluated = 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
+            NE[1, j] += evaluated * outside_domain(dom, C[10, j], qx1[i], qx2[i], qv1[i], qv2[i])
     for i in range(m):
         j = i if ident else act[i]
         inside += 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
@@ -345,7 +352,7 @@ def _substep(fn, bp, C, dom, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1
         k = K[j]
         h = dt / k
         x1, x2, v1, v2 = X1[j], X2[j], V1[j], V2[j]
-        NE[j, 0] += 4
+        NE[0, j] += 4
         kx1 = v1 + 0.5 * h * a1[i]
         kx2 = v2 + 0.5 * h * a2[i]
         lx1 = v1 + 0.5 * h * b1[i]
@@ -410,7 +417,7 @@ def _rk4_stages(fn, bp, consts, dom, state, t0, dt, steps, record_every, eps_sto
         C[10, j] = consts[p, 9]
         n_run += 1
     K = np.empty(n, dtype=np.int64)   # per entry: substeps of this step
-    NE = np.zeros((n, 2), dtype=np.int64)  # per entry: force evaluations of this step, and those outside the domain
+    NE = np.zeros((2, n), dtype=np.int64)  # per entry: force evaluations of this step, and those outside the domain
     ST = np.empty(n, dtype=np.int64)  # per entry: status of this step
     act = np.empty(n, dtype=np.int64)
     qx1, qx2, qv1, qv2, tq = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
@@ -433,8 +440,8 @@ def _rk4_stages(fn, bp, consts, dom, state, t0, dt, steps, record_every, eps_sto
             far += 1 if (X1[j] * X1[j] + X2[j] * X2[j]) / C[6, j] > es2 else 0
             K[j] = 1
             ST[j] = OK
-            NE[j, 0] = 0
-            NE[j, 1] = 0
+            NE[0, j] = 0
+            NE[1, j] = 0
         kmax = 1
         if far > 0:
             for j in range(n_run):
@@ -465,8 +472,8 @@ def _rk4_stages(fn, bp, consts, dom, state, t0, dt, steps, record_every, eps_sto
         keep = 0
         for j in range(n_run):
             p = run[j]
-            evals[p, 0] += NE[j, 0]
-            evals[p, 1] += NE[j, 1]
+            evals[p, 0] += NE[0, j]
+            evals[p, 1] += NE[1, j]
             t_stop[p] = T[j]  # the trajectory's current time (its stopping time once it stops)
             state[p, 4] = max(state[p, 4], X1[j] * X1[j] + X2[j] * X2[j])
             st = ST[j]

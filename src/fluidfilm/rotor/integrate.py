@@ -208,29 +208,33 @@ def outside_domain(dom, inv_c2, x1, x2, v1, v2):
     surrogate kernels' rule (``surrogate.kernels``), eps = sqrt(|X|^2 inv_c2) above eps_max, or a velocity
     component above the v_max of the first band holding eps (the last band also above its top).
 
-    ``dom`` (``domain_rule``): row 0 [eps_max, 0, active], rows 1.. the bands (eps_low, eps_high, v_max)."""
+    ``dom`` (``domain_rule``): row 0 [eps_max, active (inf: no), 0], rows 1.. the bands (eps_low, eps_high,
+    v_max)."""
     eps = math.sqrt((x1 * x1 + x2 * x2) * inv_c2)
+    # as selects, without branches (the loops over a batch's states vectorise): the first band holding eps
+    vmax = math.inf
+    hit = False
     n = dom.shape[0]
-    vout = False
-    for s in range(n - 1, 0, -1):
-        if dom[s, 0] <= eps < dom[s, 1] or (s == n - 1 and eps >= dom[s, 1]):
-            vout = abs(v1) > dom[s, 2] or abs(v2) > dom[s, 2]
-    return 1 if (eps > dom[0, 0] or vout) else 0
+    for s in range(1, n):
+        now = (not hit) & (((dom[s, 0] <= eps) & (eps < dom[s, 1])) | ((s == n - 1) & (eps >= dom[s, 1])))
+        vmax = dom[s, 2] if now else vmax
+        hit = hit | now
+    return 1 if (eps > dom[0, 0]) | (max(abs(v1), abs(v2)) > vmax) else 0
 
 
 def domain_rule(model) -> np.ndarray:
-    """``outside_domain``'s table of a model's validity domain: row 0 [eps_max, 0, active], then the bands;
-    inactive (nothing counted) for a domain that is the whole film."""
+    """``outside_domain``'s table of a model's validity domain: row 0 [eps_max, active, 0], then the bands;
+    inactive (row 0 column 1 infinite: nothing counted) for a domain that is the whole film."""
     v = model.validity
     dom = np.zeros((1 + len(v.bands), 3))
-    dom[0] = (v.eps_max, 0.0, 1.0 if (v.eps_max < 1.0 or v.bands) else 0.0)
+    dom[0] = (v.eps_max, 0.0 if (v.eps_max < 1.0 or v.bands) else math.inf, 0.0)
     if v.bands:
         dom[1:] = np.asarray(v.bands, dtype=float)
     return dom
 
 
-#: the domain table of a run that counts by the model's own counter (``simulate``)
-_NO_DOMAIN = np.zeros((1, 3))
+#: the domain table of a run that counts by the model's own counter (``simulate``): inactive
+_NO_DOMAIN = np.array([[1.0, math.inf, math.inf]])
 
 
 @njit(cache=True, inline="always")
@@ -246,7 +250,7 @@ def _rk4_step(kernel, params, consts, x1, x2, v1, v2, t, t0, step, dt, eps_subst
     not that the journal touched: the step is redone with twice the substeps (up to ``max_substeps``)
     before contact is reported. Inlined, so each loop compiles it as if written in place.
     """
-    counting = dom[0, 2] > 0.0
+    counting = dom[0, 1] < math.inf
     n_out = 0
     c2 = consts[6]
     e2 = (x1 * x1 + x2 * x2) / c2
