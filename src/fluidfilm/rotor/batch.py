@@ -637,18 +637,18 @@ def _stage_chunks(model, precision, n_threads, consts, *args):
 class _StepCheck:
     """``simulate``'s step check for a batch (``rk4_step_limit`` per trajectory), at the start and at the end of
     every chunk of steps.  The eigenvalues of all trajectories come from one call of the model's batched
-    kernel (float64, private parameters: nothing counted) or of its ``forces``, and only the trajectories whose
+    kernel (the run's ``precision``, already loaded; private parameters: nothing counted) or of its ``forces``, and only the trajectories whose
     step is within a factor 2 of the limit so found (and the one with the smallest) get the one-state check
     whose verdict and words are ``simulate``'s.  Per-trajectory settings: the one-state check for each."""
 
     def __init__(self, model, kernel, params, setting, settings_arr, consts, c, dt, omega, eps_substep,
-                 max_substeps, per_setting: bool):
+                 max_substeps, per_setting: bool, precision: str):
         self.model, self.kernel, self.params, self.setting = model, kernel, params, setting
         self.settings_arr, self.consts, self.c, self.dt = settings_arr, consts, c, dt
         self.rule = (omega, eps_substep, max_substeps)
         self.batched = None
         if not per_setting and isinstance(model, BatchForceModel):
-            self.batched = model.batch_force_kernel("float64", private=True)
+            self.batched = model.batch_force_kernel(precision, private=True)
         self.per_setting = per_setting
         self.check_outside = 0  # evaluations of the checks the model's own counter took (subtracted)
 
@@ -894,7 +894,7 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         raise ValueError(f"check_step must be True or False, got {check_step!r}")
     saved = setting.copy()
     check = _StepCheck(model, kernel, params, setting, settings_arr, consts, c, float(dt), float(omega),
-                       float(eps_substep), int(max_substeps), settings is not None) if check_step else None
+                       float(eps_substep), int(max_substeps), settings is not None, precision) if check_step else None
     if check is not None:
         check.start(x0, v0)
     if stage_batched is None:
