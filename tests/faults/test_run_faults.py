@@ -145,23 +145,88 @@ def test_a_run_outside_the_training_domain_is_not_ok_and_warns_once_naming_share
     assert inside.status == "ok" and inside.ok and inside.in_domain
 
 
-def test_a_batch_outside_the_training_domain_is_not_ok():
+@pytest.mark.parametrize("stage_batched", [False, True])
+def test_a_batch_counts_the_domain_per_trajectory_as_simulate_does(stage_batched):
+    """Each trajectory its own count, status and largest eccentricity (as ``simulate``'s run of it alone), one
+    warning naming how many left and the share; ``strict=True`` raises."""
     model = models.single()
     c = models.C
     x0 = np.array([[0.0, 0.3 * c], [0.0, 0.3 * c]])
-    v0 = np.array([[0.0, 0.0], [0.0, 0.6]])
-    with pytest.warns(RuntimeWarning, match=r"\(50 % of 24, whole batch\), largest recorded eccentricity"):
-        batch = simulate_batch(model, Rotor(mass=2.5), t_end=3e-5, dt=1e-5, x0=x0, v0=v0, stage_batched=False)
-    # counted per batch: no finished trajectory of it is vouched for, each names its own largest eccentricity
-    assert batch.ok.tolist() == [False, False] and batch.completed.tolist() == [True, True]
-    for p in range(2):
-        eps = batch.trajectory(p).eccentricity(c).max()
-        assert batch.status[p].startswith("outside-domain: reached the end time; outside the training domain in 12 "
-                                          f"force evaluations (50 % of 24, whole batch), largest recorded "
-                                          f"eccentricity {eps:.4g}")
-    with pytest.raises(OutsideDomainError):
+    v0 = np.array([[0.0, 0.0], [0.0, 0.6]])  # the second: |V| beyond the data's 0.5 m/s, every force outside
+    singles = [simulate(model, Rotor(mass=2.5), t_end=3e-5, dt=1e-5, x0=x0[p], v0=v0[p]) for p in range(2)]
+    with pytest.warns(RuntimeWarning, match=r"1 of 2 trajectories outside the training domain, in 12 force "
+                                             r"evaluations \(50 % of 24\); largest eccentricity"):
+        batch = simulate_batch(model, Rotor(mass=2.5), t_end=3e-5, dt=1e-5, x0=x0, v0=v0,
+                               stage_batched=stage_batched, precision="float64")
+    assert batch.n_outside_domain.tolist() == [s.n_outside_domain for s in singles] == [0, 12]
+    assert batch.status == [s.status for s in singles]
+    assert batch.status[1].startswith("outside-domain: reached the end time; outside the training domain in 12 "
+                                      "force evaluations (100 % of 12), largest eccentricity")
+    assert batch.ok.tolist() == [True, False] and batch.completed.tolist() == [True, True]
+    assert batch.trajectory(1).n_outside_domain == 12 and not batch.trajectory(1).in_domain
+    assert batch.eps_reached[1] == pytest.approx(singles[1].eccentricity(c).max(), rel=1e-12)
+    with pytest.raises(OutsideDomainError, match="1 of 2 trajectories outside the training domain"):
         simulate_batch(model, Rotor(mass=2.5), t_end=3e-5, dt=1e-5, x0=x0, v0=v0, strict=True,
-                       stage_batched=False)
+                       stage_batched=stage_batched)
+    inside = simulate_batch(model, Rotor(mass=2.5), t_end=3e-5, dt=1e-5, x0=x0, strict=True,
+                            stage_batched=stage_batched)
+    assert inside.ok.all() and inside.n_outside_domain.tolist() == [0, 0]
+
+
+@pytest.mark.parametrize("stage_batched", [False, True])
+def test_a_batch_step_that_stops_resolving_the_film_along_the_run_ends_that_trajectory(stage_batched):
+    """``simulate``'s along-the-run case in a batch beside a trajectory that stays resolved: the pushed one
+    ends "unresolved" where ``simulate`` stops it, naming dt and the largest safe step; the other runs on."""
+    solver = ReynoldsSolver(paper_bearing(), 30, 30)
+    rotors = [Rotor(mass=0.5, external_force=(0.0, 150.0)), Rotor(mass=0.5)]
+    kw = {"t_end": 0.2, "dt": 4e-5, "eps_substep": 0.95, "record_every": 10}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        batch = simulate_batch(solver, rotors, stage_batched=stage_batched, **kw)
+        single = simulate(solver, rotors[0], **kw)
+    assert any("1 of 2 trajectories ended unresolved" in str(w.message) for w in caught)
+    assert batch.status[0].startswith("unresolved: at t=") and "dt=4e-05 s is longer than the largest safe step" \
+        in batch.status[0], batch.status[0]
+    assert batch.status[0].split("; rerun")[0] == single.status.split("; rerun")[0]
+    tp = batch.trajectory(0)
+    np.testing.assert_array_equal(tp.x, single.x)
+    np.testing.assert_array_equal(tp.t, single.t)
+    assert not batch.ok[0] and not batch.completed[0] and batch.t_stop[0] == single.t_stop
+    assert batch.ok[1] and batch.n_recorded[1] == 5000 // 10 + 1  # every row to the end
+
+
+@pytest.mark.parametrize("stage_batched", [False, True])
+def test_a_batch_in_chunks_equals_one_run_to_the_bit(monkeypatch, stage_batched):
+    """The chunks of the progress bar and the along-the-run check do not change a trajectory: chunks of 13
+    steps against one chunk, a contact among the trajectories; the bar counts every step."""
+    from fluidfilm.rotor import batch as batch_module
+
+    model = ReynoldsSolver(paper_bearing(), 16, 8)
+    c = model.clearance
+    rotors = [Rotor(mass=2.0, imbalance=5e-5), Rotor(mass=2.0, external_force=(0.0, 2000.0)),
+              Rotor(mass=3.0, imbalance=2e-5)]
+    x0 = np.array([[0.0, 0.0], [0.0, 0.5 * c], [0.2 * c, 0.85 * c]])
+    kw = {"t_end": 0.01, "dt": 1e-5, "record_every": 7, "x0": x0, "stage_batched": stage_batched, "threads": 2}
+    monkeypatch.setattr(integrate, "CHUNK_MIN_STEPS", 10**9)
+    monkeypatch.setattr(integrate, "MAX_CHUNKS", 1)
+    whole = simulate_batch(model, rotors, **kw)
+    monkeypatch.setattr(integrate, "CHUNK_MIN_STEPS", 13)
+    monkeypatch.setattr(integrate, "MAX_CHUNKS", 10**6)
+    bars = []
+
+    def recording_bar(progress, total, what):
+        bar = integrate._progress_bar(progress, total, what)
+        bars.append((bar, total))
+        return bar
+    monkeypatch.setattr(batch_module, "_progress_bar", recording_bar)
+    chunked = simulate_batch(model, rotors, progress=True, **kw)
+    assert chunked.status == whole.status and "contact" in whole.status[1]
+    for name in ("x", "v", "t", "n_recorded", "t_stop", "n_force_evals", "n_outside_domain", "eps_reached"):
+        np.testing.assert_array_equal(getattr(chunked, name), getattr(whole, name), err_msg=name)
+    (bar, total), = bars
+    assert total == 1000 and bar is not None and bar.n == 1000
+    with pytest.raises(ValueError, match="progress must be True, False or None, got 'yes'"):
+        simulate_batch(model, rotors, progress="yes", **kw)
 
 
 # --------------------------------------------------------------------------- item 24

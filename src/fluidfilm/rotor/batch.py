@@ -36,6 +36,13 @@ with more substeps: it ends the trajectory as a contact):
   (``integrate._rk4_step``), serially (the surrogates' one-state kernels
   keep scratch rows in their parameters, which threads would share).
 
+Chunks, as ``simulate``'s: both loops run steps ``steps[0]`` to ``steps[1] - 1`` per call, the running
+state carried between calls in a packed (N, 5) array (position, velocity, largest |X|^2) beside the status
+and time arrays, so a run in chunks equals one call to the bit.  Between chunks ``simulate_batch`` moves the
+progress bar and re-checks the step of every running trajectory (``_StepCheck``).  Each loop counts every
+trajectory's force evaluations outside the model's validity domain in column 1 of ``evals`` (column 0: all
+its evaluations), by the one-state kernels' rule (``integrate.outside_domain``).
+
 Per-trajectory control settings (``settings``): a surrogate of the active
 bearing reads its sleeve position from a small mutable array in its kernel
 parameters; with ``settings`` (N, k) the lockstep loop writes trajectory p's
@@ -58,10 +65,29 @@ from numba import njit, typeof
 from numba.core import types as nb_types
 
 from fluidfilm.core.force_model import BatchForceModel, BatchSettable, ForceModel, TransientFilmModel, check_precision
-from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, OUTSIDE_DOMAIN, OutsideDomainError,
-                                       Trajectory, _holds_functions, _ramped, _rk4_step, _rk4_step_uncached,
-                                       _uncached, check_run_args, rk4_step_limit, run_loop)
+from fluidfilm.rotor import integrate
+from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, OUTSIDE_DOMAIN, UNRESOLVED,
+                                       OutsideDomainError, Trajectory, _counted, _domain_note, _holds_functions, _progress_bar, _ramped, _rk4_step,
+                                       _rk4_step_uncached, _uncached, check_run_args, domain_rule,
+                                       film_eigenvalues_many, outside_domain, rk4_step_limit, run_loop, step_limits,
+                                       unresolved_text)
 from fluidfilm.rotor.model import Rotor
+
+
+def _steps_at(args: tuple) -> int:
+    """Where the loop arguments hold ``steps`` (None until a chunk gives it)."""
+    return next(i for i, a in enumerate(args) if a is None)
+
+
+@contextlib.contextmanager
+def _lockstep_chunks(kernel, params, setting, settings_arr, consts, *args):
+    """``_rk4_batch`` as ``advance(steps)`` (``_stage_chunks``' contract, one thread)."""
+    at = _steps_at(args)
+
+    def advance(steps: tuple) -> None:
+        run_loop(_rk4_batch, _rk4_batch_uncached, kernel, params, setting, settings_arr, consts,
+                 *args[:at], steps, *args[at + 1:])
+    yield advance
 
 
 @dataclass
@@ -78,6 +104,10 @@ class BatchTrajectory:
     n_force_evals: np.ndarray
     wall_time_s: float = 0.0
     meta: dict = field(default_factory=dict)
+    #: per trajectory: force evaluations outside the model's validity domain, and the largest eccentricity
+    #: ratio reached after a step (the start included)
+    n_outside_domain: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    eps_reached: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __len__(self) -> int:
         return self.x.shape[0]
@@ -102,18 +132,20 @@ class BatchTrajectory:
         ts = None if math.isnan(self.t_stop[p]) else float(self.t_stop[p])
         return Trajectory(t=t, x=self.x[p, :n].copy(), v=self.v[p, :n].copy(), status=self.status[p], t_stop=ts,
                           n_force_evals=int(self.n_force_evals[p]), wall_time_s=self.wall_time_s / len(self),
-                          meta=dict(self.meta))
+                          meta=dict(self.meta),
+                          n_outside_domain=int(self.n_outside_domain[p]) if self.n_outside_domain.size else 0)
 
 
 @njit(cache=True, inline="always")
-def _start_row(p, x0, v0, t0, out_x, out_v, n_rec, status, t_stop, n_evals):
-    """Trajectory p's first recorded row and counters (both batch loops)."""
-    out_x[p, 0, 0], out_x[p, 0, 1] = x0[p, 0], x0[p, 1]
-    out_v[p, 0, 0], out_v[p, 0, 1] = v0[p, 0], v0[p, 1]
+def _start_row(p, state, t0, out_x, out_v, n_rec, status, t_stop, evals):
+    """Trajectory p's first recorded row and counters (both batch loops, at step 0)."""
+    out_x[p, 0, 0], out_x[p, 0, 1] = state[p, 0], state[p, 1]
+    out_v[p, 0, 0], out_v[p, 0, 1] = state[p, 2], state[p, 3]
     n_rec[p] = 1
     status[p] = 0
     t_stop[p] = t0
-    n_evals[p] = 0
+    evals[p, 0] = 0
+    evals[p, 1] = 0
 
 
 @njit(cache=True, inline="always")
@@ -138,17 +170,20 @@ def _fill_unrecorded(out_x, out_v, n_rec):
 
 
 @njit(cache=True)
-def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
-               eps_substep, max_substeps, out_x, out_v, n_rec, status, t_stop, n_evals):
-    """Lockstep RK4 of N trajectories; each one's arithmetic is ``integrate._rk4_run``'s."""
-    n_traj = x0.shape[0]
+def _rk4_batch(kernel, params, setting, settings, consts, dom, state, t0, dt, steps, record_every, eps_stop,
+               eps_substep, max_substeps, out_x, out_v, n_rec, status, t_stop, evals):
+    """Lockstep RK4 of N trajectories, steps ``steps[0]`` to ``steps[1] - 1`` of ``steps[2]`` (a chunk of the
+    run: the running trajectories carried in ``state``, ``status``, ``t_stop``; module doc of
+    ``simulate_batch``); each one's arithmetic is ``integrate._rk4_run``'s."""
+    step0, step1, n_steps = steps
+    n_traj = state.shape[0]
     n_set = settings.shape[1]
-    state = np.empty((n_traj, 4))
+    n_running = 0
     for p in range(n_traj):
-        state[p, 0], state[p, 1], state[p, 2], state[p, 3] = x0[p, 0], x0[p, 1], v0[p, 0], v0[p, 1]
-        _start_row(p, x0, v0, t0, out_x, out_v, n_rec, status, t_stop, n_evals)
-    n_running = n_traj
-    for step in range(n_steps):
+        if step0 == 0:
+            _start_row(p, state, t0, out_x, out_v, n_rec, status, t_stop, evals)
+        n_running += 1 if status[p] == 0 else 0
+    for step in range(step0, step1):
         if n_running == 0:
             break
         for p in range(n_traj):
@@ -160,17 +195,21 @@ def _rk4_batch(kernel, params, setting, settings, consts, x0, v0, t0, dt, n_step
                   consts[p, 6], consts[p, 7], consts[p, 8])
             x1, x2, v1, v2 = state[p, 0], state[p, 1], state[p, 2], state[p, 3]
             # no retry of a step whose stage left the clearance (simulate's retry=True): it ends the trajectory
-            x1, x2, v1, v2, t, n, st = _rk4_step(kernel, params, cp, x1, x2, v1, v2, t_stop[p], t0, step, dt,
-                                                 eps_substep, max_substeps, eps_stop * eps_stop * consts[p, 6], False)
-            n_evals[p] += n
+            x1, x2, v1, v2, t, n, st, n_out = _rk4_step(kernel, params, cp, x1, x2, v1, v2, t_stop[p], t0, step, dt,
+                                                        eps_substep, max_substeps, eps_stop * eps_stop * consts[p, 6],
+                                                        False, dom, consts[p, 9])
+            evals[p, 0] += n
+            evals[p, 1] += n_out
             state[p, 0], state[p, 1], state[p, 2], state[p, 3] = x1, x2, v1, v2
+            state[p, 4] = max(state[p, 4], x1 * x1 + x2 * x2)
             t_stop[p] = t  # the trajectory's current time (its stopping time once it stops)
             if st != 0:
                 status[p] = st
                 n_running -= 1
             if st != 0 or (step + 1) % record_every == 0:
                 _record_row(p, out_x, out_v, n_rec, x1, x2, v1, v2)
-    _fill_unrecorded(out_x, out_v, n_rec)
+    if step1 == n_steps:
+        _fill_unrecorded(out_x, out_v, n_rec)
 
 
 # kernels the on-disk cache cannot take (a user's model, an ensemble's members): an uncached twin
@@ -179,7 +218,7 @@ _rk4_batch_uncached = _uncached(_rk4_batch, _rk4_step=_rk4_step_uncached)
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok, xsb, vsb, fsb, rows, sx1, sx2,
-                   sv1, sv2):
+                   sv1, sv2, dom, NE):
     """One RK4 stage of the m entries ``act[:m]`` (``ident``: entries 0..m-1) at the stage states q and times
     tq: the film forces in ONE call ``fn(bp, xs, vs, fs)`` of the states inside the clearance (column-major
     (r, 2) views of the flat buffers xsb, vsb, fsb), then
@@ -190,9 +229,18 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
     The stage states are views of the kernel's buffers (``_substep``: qx1 = xsb[:m], qx2 = xsb[m:2m], qv1,
     qv2 likewise in vsb), so when every state lies inside the clearance (the rule) the kernel reads them where
     the stage wrote them: no copy (copying them cost ~1.2 ns per force, a scalar loop). Otherwise they are
-    copied out to the scratch rows s* and the states inside gathered back, in order."""
+    copied out to the scratch rows s* and the states inside gathered back, in order.
+
+    With an active domain table ``dom`` (``integrate.domain_rule``), each entry's evaluations outside the
+    model's domain are counted in ``NE[1, j]`` (``integrate.outside_domain``, the states inside the
+    clearance: those whose forces are evaluated)."""
     r = 0
     inside = 0
+    if dom[0, 1] < math.inf:
+        for i in range(m):
+            j = i if ident else act[i]
+            evaluated = 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
+            NE[1, j] += evaluated * outside_domain(dom, C[10, j], qx1[i], qx2[i], qv1[i], qv2[i])
     for i in range(m):
         j = i if ident else act[i]
         inside += 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
@@ -277,7 +325,8 @@ def _late_stage(f, p1, p2, q1, q2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1,
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _substep(fn, bp, C, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE, qx1, qx2, qv1, qv2, tq, a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs, rows):
+def _substep(fn, bp, C, dom, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE, qx1, qx2, qv1, qv2, tq,
+             a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs, rows):
     """Substep ``sub`` of the entries ``act[:m]`` (``ident``: every entry, none substepping): four stages and
     the update, ``_rk4_step``'s arithmetic per entry.  The stage states are written into the kernel's flat
     buffers xs, vs (``_accelerations``); qx1, qx2, qv1, qv2 as passed are its scratch rows."""
@@ -287,23 +336,23 @@ def _substep(fn, bp, C, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2,
     for i in range(m):
         j = i if ident else act[i]
         qx1[i], qx2[i], qv1[i], qv2[i], tq[i] = X1[j], X2[j], V1[j], V2[j], T[j]
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, a1, a2, ok1, xs, vs, fs, rows, sx1, sx2, sv1, sv2)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, a1, a2, ok1, xs, vs, fs, rows, sx1, sx2, sv1, sv2, dom, NE)
     for i in range(m):
         j = i if ident else act[i]
         h = dt / K[j]
         qx1[i], qx2[i] = X1[j] + 0.5 * h * V1[j], X2[j] + 0.5 * h * V2[j]
         qv1[i], qv2[i], tq[i] = V1[j] + 0.5 * h * a1[i], V2[j] + 0.5 * h * a2[i], T[j] + 0.5 * h
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, b1, b2, ok2, xs, vs, fs, rows, sx1, sx2, sv1, sv2)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, b1, b2, ok2, xs, vs, fs, rows, sx1, sx2, sv1, sv2, dom, NE)
     _late_stage(0.5, a1, a2, b1, b2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, c1, c2, ok3, xs, vs, fs, rows, sx1, sx2, sv1, sv2)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, c1, c2, ok3, xs, vs, fs, rows, sx1, sx2, sv1, sv2, dom, NE)
     _late_stage(1.0, b1, b2, c1, c2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, d1, d2, ok4, xs, vs, fs, rows, sx1, sx2, sv1, sv2)
+    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, d1, d2, ok4, xs, vs, fs, rows, sx1, sx2, sv1, sv2, dom, NE)
     for i in range(m):
         j = i if ident else act[i]
         k = K[j]
         h = dt / k
         x1, x2, v1, v2 = X1[j], X2[j], V1[j], V2[j]
-        NE[j] += 4
+        NE[0, j] += 4
         kx1 = v1 + 0.5 * h * a1[i]
         kx2 = v2 + 0.5 * h * a2[i]
         lx1 = v1 + 0.5 * h * b1[i]
@@ -329,9 +378,10 @@ def _substep(fn, bp, C, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2,
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop, eps_substep, max_substeps,
-                out_x, out_v, n_rec, status, t_stop, n_evals):
-    """RK4 of N trajectories with the force model evaluated once per stage for all running ones.
+def _rk4_stages(fn, bp, consts, dom, state, t0, dt, steps, record_every, eps_stop, eps_substep, max_substeps,
+                out_x, out_v, n_rec, status, t_stop, evals):
+    """RK4 of N trajectories with the force model evaluated once per stage for all running ones: steps
+    ``steps[0]`` to ``steps[1] - 1`` of ``steps[2]`` (a chunk, as ``_rk4_batch``).
 
     Per trajectory, the arithmetic of ``_rk4_batch`` (``integrate._rk4_step`` without the retry): the same
     substep counts, stage states, stopping rules and recorded rows.  The state is held per component
@@ -340,24 +390,34 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
     in which no entry substeps runs every loop over the entries 0..m-1 (contiguous); otherwise per substep
     the entries still stepping (a trajectory with k substeps takes part in the first k; one that stopped in
     this step drops out) are a second list ``act``.  Every stage gathers its entries' states inside the
-    clearance and calls ``fn`` once on them."""
-    n = x0.shape[0]
+    clearance and calls ``fn`` once on them.  A chunk starts from the state carried in ``state`` (rows x1,
+    x2, v1, v2 and the largest |X|^2 so far), ``t_stop`` (the current time) and ``status`` (the running
+    trajectories, in order: the list a single call would hold at that step), and leaves it there."""
+    step0, step1, n_steps = steps
+    n = state.shape[0]
     X1 = np.empty(n)
     X2 = np.empty(n)
     V1 = np.empty(n)
     V2 = np.empty(n)
     T = np.empty(n)
     run = np.empty(n, dtype=np.int64)
-    C = np.empty((10, n))  # consts per column, and the stopping radius^2 (eps_stop^2 c^2)
+    C = np.empty((11, n))  # consts per column, the stopping radius^2 (eps_stop^2 c^2) and 1/c^2 (domain count)
+    n_run = 0
     for p in range(n):
-        X1[p], X2[p], V1[p], V2[p], T[p] = x0[p, 0], x0[p, 1], v0[p, 0], v0[p, 1], t0
-        _start_row(p, x0, v0, t0, out_x, out_v, n_rec, status, t_stop, n_evals)
-        run[p] = p
+        if step0 == 0:
+            _start_row(p, state, t0, out_x, out_v, n_rec, status, t_stop, evals)
+        if status[p] != OK:
+            continue
+        j = n_run
+        X1[j], X2[j], V1[j], V2[j], T[j] = state[p, 0], state[p, 1], state[p, 2], state[p, 3], t_stop[p]
+        run[j] = p
         for k in range(9):
-            C[k, p] = consts[p, k]
-        C[9, p] = eps_stop * eps_stop * consts[p, 6]
+            C[k, j] = consts[p, k]
+        C[9, j] = eps_stop * eps_stop * consts[p, 6]
+        C[10, j] = consts[p, 9]
+        n_run += 1
     K = np.empty(n, dtype=np.int64)   # per entry: substeps of this step
-    NE = np.zeros(n, dtype=np.int64)  # per entry: force evaluations of this step
+    NE = np.zeros((2, n), dtype=np.int64)  # per entry: force evaluations of this step, and those outside the domain
     ST = np.empty(n, dtype=np.int64)  # per entry: status of this step
     act = np.empty(n, dtype=np.int64)
     qx1, qx2, qv1, qv2, tq = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
@@ -372,8 +432,7 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
     vs = np.empty(2 * n)
     fs = np.empty(2 * n)
     es2 = eps_substep * eps_substep
-    n_run = n
-    for step in range(n_steps):
+    for step in range(step0, step1):
         if n_run == 0:
             break
         far = 0
@@ -381,7 +440,8 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
             far += 1 if (X1[j] * X1[j] + X2[j] * X2[j]) / C[6, j] > es2 else 0
             K[j] = 1
             ST[j] = OK
-            NE[j] = 0
+            NE[0, j] = 0
+            NE[1, j] = 0
         kmax = 1
         if far > 0:
             for j in range(n_run):
@@ -394,7 +454,7 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
                     if k > kmax:
                         kmax = k
         if kmax == 1:
-            _substep(fn, bp, C, act, True, n_run, 0, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE, qx1,
+            _substep(fn, bp, C, dom, act, True, n_run, 0, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE, qx1,
                      qx2, qv1, qv2, tq, a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs, rows)
         else:
             for sub in range(kmax):
@@ -405,15 +465,17 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
                         m += 1
                 if m == 0:
                     break
-                _substep(fn, bp, C, act, False, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE,
+                _substep(fn, bp, C, dom, act, False, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE,
                          qx1, qx2, qv1, qv2, tq, a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs,
                          rows)
         # record, and compact the running entries (in order)
         keep = 0
         for j in range(n_run):
             p = run[j]
-            n_evals[p] += NE[j]
+            evals[p, 0] += NE[0, j]
+            evals[p, 1] += NE[1, j]
             t_stop[p] = T[j]  # the trajectory's current time (its stopping time once it stops)
+            state[p, 4] = max(state[p, 4], X1[j] * X1[j] + X2[j] * X2[j])
             st = ST[j]
             if st != 0:
                 status[p] = st
@@ -423,11 +485,15 @@ def _rk4_stages(fn, bp, consts, x0, v0, t0, dt, n_steps, record_every, eps_stop,
                 if keep != j:
                     run[keep] = p
                     X1[keep], X2[keep], V1[keep], V2[keep], T[keep] = X1[j], X2[j], V1[j], V2[j], T[j]
-                    for k in range(10):
+                    for k in range(11):
                         C[k, keep] = C[k, j]
                 keep += 1
         n_run = keep
-    _fill_unrecorded(out_x, out_v, n_rec)
+    for j in range(n_run):  # the running trajectories' states, for the next chunk
+        p = run[j]
+        state[p, 0], state[p, 1], state[p, 2], state[p, 3] = X1[j], X2[j], V1[j], V2[j]
+    if step1 == n_steps:
+        _fill_unrecorded(out_x, out_v, n_rec)
 
 
 _rk4_stages_uncached = _uncached(_rk4_stages, _substep=_uncached(_substep, _accelerations=_uncached(_accelerations)))
@@ -524,97 +590,166 @@ def _stages_loop(fn, bp, loop_args):
     return loop
 
 
-def _run_stages(model, precision, n_threads, consts, x0, v0, *args) -> None:
-    """``_rk4_stages`` over ``n_threads`` contiguous chunks of the batch, each chunk in its own thread with
-    its own private batched-kernel parameters (their own counters: nothing mutable is shared), the counts
-    merged into the model's afterwards."""
-    (t0, dt, n_steps, record_every, eps_stop, eps_substep, max_substeps, out_x, out_v, n_rec, status, t_stop,
-     n_evals) = args
-    n = x0.shape[0]
+@contextlib.contextmanager
+def _stage_chunks(model, precision, n_threads, consts, *args):
+    """``_rk4_stages`` over ``n_threads`` contiguous chunks of the batch, as ``advance(steps)`` (one chunk of
+    steps, ``(step0, step1, n_steps)``): each chunk of trajectories in its own thread with its own private
+    batched-kernel parameters (their own counters: nothing mutable is shared), the counts merged into the
+    model's at the end.  ``args``: the loop's arguments after ``consts``, ``steps`` as None."""
+    n = consts.shape[0]
     edges = np.linspace(0, n, n_threads + 1).round().astype(int)
     kernels = []
     for _ in range(n_threads):
         kernel = model.batch_force_kernel(precision, private=True)
         assert kernel is not None  # checked by the caller
         kernels.append(kernel)
+    at = _steps_at(args)
 
-    def chunk_args(c: int) -> tuple:
+    def chunk_args(c: int, steps: tuple) -> tuple:
         lo, hi = int(edges[c]), int(edges[c + 1])
-        return (consts[lo:hi], x0[lo:hi], v0[lo:hi], t0, dt, n_steps, record_every, eps_stop, eps_substep,
-                max_substeps, out_x[lo:hi], out_v[lo:hi], n_rec[lo:hi], status[lo:hi], t_stop[lo:hi], n_evals[lo:hi])
+        rows = [a[lo:hi] if isinstance(a, np.ndarray) and a.shape[:1] == (n,) else a for a in args]
+        rows[at] = steps
+        return (consts[lo:hi], *rows)
 
     # compiled (or loaded from the cache) here, before any thread starts; every chunk has the same types
-    loop = _stages_loop(kernels[0][0], kernels[0][1], chunk_args(0))
+    loop = _stages_loop(kernels[0][0], kernels[0][1], chunk_args(0, (0, 0, 0)))
+    # the compiled loop releases the GIL (nogil): the chunks run in parallel
+    pool = ThreadPoolExecutor(max_workers=n_threads) if n_threads > 1 else None
 
-    def chunk(c: int) -> None:
-        fn, bp = kernels[c]
-        loop(fn, bp, *chunk_args(c))
-
-    if n_threads == 1:
-        chunk(0)
-    else:
-        # the compiled loop releases the GIL (nogil): the chunks run in parallel
-        with ThreadPoolExecutor(max_workers=n_threads) as pool:
+    def advance(steps: tuple) -> None:
+        def chunk(c: int) -> None:
+            fn, bp = kernels[c]
+            loop(fn, bp, *chunk_args(c, steps))
+        if pool is None:
+            chunk(0)
+        else:
             list(pool.map(chunk, range(n_threads)))
-    for _, bp in kernels:
-        model.merge_counts(bp)
+
+    try:
+        yield advance
+    finally:
+        if pool is not None:
+            pool.shutdown()
+        for _, bp in kernels:
+            model.merge_counts(bp)
 
 
-def _check_batch_step(model, kernel, params, setting, settings_arr, consts, x0, v0, c, dt, omega, eps_substep,
-                      max_substeps) -> None:
-    """``simulate``'s start check for every distinct (rotor, start state, setting) of the batch: a ValueError
-    naming dt, the first trajectory it cannot resolve and the batch's largest safe step."""
-    seen: dict = {}
-    worst = None
-    for p in range(x0.shape[0]):
-        key = (consts[p].tobytes(), x0[p].tobytes(), v0[p].tobytes(), settings_arr[p].tobytes())
-        if key in seen:
-            continue
-        if setting.size:
-            setting[:] = settings_arr[p]
+class _StepCheck:
+    """``simulate``'s step check for a batch (``rk4_step_limit`` per trajectory), at the start and at the end of
+    every chunk of steps.  The eigenvalues of all trajectories come from one call of the model's batched
+    kernel (the run's ``precision``, already loaded; private parameters: nothing counted) or of its ``forces``, and only the trajectories whose
+    step is within a factor 2 of the limit so found (and the one with the smallest) get the one-state check
+    whose verdict and words are ``simulate``'s.  Per-trajectory settings: the one-state check for each."""
+
+    def __init__(self, model, kernel, params, setting, settings_arr, consts, c, dt, omega, eps_substep,
+                 max_substeps, per_setting: bool, precision: str):
+        self.model, self.kernel, self.params, self.setting = model, kernel, params, setting
+        self.settings_arr, self.consts, self.c, self.dt = settings_arr, consts, c, dt
+        self.rule = (omega, eps_substep, max_substeps)
+        self.batched = None
+        if not per_setting and isinstance(model, BatchForceModel):
+            self.batched = model.batch_force_kernel(precision, private=True)
+        self.per_setting = per_setting
+        self.check_outside = 0  # evaluations of the checks the model's own counter took (subtracted)
+
+    def _forces(self, xs, vs):
+        if self.batched is not None:
+            fn, bp = self.batched
+            fs = np.empty((xs.shape[0], 2), order="F")  # the kernel's compiled layout (``_STAGE_VIEW``)
+            fn(bp, np.asfortranarray(xs), np.asfortranarray(vs), fs)
+            return fs
+        return np.asarray(self.model.forces(xs, vs), dtype=float)
+
+    def one(self, p: int, x, v):
+        """The one-state limit of trajectory p at (x, v), the model's counters kept."""
+        if self.setting.size:
+            self.setting[:] = self.settings_arr[p]
+        kernel, params = self.kernel, self.params
 
         def force(x1, x2, v1, v2):
             return kernel(params, x1, x2, v1, v2)
-        lim = rk4_step_limit(force, x0[p], v0[p], consts[p, 0], float(c[p]), omega, eps_substep, max_substeps)
-        seen[key] = lim
-        if worst is None or lim.dt_max < worst[1].dt_max:
-            worst = (p, lim)
-    assert worst is not None
-    p, lim = worst
-    if dt > lim.dt_max * (1.0 + 1e-9):
-        raise ValueError(f"dt={dt!r} s cannot resolve this batch: the largest safe step is {lim.dt_max:.3g} s "
-                         f"(trajectory {p} at its start, eccentricity {np.hypot(*x0[p]) / c[p]:.3g}; rule: "
-                         f"{lim.rule}). Use dt <= {lim.dt_max:.3g} or check_step=False (experts)")
+        omega, eps_substep, max_substeps = self.rule
+        lim, extra = _counted(self.model, lambda: rk4_step_limit(force, x, v, self.consts[p, 0], float(self.c[p]),
+                                                                  omega, eps_substep, max_substeps), params)
+        self.check_outside += extra
+        return lim
+
+    def limits(self, idx: np.ndarray, X: np.ndarray, V: np.ndarray) -> dict:
+        """{p: StepLimit} for the trajectories ``idx`` (states X, V) that may not be resolved, and the one with
+        the smallest limit; the model's setting restored."""
+        saved = self.setting.copy()
+        try:
+            if self.per_setting:
+                cand = list(range(idx.size))
+            else:
+                omega, eps_substep, max_substeps = self.rule
+                lam, extra = _counted(self.model, lambda: film_eigenvalues_many(
+                    self._forces, X, V, self.consts[idx, 0], self.c[idx], omega), self.params)
+                self.check_outside += extra
+                e2 = (X[:, 0] ** 2 + X[:, 1] ** 2) / self.c[idx] ** 2
+                dt_max = step_limits(lam, e2, omega, eps_substep, max_substeps)[1].min(axis=1)
+                cand = sorted(set(np.flatnonzero(self.dt > 0.5 * dt_max).tolist()) | {int(np.argmin(dt_max))})
+            return {int(idx[i]): self.one(int(idx[i]), X[i], V[i]) for i in cand}
+        finally:
+            self.setting[:] = saved
+
+    def start(self, x0, v0) -> None:
+        """A ValueError naming dt, the trajectory with the smallest limit and that limit, where dt exceeds it."""
+        lims = self.limits(np.arange(x0.shape[0]), x0, v0)
+        p = min(lims, key=lambda q: lims[q].dt_max)
+        lim = lims[p]
+        if self.dt > lim.dt_max * (1.0 + 1e-9):
+            raise ValueError(f"dt={self.dt!r} s cannot resolve this batch: the largest safe step is {lim.dt_max:.3g} s "
+                             f"(trajectory {p} at its start, eccentricity {np.hypot(*x0[p]) / self.c[p]:.3g}; rule: "
+                             f"{lim.rule}). Use dt <= {lim.dt_max:.3g} or check_step=False (experts)")
+
+    def along(self, state, status, out_x, out_v, n_rec, s1: int, record_every: int) -> dict:
+        """The check at the end of a chunk (step ``s1``): each running trajectory that the step no longer
+        resolves ends "unresolved" (status ``UNRESOLVED``, its state recorded); returns {p: StepLimit} of those."""
+        idx = np.flatnonzero(status == OK)
+        if idx.size == 0:
+            return {}
+        lims = self.limits(idx, state[idx, :2].copy(), state[idx, 2:4].copy())
+        bad = {p: lim for p, lim in lims.items() if self.dt > lim.dt_max * (1.0 + 1e-9)}
+        for p in bad:
+            status[p] = UNRESOLVED
+            if s1 % record_every:  # the state at the check is not a recorded row yet
+                _record_row(p, out_x, out_v, n_rec, state[p, 0], state[p, 1], state[p, 2], state[p, 3])
+        return bad
 
 
-def _domain_texts(model, texts: list, out_x, out_v, n_rec, c, n_evals: int, strict: bool) -> list:
-    """The batch's statuses with its evaluations outside the model's domain (one warning, or
-    ``OutsideDomainError`` with ``strict``; ``simulate_batch``'s Returns)."""
-    n_outside = int(model.n_outside_domain)
-    note = model.domain_report()
-    n = len(texts)
-    eps_rec = np.array([np.hypot(*out_x[p, :n_rec[p]].T).max() / c[p] for p in range(n)])
+def _domain_texts(model, texts: list, evals, eps_reached, strict: bool) -> list:
+    """The batch's statuses with each trajectory's evaluations outside the model's domain (``evals[:, 1]``):
+    "outside-domain: ..." for a finished one, a note after the others', one warning naming the share, or
+    ``OutsideDomainError`` with ``strict`` (``simulate_batch``'s Returns)."""
     if hasattr(model, "check_grid"):  # a reference solver warns once where its grid is too coarse for the run
-        model.check_grid(float(eps_rec.max()))
+        model.check_grid(float(eps_reached.max()))
+    n_out = evals[:, 1]
+    out = list(texts)
+    if n_out.sum() > 0:
+        hit = np.flatnonzero(n_out > 0)
+        total, n_evals = int(n_out.sum()), int(evals[:, 0].sum())
+        summary = (f"{hit.size} of {len(texts)} trajectories outside the training domain, in {total} force "
+                   f"evaluations ({100.0 * total / max(n_evals, 1):.3g} % of {n_evals}); largest eccentricity "
+                   f"{eps_reached[hit].max():.4g} (domain eps <= {model.validity.eps_max:g})")
+        if strict:
+            raise OutsideDomainError(f"{model.name}: {summary} during the batch (strict=True)")
+        warnings.warn(f"{model.name}: {summary} during the batch", RuntimeWarning, stacklevel=3)
+        for p in hit:
+            note = _domain_note(model, int(n_out[p]), int(evals[p, 0]), float(eps_reached[p]) ** 2, 1.0)
+            out[p] = f"{OUTSIDE_DOMAIN}: reached the end time; {note}" if out[p] == "ok" else f"{out[p]}; {note}"
+        return out
+    # a model whose count its validity domain does not describe, or that reports without counting: the note
+    # is the whole batch's, and no finished trajectory can be vouched for where it counted
+    note = model.domain_report()
     if not note:
-        return texts
-    if n_outside <= 0:  # a model that reports without counting keeps its own note
-        texts = [f"{s}; {note} (whole batch)" for s in texts]
-        warnings.warn(f"{model.name}: {note} during the batch", RuntimeWarning, stacklevel=3)
-        return texts
-    share = 100.0 * n_outside / max(n_evals, 1)
-    summary = (f"outside the training domain in {n_outside} force evaluations ({share:.3g} % of {n_evals}, whole "
-               f"batch), largest recorded eccentricity {eps_rec.max():.4g} (domain eps <= {model.validity.eps_max:g})")
-    if strict:
-        raise OutsideDomainError(f"{model.name}: {summary} during the batch (strict=True)")
-    warnings.warn(f"{model.name}: {summary} during the batch", RuntimeWarning, stacklevel=3)
-    out = []
-    for p, s in enumerate(texts):
-        mine = (f"outside the training domain in {n_outside} force evaluations ({share:.3g} % of {n_evals}, whole "
-                f"batch), largest recorded eccentricity {eps_rec[p]:.4g} (domain eps <= {model.validity.eps_max:g})")
-        # the count is the batch's (its loops count per batch): no finished trajectory can be vouched for
-        out.append(f"{OUTSIDE_DOMAIN}: reached the end time; {mine}" if s == "ok" else f"{s}; {mine}")
-    return out
+        return out
+    counted = int(model.n_outside_domain) > 0
+    if strict and counted:
+        raise OutsideDomainError(f"{model.name}: {note} during the batch (strict=True)")
+    warnings.warn(f"{model.name}: {note} during the batch", RuntimeWarning, stacklevel=3)
+    return [f"{OUTSIDE_DOMAIN}: reached the end time; {note} (whole batch)" if s == "ok" and counted else
+            f"{s}; {note} (whole batch)" for s in out]
 
 
 def _rows(value, n: int, what: str) -> np.ndarray:
@@ -632,7 +767,7 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
                    eps_stop: float = 0.98, record_every: int = 1, eps_substep: float = 0.8,
                    max_substeps: int = 256, t0: float = 0.0, threads: int | None = None,
                    precision: str = "float32", stage_batched: bool | None = None, check_step: bool = True,
-                   strict: bool = False) -> BatchTrajectory:
+                   strict: bool = False, progress: bool | None = None) -> BatchTrajectory:
     """Integrate N rotors (a ``Rotor`` or a sequence of N) in ``model`` from x0, v0 ((2,) or (N, 2)).
 
     Parameters
@@ -664,20 +799,26 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         ``STAGE_BATCHED_MIN_N`` trajectories (a surrogate's batched kernel costs ~2 us per call however
         few its states, so a small batch runs faster through the one-state kernel).
     check_step : bool, default True
-        Refuse a ``dt`` that cannot resolve some trajectory at its start state (``integrate.rk4_step_limit``,
-        each distinct rotor, state and setting), with a ValueError naming ``dt``, the trajectory and the
-        largest safe step; False (experts): no check.  Unlike ``simulate``, the batch is checked at the
-        start only (its loops are not run in chunks).
+        Refuse a ``dt`` that cannot resolve some trajectory at its start state (``integrate.rk4_step_limit``),
+        with a ValueError naming ``dt``, the trajectory and the largest safe step; and, as ``simulate``, re-check
+        every running trajectory at the end of each chunk of steps: one that the step no longer resolves ends
+        with status "unresolved: ..." naming dt and its largest safe step (one warning for the batch); the
+        others run on.  False (experts): no check.
     strict : bool, default False
-        Raise ``OutsideDomainError`` where force evaluations of the batch left the model's domain.
+        Raise ``OutsideDomainError`` where force evaluations of some trajectory left the model's domain.
+    progress : bool or None, default None
+        A tqdm bar on stderr (shown once the batch has taken 2 s), as ``simulate``'s: None shows it only where
+        stderr is a terminal and ``CI`` is unset (so not in the pipeline's logs).  The loops run in chunks of
+        steps either way (``integrate.CHUNK_MIN_STEPS``), and the trajectories do not depend on them to the bit.
 
     Returns
     -------
     BatchTrajectory
-        ``status[p]`` as ``simulate``'s, but the evaluations outside the model's domain are counted per
-        batch: where the count is not zero, every trajectory that reached the end has status
-        "outside-domain: ..." (not ok, ``completed``), naming the batch's count and share and the
-        trajectory's largest recorded eccentricity; the others carry the same note after theirs.
+        ``status[p]`` as ``simulate``'s: each trajectory's own force evaluations outside the model's domain
+        (``n_outside_domain[p]``, counted by ``integrate.outside_domain``, the one-state kernels' rule) make a
+        finished trajectory "outside-domain: ..." (not ok, ``completed``) naming its count, share and largest
+        eccentricity (``eps_reached[p]``); one warning names how many trajectories and the share of the
+        batch's evaluations.
     """
     if not isinstance(model, ForceModel):
         raise ValueError(f"{type(model).__name__} is not a force model (fluidfilm.core.force_model.ForceModel); "
@@ -723,7 +864,7 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         (r.mass, r.imbalance, np.nan if r.imbalance_final is None else r.imbalance_final, r.imbalance_direction,
          r.external_force, r.gravity, r.ramp_time) for r in rotor_list]))
     ramped = ~np.isnan(imb_final)
-    consts = np.empty((n, 9))
+    consts = np.empty((n, 10))
     consts[:, 0] = 1.0 / mass
     consts[:, 1] = imb * omega**2
     consts[:, 2] = omega
@@ -733,6 +874,8 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     consts[:, 6] = c**2
     consts[:, 7] = np.where(ramped, imb_final, imb) * omega**2
     consts[:, 8] = np.where(ramped, ramp, 0.0)
+    # 1/c^2 as the kernels hold it (a surrogate's setting row 0), for the per-trajectory domain count
+    consts[:, 9] = settings_arr[:, 0] if settings is not None else 1.0 / c**2
     record_every = int(record_every)
     n_out = n_steps // record_every + 2
     # empty: the compiled loops write every row, the recorded ones and NaN past them (_fill_unrecorded)
@@ -741,34 +884,45 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     n_rec = np.zeros(n, dtype=np.int64)
     status = np.zeros(n, dtype=np.int64)
     t_stop = np.zeros(n)
-    n_evals = np.zeros(n, dtype=np.int64)
+    evals = np.zeros((n, 2), dtype=np.int64)  # per trajectory: force evaluations, and those outside the domain
+    # the running state carried between chunks: x1, x2, v1, v2 and the largest |X|^2 reached
+    state = np.concatenate([x0, v0, (x0[:, 0] ** 2 + x0[:, 1] ** 2)[:, None]], axis=1)
+    dom = domain_rule(model)
     check_precision(precision)
     n_threads = _thread_count(threads, n)
     if not isinstance(check_step, (bool, np.bool_)):
         raise ValueError(f"check_step must be True or False, got {check_step!r}")
     saved = setting.copy()
-    if check_step:
-        try:
-            _check_batch_step(model, kernel, params, setting, settings_arr, consts, x0, v0, c, float(dt),
-                              float(omega), float(eps_substep), int(max_substeps))
-        finally:
-            setting[:] = saved
+    check = _StepCheck(model, kernel, params, setting, settings_arr, consts, c, float(dt), float(omega),
+                       float(eps_substep), int(max_substeps), settings is not None, precision) if check_step else None
+    if check is not None:
+        check.start(x0, v0)
+    if stage_batched is None:
+        stage_batched = n >= STAGE_BATCHED_MIN_N
+    staged = stage_batched and settings is None and isinstance(model, BatchForceModel) and \
+        model.batch_force_kernel(precision) is not None
+    # the loops' arguments after ``consts``; ``steps`` (None here) is each chunk's (step0, step1, n_steps)
+    args = (dom, state, float(t0), float(dt), None, record_every, float(eps_stop), float(eps_substep),
+            int(max_substeps), out_x, out_v, n_rec, status, t_stop, evals)
+    chunk = max(integrate.CHUNK_MIN_STEPS, -(-n_steps // integrate.MAX_CHUNKS))  # as simulate's
+    unresolved: dict = {}
     model.reset_domain_counter()
     t_start = time.perf_counter()
+    bar = _progress_bar(progress, n_steps, "simulate_batch")
     try:
-        if stage_batched is None:
-            stage_batched = n >= STAGE_BATCHED_MIN_N
-        if stage_batched and settings is None and isinstance(model, BatchForceModel) and \
-                model.batch_force_kernel(precision) is not None:
-            _run_stages(model, precision, n_threads, consts, x0, v0, float(t0), float(dt), n_steps, record_every,
-                        float(eps_stop), float(eps_substep), int(max_substeps), out_x, out_v, n_rec, status, t_stop,
-                        n_evals)
-        else:
-            run_loop(_rk4_batch, _rk4_batch_uncached, kernel, params, setting, settings_arr, consts, x0, v0,
-                     float(t0), float(dt), n_steps, record_every, float(eps_stop), float(eps_substep),
-                     int(max_substeps), out_x, out_v, n_rec, status, t_stop, n_evals)
+        with (_stage_chunks(model, precision, n_threads, consts, *args) if staged else
+              _lockstep_chunks(kernel, params, setting, settings_arr, consts, *args)) as advance:
+            for s0 in range(0, n_steps, chunk):
+                s1 = min(s0 + chunk, n_steps)
+                advance((s0, s1, n_steps))
+                if bar is not None:
+                    bar.update(s1 - s0)
+                if check is not None:
+                    unresolved.update(check.along(state, status, out_x, out_v, n_rec, s1, record_every))
     finally:
         setting[:] = saved
+        if bar is not None:
+            bar.close()
     wall = time.perf_counter() - t_start
     # the recorded time grid, as simulate's: t0 + (j * record_every) dt, computed the way its loop does
     t_grid = np.empty(n_out)
@@ -778,13 +932,20 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     texts = ["ok"] * n
     t_stop_out = np.full(n, np.nan)
     for p in np.flatnonzero(status != OK):
+        t_stop_out[p] = t_stop[p]
         if status[p] in (CONTACT, CONTACT_STAGE):
             texts[p] = f"contact: eccentricity reached eps_stop={eps_stop} at t={t_stop[p]:.6g} s"
-            t_stop_out[p] = t_stop[p]
+        elif status[p] == UNRESOLVED:
+            texts[p] = unresolved_text(t_stop[p], np.hypot(*state[p, :2]) / c[p], dt, unresolved[p],
+                                       "simulate(..., dt=None) (adaptive)")
         else:
             texts[p] = f"diverged: non-finite state after t={t_stop[p]:.6g} s"
-            t_stop_out[p] = t_stop[p]
-    texts = _domain_texts(model, texts, out_x, out_v, n_rec, c, int(n_evals.sum()), strict)
+    if unresolved:
+        warnings.warn(f"{len(unresolved)} of {n} trajectories ended unresolved: dt={dt!r} s no longer resolves "
+                      f"them along the run (their status names the largest safe step)", RuntimeWarning, stacklevel=2)
+    eps_reached = np.sqrt(state[:, 4]) / c
+    texts = _domain_texts(model, texts, evals, eps_reached, strict)
     return BatchTrajectory(t=t_grid, x=out_x, v=out_v, n_recorded=n_rec, status=texts, t_stop=t_stop_out,
-                           n_force_evals=n_evals, wall_time_s=wall,
-                           meta={"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every})
+                           n_force_evals=evals[:, 0].copy(), wall_time_s=wall,
+                           meta={"dt": dt, "t0": t0, "t_end": t_end, "record_every": record_every},
+                           n_outside_domain=evals[:, 1].copy(), eps_reached=eps_reached)

@@ -203,15 +203,55 @@ def _record(out_t, out_x, out_v, n, t, x1, x2, v1, v2):
 
 
 @njit(cache=True, inline="always")
-def _rk4_step(kernel, params, consts, x1, x2, v1, v2, t, t0, step, dt, eps_substep, max_substeps, stop2, retry):
+def outside_domain(dom, inv_c2, x1, x2, v1, v2):
+    """1 where a force evaluated at the state falls outside the validity domain ``dom``, else 0: the one-state
+    surrogate kernels' rule (``surrogate.kernels``), eps = sqrt(|X|^2 inv_c2) above eps_max, or a velocity
+    component above the v_max of the first band holding eps (the last band also above its top).
+
+    ``dom`` (``domain_rule``): row 0 [eps_max, active (inf: no), 0], rows 1.. the bands (eps_low, eps_high,
+    v_max)."""
+    eps = math.sqrt((x1 * x1 + x2 * x2) * inv_c2)
+    # as selects, without branches (the loops over a batch's states vectorise): the first band holding eps
+    vmax = math.inf
+    hit = False
+    n = dom.shape[0]
+    for s in range(1, n):
+        now = (not hit) & (((dom[s, 0] <= eps) & (eps < dom[s, 1])) | ((s == n - 1) & (eps >= dom[s, 1])))
+        vmax = dom[s, 2] if now else vmax
+        hit = hit | now
+    return 1 if (eps > dom[0, 0]) | (max(abs(v1), abs(v2)) > vmax) else 0
+
+
+def domain_rule(model) -> np.ndarray:
+    """``outside_domain``'s table of a model's validity domain: row 0 [eps_max, active, 0], then the bands;
+    inactive (row 0 column 1 infinite: nothing counted) for a domain that is the whole film."""
+    v = model.validity
+    dom = np.zeros((1 + len(v.bands), 3))
+    dom[0] = (v.eps_max, 0.0 if (v.eps_max < 1.0 or v.bands) else math.inf, 0.0)
+    if v.bands:
+        dom[1:] = np.asarray(v.bands, dtype=float)
+    return dom
+
+
+#: the domain table of a run that counts by the model's own counter (``simulate``): inactive
+_NO_DOMAIN = np.array([[1.0, math.inf, math.inf]])
+
+
+@njit(cache=True, inline="always")
+def _rk4_step(kernel, params, consts, x1, x2, v1, v2, t, t0, step, dt, eps_substep, max_substeps, stop2, retry,
+              dom, inv_c2):
     """Step ``step`` of RK4 from the state (x1, x2, v1, v2) at time t (= t0 + step dt), in substeps.
 
-    The one RK4 step of ``simulate`` and ``simulate_batch``. Returns (x1, x2, v1, v2, t, n_evals, status):
-    the state after the step, or the last valid state where it stopped (status ``CONTACT``,
-    ``CONTACT_STAGE``, ``NONFINITE``). ``retry``: a stage outside the clearance says the step is too long,
+    The one RK4 step of ``simulate`` and ``simulate_batch``. Returns (x1, x2, v1, v2, t, n_evals, status,
+    n_outside): the state after the step, or the last valid state where it stopped (status ``CONTACT``,
+    ``CONTACT_STAGE``, ``NONFINITE``), and its force evaluations outside the domain table ``dom``
+    (``outside_domain`` with 1/c^2 ``inv_c2``; none counted where ``dom`` is inactive). ``retry``: a stage
+    outside the clearance says the step is too long,
     not that the journal touched: the step is redone with twice the substeps (up to ``max_substeps``)
     before contact is reported. Inlined, so each loop compiles it as if written in place.
     """
+    counting = dom[0, 1] < math.inf
+    n_out = 0
     c2 = consts[6]
     e2 = (x1 * x1 + x2 * x2) / c2
     k = 1
@@ -240,6 +280,13 @@ def _rk4_step(kernel, params, consts, x1, x2, v1, v2, t, t0, step, dt, eps_subst
             mx1 = v1 + h * c1
             mx2 = v2 + h * c2_
             n_evals += 4
+            if counting:  # the stage states whose forces were evaluated (inside the clearance)
+                n_out += (_outside_at(dom, inv_c2, x1, x2, v1, v2, ok1)
+                          + _outside_at(dom, inv_c2, x1 + 0.5 * h * v1, x2 + 0.5 * h * v2, v1 + 0.5 * h * a1,
+                                        v2 + 0.5 * h * a2, ok2)
+                          + _outside_at(dom, inv_c2, x1 + 0.5 * h * kx1, x2 + 0.5 * h * kx2, v1 + 0.5 * h * b1,
+                                        v2 + 0.5 * h * b2, ok3)
+                          + _outside_at(dom, inv_c2, x1 + h * lx1, x2 + h * lx2, v1 + h * c1, v2 + h * c2_, ok4))
             if not (ok1 and ok2 and ok3 and ok4):
                 status = CONTACT_STAGE
                 break
@@ -259,7 +306,12 @@ def _rk4_step(kernel, params, consts, x1, x2, v1, v2, t, t0, step, dt, eps_subst
         if not (retry and status == CONTACT_STAGE and k < max_substeps):
             break
         k = min(2 * k, max_substeps)
-    return x1, x2, v1, v2, t, n_evals, status
+    return x1, x2, v1, v2, t, n_evals, status, n_out
+
+
+@njit(cache=True, inline="always")
+def _outside_at(dom, inv_c2, x1, x2, v1, v2, evaluated):
+    return outside_domain(dom, inv_c2, x1, x2, v1, v2) if evaluated else 0
 
 
 @njit(cache=True)
@@ -279,8 +331,8 @@ def _rk4_run(kernel, params, consts, x0, v0, t0, dt, step0, step1, record_every,
     e2max = 0.0
     status = OK
     for step in range(step0, step1):
-        x1, x2, v1, v2, t, n, status = _rk4_step(kernel, params, consts, x1, x2, v1, v2, t0 + step * dt, t0, step,
-                                                 dt, eps_substep, max_substeps, stop2, True)
+        x1, x2, v1, v2, t, n, status, _ = _rk4_step(kernel, params, consts, x1, x2, v1, v2, t0 + step * dt, t0,
+                                                    step, dt, eps_substep, max_substeps, stop2, True, _NO_DOMAIN, 0.0)
         n_evals += n
         e2 = x1 * x1 + x2 * x2
         if e2 > e2max:
@@ -630,21 +682,38 @@ def film_eigenvalues(force, x, v, inv_mass: float, clearance: float, omega: floa
     -------
     ndarray, shape (4,), complex
     """
-    hx = 1e-4 * clearance
+    def forces(xs, vs):
+        return np.array([force(xs[i, 0], xs[i, 1], vs[i, 0], vs[i, 1]) for i in range(xs.shape[0])], dtype=float)
+
+    return film_eigenvalues_many(forces, np.array([[float(x[0]), float(x[1])]]), np.array([[float(v[0]), float(v[1])]]),
+                                 np.array([inv_mass]), np.array([clearance]), omega)[0]
+
+
+def film_eigenvalues_many(forces, X, V, inv_mass, clearance, omega: float) -> np.ndarray:
+    """``film_eigenvalues`` of M states at once: ``forces(xs, vs) -> fs`` evaluates (8M, 2) states [m], [m/s]
+    into forces (8M, 2) [N] (a batched kernel; the perturbed states of state i are rows 8i..8i+7);
+    X, V (M, 2); ``inv_mass``, ``clearance`` (M,).  Returns (M, 4) complex, NaN where a force is not finite."""
+    m = X.shape[0]
+    hx = 1e-4 * np.asarray(clearance, dtype=float)
     hv = hx * max(omega, 1.0)
-    x1, x2 = float(x[0]), float(x[1])
-    v1, v2 = float(v[0]), float(v[1])
-    jac = np.zeros((4, 4))
-    jac[0, 2] = jac[1, 3] = 1.0
-    for j, (dx1, dx2, dv1, dv2, h) in enumerate(((hx, 0.0, 0.0, 0.0, hx), (0.0, hx, 0.0, 0.0, hx),
-                                                  (0.0, 0.0, hv, 0.0, hv), (0.0, 0.0, 0.0, hv, hv))):
-        fp = force(x1 + dx1, x2 + dx2, v1 + dv1, v2 + dv2)
-        fm = force(x1 - dx1, x2 - dx2, v1 - dv1, v2 - dv2)
-        jac[2, j] = (fp[0] - fm[0]) / (2.0 * h) * inv_mass
-        jac[3, j] = (fp[1] - fm[1]) / (2.0 * h) * inv_mass
-    if not np.isfinite(jac).all():
-        return np.full(4, np.nan + 0j)
-    return np.linalg.eigvals(jac)
+    xs = np.repeat(X, 8, axis=0).reshape(m, 8, 2)
+    vs = np.repeat(V, 8, axis=0).reshape(m, 8, 2)
+    for j in range(4):  # rows 2j, 2j+1: + and - the step in component j (x1, x2, v1, v2)
+        arr, comp, h = (xs, j, hx) if j < 2 else (vs, j - 2, hv)
+        arr[:, 2 * j, comp] = arr[:, 2 * j, comp] + h
+        arr[:, 2 * j + 1, comp] = arr[:, 2 * j + 1, comp] - h
+    fs = np.asarray(forces(xs.reshape(8 * m, 2), vs.reshape(8 * m, 2)), dtype=float).reshape(m, 8, 2)
+    jac = np.zeros((m, 4, 4))
+    jac[:, 0, 2] = jac[:, 1, 3] = 1.0
+    for j in range(4):
+        h = hx if j < 2 else hv
+        jac[:, 2, j] = (fs[:, 2 * j, 0] - fs[:, 2 * j + 1, 0]) / (2.0 * h) * inv_mass
+        jac[:, 3, j] = (fs[:, 2 * j, 1] - fs[:, 2 * j + 1, 1]) / (2.0 * h) * inv_mass
+    lam = np.full((m, 4), np.nan + 0j)
+    good = np.isfinite(jac).all(axis=(1, 2))
+    if good.any():
+        lam[good] = np.linalg.eigvals(jac[good])
+    return lam
 
 
 def rk4_step_limit(force, x, v, inv_mass: float, clearance: float, omega_max: float, eps_substep: float = 0.8,
@@ -678,28 +747,37 @@ def rk4_step_limit(force, x, v, inv_mass: float, clearance: float, omega_max: fl
     """
     lam = film_eigenvalues(force, x, v, inv_mass, clearance, omega_max)
     e2 = (float(x[0]) ** 2 + float(x[1]) ** 2) / clearance**2
-    k = 1
-    if e2 > eps_substep**2:
-        k = min(int(math.ceil(((1.0 - eps_substep**2) / (1.0 - e2)) ** 1.5)), max_substeps)
-    limits = []
-    if np.isfinite(lam).all():
-        rate = float(np.abs(lam).max())
-        if rate > 0.0:
-            limits.append((k * RK4_LAMBDA_DT / rate, f"RK4 stability |lambda dt| <= {RK4_LAMBDA_DT} (2.8 with a "
-                           f"safety factor 2) for the film's fastest rate |lambda| = {rate:.4g} 1/s"
-                           + (f" in {k} substeps" if k > 1 else "")))
-        osc = float(np.abs(lam.imag).max())
-        if osc > 0.0:
-            limits.append((k * 2.0 * math.pi / (STEPS_PER_PERIOD * osc),
-                           f"{STEPS_PER_PERIOD} steps per period of the film-rotor oscillation at "
-                           f"{osc / (2 * math.pi):.4g} Hz"))
+    k, steps = step_limits(lam[None, :], np.array([e2]), omega_max, eps_substep, max_substeps)
+    rate = float(np.abs(lam).max()) if np.isfinite(lam).all() else 0.0
+    osc = float(np.abs(lam.imag).max()) if np.isfinite(lam).all() else 0.0
+    words = (f"RK4 stability |lambda dt| <= {RK4_LAMBDA_DT} (2.8 with a safety factor 2) for the film's fastest "
+             f"rate |lambda| = {rate:.4g} 1/s" + (f" in {int(k[0])} substeps" if k[0] > 1 else ""),
+             f"{STEPS_PER_PERIOD} steps per period of the film-rotor oscillation at {osc / (2 * math.pi):.4g} Hz",
+             f"{STEPS_PER_PERIOD} steps per shaft revolution at {omega_max / RPM:.6g} rpm")
+    rule = int(np.argmin(steps[0]))
+    if not np.isfinite(steps[0, rule]):
+        return StepLimit(math.inf, "nothing limits the step", lam, int(k[0]))
+    return StepLimit(float(steps[0, rule]), words[rule], lam, int(k[0]))
+
+
+def step_limits(lam: np.ndarray, e2: np.ndarray, omega_max: float, eps_substep: float,
+                max_substeps: int) -> tuple[np.ndarray, np.ndarray]:
+    """``rk4_step_limit``'s rules for M states at once: (substeps (M,), steps (M, 3)), the largest step of
+    each rule (stability, oscillation, revolution; ``inf`` where it does not apply), from the eigenvalues
+    ``lam`` (M, 4) and the squared eccentricities ``e2`` (M,).  The largest safe step is ``steps.min(1)``."""
+    k = np.ones(e2.shape, dtype=np.int64)
+    far = e2 > eps_substep**2
+    k[far] = np.minimum(np.ceil(((1.0 - eps_substep**2) / (1.0 - e2[far])) ** 1.5), max_substeps).astype(np.int64)
+    steps = np.full(e2.shape + (3,), math.inf)
+    finite = np.isfinite(lam).all(axis=-1)
+    with np.errstate(divide="ignore"):
+        rate = np.where(finite, np.abs(lam).max(axis=-1, initial=0.0), 0.0)
+        osc = np.where(finite, np.abs(lam.imag).max(axis=-1, initial=0.0), 0.0)
+        steps[..., 0] = np.where(rate > 0.0, k * RK4_LAMBDA_DT / rate, math.inf)
+        steps[..., 1] = np.where(osc > 0.0, k * 2.0 * math.pi / (STEPS_PER_PERIOD * osc), math.inf)
     if omega_max > 0.0:
-        limits.append((2.0 * math.pi / (STEPS_PER_PERIOD * omega_max),
-                       f"{STEPS_PER_PERIOD} steps per shaft revolution at {omega_max / RPM:.6g} rpm"))
-    if not limits:
-        return StepLimit(math.inf, "nothing limits the step", lam, k)
-    dt_max, rule = min(limits, key=lambda r: r[0])
-    return StepLimit(dt_max, rule, lam, k)
+        steps[..., 2] = 2.0 * math.pi / (STEPS_PER_PERIOD * omega_max)
+    return k, steps
 
 
 def _force_at(kernel, params, speed_kernel, consts_speed, omega_ref):
@@ -971,10 +1049,7 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float | None = 1
     elif status in (CONTACT, CONTACT_STAGE):
         text = f"contact: eccentricity reached eps_stop={eps_stop} at t={t_stop:.6g} s"
     elif status == UNRESOLVED:
-        lim = run["limit"]
-        text = (f"unresolved: at t={t_stop:.6g} s (eccentricity {np.hypot(*run['x_stop']) / c:.3g}) dt={dt!r} s is "
-                f"longer than the largest safe step {lim.dt_max:.3g} s ({lim.rule}); rerun with a shorter dt or "
-                "dt=None (adaptive)")
+        text = unresolved_text(t_stop, np.hypot(*run['x_stop']) / c, dt, run["limit"], "dt=None (adaptive)")
     else:
         text = f"diverged: non-finite state after t={t_stop:.6g} s"
     n_outside = max(int(model.n_outside_domain) - run["check_outside"], 0)
@@ -993,6 +1068,12 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float | None = 1
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
                       t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=run["wall"],
                       meta=meta, n_outside_domain=n_outside)
+
+
+def unresolved_text(t: float, eps: float, dt, lim: StepLimit, remedy: str) -> str:
+    """The status of a run stopped by the along-the-run step check (``simulate``, ``simulate_batch``)."""
+    return (f"unresolved: at t={t:.6g} s (eccentricity {eps:.3g}) dt={dt!r} s is longer than the largest safe "
+            f"step {lim.dt_max:.3g} s ({lim.rule}); rerun with a shorter dt or {remedy}")
 
 
 def _check_adaptive_args(t_end, t0, rtol, atol, record_dt) -> float:
