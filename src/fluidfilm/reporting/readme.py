@@ -54,7 +54,8 @@ _table = report.markdown_table
 # Stages that the paper's figures and numbers do not need: the workspace's own surrogate (three seeds),
 # its ensemble, error map and batched speed, the grading study, the ablation and the characteristics.
 BEYOND_PAPER_STAGES = ("dataset_orbit", "train_best", "train_best_seeds", "ensemble", "error_map", "batch_speed",
-                       "grading_study", "ablation", "characteristics", "runup", "cavitation_rules")
+                       "grading_study", "ablation", "characteristics", "runup", "cavitation_rules",
+                       "jfo_surrogate")
 
 
 def _untimed_stages(reports: Path, timed) -> list[str]:
@@ -541,6 +542,34 @@ def render_cavitation_rules_summary(reports: Path) -> str:
             f"{_num(100 * m['jfo_whirl_threshold_rel_diff_gumbel'], '.1f', ' %')} and its run-up onset (Pfeil's rotor) by "
             f"{_num(100 * m['jfo_runup_onset_rel_diff_gumbel'], '.1f', ' %')} "
             f"([docs/mass_conserving.md](docs/mass_conserving.md)).\n")
+
+
+def render_jfo_surrogate(reports: Path) -> str:
+    """The JFO film's surrogate with memory against its reference (``reports/jfo_surrogate.json`` and
+    ``jfo_surrogate_cases.csv``, the ``jfo_surrogate`` stage): per case, the orbit distances, satisfactory or not,
+    and the wall times side by side."""
+    import pandas as pd
+
+    js = _load(reports, "jfo_surrogate.json")
+    cases = pd.read_csv(reports / "jfo_surrogate_cases.csv")
+    st = js["settings"]
+    rows = [[r.case, _num(r.ref_span, ".3f"), _num(r.rms_pct, ".2f"), _num(r.hausdorff_pct, ".2f"),
+             "yes" if bool(r.satisfactory) else "no", _num(r.reference_wall_s, ".2f"), _num(1e3 * r.surrogate_wall_s, ".1f"),
+             _num(r.speedup, ",.0f", "x")] for r in cases.sort_values("case").itertuples()]
+    m = js["metrics"]
+    return (f"The paper's bearing, JFO on {st['grid'][0]}x{st['grid'][1]} with the groove at "
+            f"{st['groove_angle_deg']:g} deg; the surrogate's memory: the journal's positions {st['n_lags']} x "
+            f"{1e3 * st['lag_dt']:g} ms back; a {st['width']}x{st['depth']} tanh network fitted on {js['n_paths']} "
+            f"JFO paths of random rotors ({js['n_samples']:,} samples; every {js['val_every']}th path held out: force "
+            f"error {100 * js['val_rel_rmse']:.1f} % RMS on those). Orbits settled from t = {st['t_settle']:g} s, "
+            f"satisfactory when RMS and Hausdorff distance are both within {st['threshold_pct']:g} % of c; wall times "
+            f"over each case's first {st['timing_t_end']:g} s, side by side in one process (median of "
+            f"{st['timing_repeats']}):\n\n"
+            + _table(["case", "JFO span [c]", "RMS [% c]", "Hausdorff [% c]", "satisfactory", "JFO reference [s]",
+                      "surrogate [ms]", "speed-up"], rows)
+            + f"\n\n**{m['satisfactory_cases_jfo_surrogate']} of {len(rows)} cases satisfactory** "
+            f"({js['satisfactory_cases'] or 'none'}); median speed-up per trajectory "
+            f"{m['speedup_trajectory_jfo_surrogate']:,.0f}x.\n")
 
 
 def render_universal_summary(reports: Path) -> str:
@@ -1092,6 +1121,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "runup": render_runup,
     "cavitation_rules": render_cavitation_rules,
     "cavitation_rules_summary": render_cavitation_rules_summary,
+    "jfo_surrogate": render_jfo_surrogate,
     "universal": render_universal,
     "universal_kc": render_universal_kc,
     "surrogate_goals": render_surrogate_goals,

@@ -104,6 +104,10 @@ CAPTIONS: dict[str, str] = {
         "sub-synchronous amplitude against shaft speed, dotted: each onset. Right: the paper's bearing as a "
         "squeeze-film damper (circular orbit at eps 0.5, 100 Hz, no rotation, fed at 20 kPa): radial (solid) and tangential "
         "(dashed) film force over a whirl period."),
+    "figures/jfo_surrogate_orbits.png": (
+        "The JFO film's force surrogate with memory (the journal's path over the last 40 ms as input) against "
+        "its reference on the paper's seven cases: settled orbits in units of c, gravity down the page; black: "
+        "the mass-conserving film, red dashes: the surrogate."),
 }
 
 

@@ -207,6 +207,8 @@ def case_rows(surrogate: MemorySurrogate, reference: ElrodAdamsSolver, refs: dic
     the wall time of each model over the case's first ``timing_t_end`` (the speed-up)."""
     c = surrogate.clearance
     rows = []
+    for m in (surrogate, reference):  # compiled before any timing
+        simulate(m, Rotor(mass=float(rotor_cfg["mass"])), t_end=5 * float(s["dt"]), dt=float(s["dt"]))
     for name, ref in refs.items():
         rotor = rotor_for_case(rotor_cfg, cases_cfg[name])
         traj = simulate(surrogate, rotor, t_end=float(s["t_end"]), dt=float(s["dt"]), record_every=int(s["record_every"]))
@@ -254,6 +256,11 @@ def plot_orbits(rows: list[dict], clearance: float, t_settle: float):
     axes[0, 0].legend(fontsize=7, loc="best")
     fig.tight_layout()
     return fig
+
+
+def _plain(d: dict) -> dict:
+    """Plain JSON values (lists, floats) from a config's nodes."""
+    return {k: (list(v) if not isinstance(v, (int, float, str)) else v) for k, v in d.items()}
 
 
 def run(cfg):
@@ -305,7 +312,11 @@ def run(cfg):
     fig = plot_orbits(rows, bearing.clearance, float(s["t_settle"]))
     io.save_figure(fig, figure_dir / "jfo_surrogate_orbits.png", dpi=120)
     good = "".join(r["case"] for r in rows if r["satisfactory"])
-    summary = {"n_paths": len(paths), "n_samples": int(len(z)), "n_val_paths": n_val,
+    settings = {k: s[k] for k in ("grid", "groove_angle_deg", "lag_dt", "n_lags", "t_settle", "threshold_pct",
+                                  "timing_t_end", "timing_repeats")}
+    settings.update(width=s["fit"]["width"], depth=s["fit"]["depth"])
+    summary = {"settings": _plain(settings), "val_every": every,
+               "n_paths": len(paths), "n_samples": int(len(z)), "n_val_paths": n_val,
                "path_status": [p["status"][:60] for p in paths], "eps_max_data": float(eps.max()),
                "val_rel_rmse": res["val_rel_rmse"], "fit_s": res["fit_s"], "epochs": res["epochs"],
                "satisfactory_cases": good, "wall_s": time.perf_counter() - t_start,
