@@ -492,6 +492,7 @@ class JfoFitSchema:
     activation: str = ranged(choices=MODEL_ACTIVATIONS)
     gain_power: float = ranged(ge=0)
     lr: float = ranged(**_POS)
+    weight_decay: float = ranged(ge=0)
     batch_size: int = ranged(**_COUNT)
     max_epochs: int = ranged(**_COUNT)
 
@@ -504,7 +505,11 @@ class JfoSurrogateSchema:
     tol_commit: float = ranged(**_POS)
     n_paths: int = ranged(ge=2, why="one path at least for training and one for validation")
     n_static_paths: int = ranged(ge=0)
+    n_rest_states: int = ranged(ge=0)
+    rest_eps_max: float = ranged(**_ECC)
+    rest_weight: int = ranged(ge=0)
     seed: int = MISSING
+    other_seeds: list[int] = MISSING
     ranges: JfoRangesSchema = MISSING
     path_t_end: float = ranged(**_POS)
     cache_dir: str = MISSING
