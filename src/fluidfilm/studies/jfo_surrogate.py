@@ -293,9 +293,15 @@ def plot_orbits(rows: list[dict], clearance: float, t_settle: float):
         sel = r["_t"] >= t_settle
         ax.plot(r["_x"][sel, 0] / clearance, r["_x"][sel, 1] / clearance, "--", color="tab:red", lw=1.2,
                 label="surrogate with memory")
+        # a static orbit is a point: mark both ends, and show at least 0.05 c round it
+        ax.plot(r["_xref"][-1, 0] / clearance, r["_xref"][-1, 1] / clearance, "ko", ms=6, mfc="none")
+        ax.plot(r["_x"][-1, 0] / clearance, r["_x"][-1, 1] / clearance, "x", color="tab:red", ms=6)
+        mid = r["_xref"][r["_tref"] >= t_settle].mean(axis=0) / clearance
+        span = max(0.05, float(np.ptp(r["_xref"][r["_tref"] >= t_settle] / clearance, axis=0).max()) * 0.6)
+        ax.set_xlim(mid[0] - span, mid[0] + span)
+        ax.set_ylim(mid[1] + span, mid[1] - span)  # gravity down the page
         ax.set_title(f"{r['case']}: RMS {r['rms_pct']:.2f} % c")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.invert_yaxis()
+        ax.set_aspect("equal", adjustable="box")
         ax.set_xlabel("X1 / c")
     axes[0, 0].set_ylabel("X2 / c (gravity down)")
     axes[0, 0].legend(fontsize=7, loc="best")
