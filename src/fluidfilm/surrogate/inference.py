@@ -38,6 +38,9 @@ from fluidfilm import io
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict
 from fluidfilm.core.force_model import ValidityDomain, check_precision
 from fluidfilm.core.states import as_state_pairs
+from fluidfilm.surrogate.contract import (FRAME_POLAR, FRAME_WHIRL, KIND_PHYSICS, KIND_PHYSICS_V, ROW_CLEARANCE,
+                                         ROW_FORCE_SCALE, ROW_FRAME, ROW_IN_MEAN, ROW_IN_STD, ROW_KIND, ROW_N_EXTRA,
+                                         ROW_OMEGA, ROW_OUT_MEAN, ROW_OUT_STD, ROW_POWER, ROW_SLEEVE, SLEEVE_AWARE)
 from fluidfilm.surrogate.kernels import (COUNTER, SETTING, BatchParams, FastBatchParams, batch_kernel, batch_params,
                                         batch_shape_key, fast_batch_params, fast_force_kernel, forces_batch, pack,
                                         shape_key, with_workspace)
@@ -79,7 +82,7 @@ class SurrogateParams(NamedTuple):
     tables: np.ndarray        # (R, L, 4) int: per region and layer [weight offset, bias offset, n_in, n_out]
     n_layers: np.ndarray      # (R,) int
     activation: int           # an ``Activation`` value
-    scalings: np.ndarray      # (R, 22) ``Scaling.kernel_row()`` of each region
+    scalings: np.ndarray      # (R, ROW_LENGTH) ``Scaling.kernel_row()`` of each region (``surrogate.contract``)
     boundaries: np.ndarray    # (R-1,) eccentricity ratios between regions
     blend_width: float        # smoothstep blend across each boundary (0: hard switch)
     domain: np.ndarray        # (S, 3) [eps_low, eps_high, v_max] of the training data
@@ -155,14 +158,14 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
     weights, tables, n_layers, act, scal = (params.weights, params.tables, params.n_layers, params.activation,
                                             params.scalings)
     s = scal[r]
-    physics = s[0] >= 1.0  # 1: physics, 2: physics_v
-    c, omega, fscale, power = s[1], s[2], s[3], s[4]
-    if s[21] == 1.0:
+    physics = s[ROW_KIND] >= KIND_PHYSICS  # physics or physics_v
+    c, omega, fscale, power = s[ROW_CLEARANCE], s[ROW_OMEGA], s[ROW_FORCE_SCALE], s[ROW_POWER]
+    if s[ROW_SLEEVE] == SLEEVE_AWARE:
         # sleeve-aware: normalise by the current clearance c_r; forces scale as (c/c_r)^2
         inv_c2 = params.setting[0]
         fscale = sleeve_force_scale_nb(fscale, c, inv_c2)
         c = 1.0 / math.sqrt(inv_c2)
-    polar = s[19] >= 1.0  # 1: polar, 2: whirl (polar with the drive's direction as input)
+    polar = s[ROW_FRAME] >= FRAME_POLAR  # polar, or whirl (polar with the drive's direction as input)
     z = params.scratch[2]
     er1, er2 = 0.0, 1.0
     drive = 1.0
@@ -174,7 +177,7 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         z[0] = speed_nb(x1, x2) / c  # |X| / c
         z[1] = vr / cw
         z[2] = vt / cw
-        if s[19] == 2.0:
+        if s[ROW_FRAME] == FRAME_WHIRL:
             # the film is homogeneous in its drive u: the network sees u's direction, |u| scales the force
             drive, z[1], z[2] = whirl_direction_nb(z[0], z[1], z[2])
         n_in = 3
@@ -185,11 +188,11 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
             z[0], z[1], z[2], z[3] = x1, x2, v1, v2
         n_in = 4
     # extra inputs (the sleeve displacement of an active bearing) come from the control array
-    for k in range(int(s[20])):
+    for k in range(int(s[ROW_N_EXTRA])):
         z[n_in] = params.setting[1 + k]
         n_in += 1
     for k in range(n_in):
-        z[k] = standardise_nb(z[k], s[5 + k], s[10 + k])
+        z[k] = standardise_nb(z[k], s[ROW_IN_MEAN + k], s[ROW_IN_STD + k])
     out = _mlp(weights, tables[r], n_layers[r], act, z, buf_a, buf_b)
     y1 = out[0]
     y2 = out[1]
@@ -197,15 +200,15 @@ def _region_force(params, r, x1, x2, v1, v2, e2, buf_a, buf_b):
         # damping structure: y = S(position) + C(position, velocity) v, v the velocity in units of c omega
         out = _mlp(weights, params.damping_tables[r], params.damping_n_layers[r], act, z, buf_a, buf_b)
         vo = n_in - 2
-        w1 = z[vo] * s[10 + vo] + s[5 + vo]
-        w2 = z[vo + 1] * s[11 + vo] + s[6 + vo]
+        w1 = z[vo] * s[ROW_IN_STD + vo] + s[ROW_IN_MEAN + vo]
+        w2 = z[vo + 1] * s[ROW_IN_STD + 1 + vo] + s[ROW_IN_MEAN + 1 + vo]
         y1 += out[0] * w1 + out[1] * w2
         y2 += out[2] * w1 + out[3] * w2
-    f1 = unstandardise_nb(y1, s[15], s[17])
-    f2 = unstandardise_nb(y2, s[16], s[18])
+    f1 = unstandardise_nb(y1, s[ROW_OUT_MEAN], s[ROW_OUT_STD])
+    f2 = unstandardise_nb(y2, s[ROW_OUT_MEAN + 1], s[ROW_OUT_STD + 1])
     if physics:
         g = film_gain_nb(fscale, e2, power)
-        if s[0] == 2.0:
+        if s[ROW_KIND] == KIND_PHYSICS_V:
             g *= velocity_factor_nb(speed_nb(v1, v2), c, omega)
         g *= drive
         f1 *= g

@@ -18,6 +18,9 @@ import math
 import numpy as np
 
 from fluidfilm.surrogate.activations import pade_tanh
+from fluidfilm.surrogate.contract import (FRAME_POLAR, FRAME_WHIRL, KIND_PHYSICS, KIND_PHYSICS_V, ROW_CLEARANCE,
+                                         ROW_FORCE_SCALE, ROW_FRAME, ROW_IN_MEAN, ROW_IN_STD, ROW_KIND, ROW_N_EXTRA,
+                                         ROW_OMEGA, ROW_OUT_MEAN, ROW_OUT_STD, ROW_POWER, ROW_SLEEVE, SLEEVE_AWARE)
 
 # a dual number is an array (5,): value, d/dx1, d/dx2, d/dv1, d/dv2
 
@@ -97,11 +100,11 @@ def _mlp(layers, z, act):
 
 def _region(model, r, x1, x2, v1, v2):
     s = model.scalings[r].kernel_row()
-    if s[20] != 0.0 or s[21] == 1.0:
+    if s[ROW_N_EXTRA] != 0.0 or s[ROW_SLEEVE] == SLEEVE_AWARE:
         raise ValueError("surrogate_jacobian does not cover surrogates with extra (sleeve) inputs")
-    physics = s[0] >= 1.0
-    c, omega, fscale, power = s[1], s[2], s[3], s[4]
-    polar = s[19] >= 1.0
+    physics = s[ROW_KIND] >= KIND_PHYSICS
+    c, omega, fscale, power = s[ROW_CLEARANCE], s[ROW_OMEGA], s[ROW_FORCE_SCALE], s[ROW_POWER]
+    polar = s[ROW_FRAME] >= FRAME_POLAR
     drive = None
     if polar:
         if x1[0] == 0.0 and x2[0] == 0.0:
@@ -111,7 +114,7 @@ def _region(model, r, x1, x2, v1, v2):
         er1, er2 = _div(x1, rr), _div(x2, rr)
         cw = c * omega
         z = [rr / c, (_mul(v1, er1) + _mul(v2, er2)) / cw, (_mul(v1, er2) - _mul(v2, er1)) / cw]
-        if s[19] == 2.0:  # frame 'whirl': the drive u = (eps - 2 v_t, 2 v_r), its direction in, |u| out
+        if s[ROW_FRAME] == FRAME_WHIRL:  # frame 'whirl': the drive u = (eps - 2 v_t, 2 v_r), its direction in, |u| out
             ua, ub = z[0] - 2.0 * z[2], 2.0 * z[1]
             # |u| ~ 1e-16 is a vanished drive up to rounding: its direction is noise there
             if math.hypot(ua[0], ub[0]) <= 1e-12 * max(z[0][0], 1.0):
@@ -125,7 +128,7 @@ def _region(model, r, x1, x2, v1, v2):
         z = [x1, x2, v1, v2]
     n_in = len(z)
     raw = [zk.copy() for zk in z]
-    zs = np.array([(z[k] - _const(s[5 + k])) / s[10 + k] for k in range(n_in)])
+    zs = np.array([(z[k] - _const(s[ROW_IN_MEAN + k])) / s[ROW_IN_STD + k] for k in range(n_in)])
     if model.structure == "plain":
         static, damping = model.networks[r], None
     else:
@@ -138,13 +141,13 @@ def _region(model, r, x1, x2, v1, v2):
         w1, w2 = raw[n_in - 2], raw[n_in - 1]
         y1 = y1 + _mul(d[0], w1) + _mul(d[1], w2)
         y2 = y2 + _mul(d[2], w1) + _mul(d[3], w2)
-    f1 = y1 * s[17] + _const(s[15])
-    f2 = y2 * s[18] + _const(s[16])
+    f1 = y1 * s[ROW_OUT_STD] + _const(s[ROW_OUT_MEAN])
+    f2 = y2 * s[ROW_OUT_STD + 1] + _const(s[ROW_OUT_MEAN + 1])
     if physics:
         e2 = (_mul(x1, x1) + _mul(x2, x2)) / c**2
         dd = _const(1.0) - e2
         g = _fn(dd, lambda u: fscale * u ** (-power), lambda u: -power * fscale * u ** (-power - 1.0))
-        if s[0] == 2.0:
+        if s[ROW_KIND] == KIND_PHYSICS_V:
             g = _mul(g, _const(1.0) + _speed(v1, v2) / (c * omega))
         if drive is not None:
             g = _mul(g, drive)

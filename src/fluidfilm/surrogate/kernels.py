@@ -77,6 +77,11 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 from fluidfilm.core.force_model import check_precision
+from fluidfilm.surrogate.contract import (FRAME_POLAR, FRAME_WHIRL, KIND_PHYSICS, KIND_PHYSICS_V, REGION_CLEARANCE,
+                                         REGION_FORCE_SCALE, REGION_FRAME, REGION_KIND, REGION_N_EXTRA, REGION_OMEGA,
+                                         REGION_POWER, REGION_SLEEVE, ROW_CLEARANCE, ROW_FRAME, ROW_IN_MEAN,
+                                         ROW_IN_STD, ROW_KIND, ROW_N_EXTRA, ROW_OMEGA, ROW_OUT_MEAN, ROW_OUT_STD,
+                                         ROW_POWER, ROW_SLEEVE, SLEEVE_AWARE, region_row)
 
 __all__ = ["tanh64", "tanh32", "silu64", "silu32", "sigmoid64", "sigmoid32", "pade_tanh64", "pade_tanh32", "fast_force_kernel", "shape_key", "pack", "kernel_source", "one_state_function", "compiled_kernel",
            "compile_seconds", "BatchParams", "batch_params", "forces_batch", "TILE", "FastBatchParams",
@@ -229,8 +234,8 @@ def _folded_networks(model):
     for net, sc in zip(model.networks, model.scalings):
         row = sc.kernel_row()
         n_in = len(sc.in_mean)
-        mean, std = row[5:5 + n_in], row[10:10 + n_in]
-        om, os_ = row[15:17], row[17:19]
+        mean, std = row[ROW_IN_MEAN:ROW_IN_MEAN + n_in], row[ROW_IN_STD:ROW_IN_STD + n_in]
+        om, os_ = row[ROW_OUT_MEAN:ROW_OUT_MEAN + 2], row[ROW_OUT_STD:ROW_OUT_STD + 2]
         if model.structure == "plain":
             out.append((_fold_network(net, mean, std, om, os_, [0, 1]), []))
         else:
@@ -265,16 +270,40 @@ def _power_source(x: str, power: float) -> str:
     return " * ".join(terms) if terms else "1.0"
 
 
-def shape_key(model) -> tuple:
+class RegionKey(NamedTuple):
+    """One region of a ``ShapeKey``: what its compiled code depends on (codes of ``surrogate.contract``)."""
+
+    kind: int          # ``ROW_KIND`` code: 0 affine, 1 physics, 2 physics_v
+    frame: int         # ``ROW_FRAME`` code: 0 cartesian, 1 polar, 2 whirl
+    n_extra: int       # extra inputs (the sleeve)
+    sleeve: bool       # the clearance follows the sleeve
+    power: float | None  # ``power_form`` of the physics gain's exponent (None: a run-time power)
+    static: tuple      # (n_out, n_in) of each layer of the network
+    damping: tuple     # the same for the damping-matrix network (empty: plain structure)
+
+
+class ShapeKey(NamedTuple):
+    """What a compiled kernel depends on (``shape_key``); a tuple, so equal to and hashed as one."""
+
+    structure: str     # "plain" or "damping"
+    activation: str    # a registered activation's name
+    regions: tuple     # a ``RegionKey`` per region
+    n_boundaries: int
+    blending: bool     # blend_width > 0
+    n_domain: int      # rows of the training domain
+
+
+def shape_key(model) -> ShapeKey:
     """What the compiled one-state kernel depends on (everything else is in its parameter vector)."""
     regions = []
     for net, sc in zip(model.networks, model.scalings):
         static, damping = (net, []) if model.structure == "plain" else net
         row = sc.kernel_row()
-        regions.append((int(row[0]), int(row[19]), int(row[20]), bool(row[21] == 1.0), power_form(float(row[4])),
-                        tuple(np.shape(W) for W, _ in static), tuple(np.shape(W) for W, _ in damping)))
-    return (model.structure, model.activation, tuple(regions), len(model.boundaries), model.blend_width > 0.0,
-            int(np.shape(model.domain)[0]))
+        regions.append(RegionKey(int(row[ROW_KIND]), int(row[ROW_FRAME]), int(row[ROW_N_EXTRA]),
+                                 bool(row[ROW_SLEEVE] == SLEEVE_AWARE), power_form(float(row[ROW_POWER])),
+                                 tuple(np.shape(W) for W, _ in static), tuple(np.shape(W) for W, _ in damping)))
+    return ShapeKey(model.structure, model.activation, tuple(regions), len(model.boundaries), model.blend_width > 0.0,
+                    int(np.shape(model.domain)[0]))
 
 
 # ---------------------------------------------------------------------------------------------- one state
@@ -297,14 +326,14 @@ class Layout:
         self.bounds = HEAD
         self.domain = self.bounds + nb
         self.regions = self.domain + 3 * n_dom  # per region [c, omega, F_scale, power]
-        widths = [shape[0] for r in regions for chain in r[5:] for shape in chain]
+        widths = [shape[0] for r in regions for chain in (r.static, r.damping) for shape in chain]
         self.maxw = max(widths + [1])
         self.scratch = self.regions + 4 * len(regions)  # two rows of maxw hidden activations
         off = self.scratch + 2 * self.maxw
         self.layers = []  # per region, per chain (static, damping): [(W offset, b offset)]
         for r in regions:
             region = []
-            for chain in r[5:]:
+            for chain in (r.static, r.damping):
                 offs = []
                 for n_out, n_in in chain:
                     offs.append((off, off + n_out * n_in))
@@ -447,7 +476,7 @@ def _frame_source(frame, ind):
     L = [f"{ind}s2 = x1 * x1 + x2 * x2", f"{ind}rr = math.sqrt(s2)", f"{ind}at0 = 1.0 if s2 == 0.0 else 0.0",
          f"{ind}x2e = x2 + at0", f"{ind}inv = 1.0 / (rr + at0)", f"{ind}er1 = x1 * inv", f"{ind}er2 = x2e * inv",
          f"{ind}icw = 1.0 / (c * omega)", f"{ind}ic = omega * icw", f"{ind}z0 = rr * ic"]
-    if frame == 2:
+    if frame == FRAME_WHIRL:
         # the drive u = (z0 - 2 z2, 2 z1) times rr: the same direction without the division by rr on the way
         # to the network's inputs (the critical path of a one-state force; ~3 ns of ~70 with float32 networks)
         L += [f"{ind}ua = s2 * ic - 2.0 * (v1 * x2e - v2 * x1) * icw", f"{ind}ub = 2.0 * (v1 * x1 + v2 * x2e) * icw",
@@ -463,8 +492,8 @@ def _region_source(r, region_key, act, lay, ind, f32=False):
     """The body of region r: inputs from the state, the network(s), the gain and the frame back.
     Mirrors ``inference._region_force`` step by step (the generic kernel is the specification)."""
     kind, frame, n_extra, sleeve, power, static, damping = region_key
-    physics = kind >= 1
-    polar = frame >= 1
+    physics = kind >= KIND_PHYSICS
+    polar = frame >= FRAME_POLAR
     rc = lay.regions + 4 * r
     L = [f"{ind}c = w[{rc}]", f"{ind}omega = w[{rc + 1}]", f"{ind}fscale = w[{rc + 2}]"]
     if sleeve:
@@ -490,9 +519,9 @@ def _region_source(r, region_key, act, lay, ind, f32=False):
     if physics:
         L.append(f"{ind}d = 1.0 - e2")
         L.append(f"{ind}g = fscale / d ** w[{rc + 3}]" if power is None else f"{ind}g = fscale / ({_power_source('d', power)})")
-        if kind == 2:
+        if kind == KIND_PHYSICS_V:
             L.append(f"{ind}g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)")
-        if frame == 2:
+        if frame == FRAME_WHIRL:
             L.append(f"{ind}g *= drive")
         L += [f"{ind}y1 *= g", f"{ind}y2 *= g"]
     if polar:
@@ -510,7 +539,7 @@ def _uniform(key) -> bool:
     structure, act, regions, nb, blending, n_dom = key
     r0 = regions[0]
     kind, frame, n_extra, sleeve, power, static, damping = r0
-    return (structure == "plain" and len(set(regions)) == 1 and kind >= 1 and frame >= 1 and not n_extra
+    return (structure == "plain" and len(set(regions)) == 1 and kind >= KIND_PHYSICS and frame >= FRAME_POLAR and not n_extra
             and not sleeve and not damping and len(static) >= 2)
 
 
@@ -521,7 +550,7 @@ def _uniform_kernel_source(key, lay, head, f32=False) -> list[str]:
     from region 0's (``Layout``).  Region by region the expressions are ``_region_source``'s, so the forces
     are the same to round-off; the branch per region (mispredicted for states that change region) and the
     blend zone's second frame are gone."""
-    act, regions = key[1], key[2]
+    act, regions = key.activation, key.regions
     kind, frame, _, _, power, static, _ = regions[0]
     offs0 = lay.layers[0][0]
     stride = (lay.layers[1][0][0][0] - offs0[0][0]) if len(regions) > 1 else 0
@@ -543,9 +572,9 @@ def _uniform_kernel_source(key, lay, head, f32=False) -> list[str]:
     L += [f"{ind2}fscale = w[rc + 2]", f"{ind2}off = k * {stride}"]
     L += _net_source(static, offs0, ["z0", "z1", "z2"], act, lay, ind2, ["y1", "y2"], base="off + ", f32=f32)
     L.append(f"{ind2}g = fscale / d ** w[rc + 3]" if power is None else f"{ind2}g = fscale / (dp)")
-    if kind == 2:
+    if kind == KIND_PHYSICS_V:
         L.append(f"{ind2}g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)")
-    if frame == 2:
+    if frame == FRAME_WHIRL:
         L.append(f"{ind2}g *= drive")
     L += [f"{ind2}y1 *= g", f"{ind2}y2 *= g",
           f"{ind2}g1 = y1 * er1 + y2 * er2", f"{ind2}g2 = y1 * er2 - y2 * er1",
@@ -695,7 +724,8 @@ class BatchParams(NamedTuple):
     n_layers: np.ndarray     # (R,) int64
     damping_tables: np.ndarray  # (R, L, 4) the damping-matrix networks' layers (damping structure)
     damping_n_layers: np.ndarray  # (R,) int64 (0: plain structure)
-    regions: np.ndarray      # (R, 8) float64 [kind, frame, n_extra, sleeve-aware, c, omega, F_scale, power]
+    regions: np.ndarray      # (R, REGION_ROW_LENGTH) float64 [kind, frame, n_extra, sleeve-aware, c, omega, F_scale, power]
+    #                          (``surrogate.contract.region_row``)
     boundaries: np.ndarray   # (R-1,) eccentricity ratios between the regions
     blend_width: float
     domain: np.ndarray       # (S, 3) [eps_low, eps_high, v_max]
@@ -750,8 +780,7 @@ def batch_params(model, dtype: str = "float64") -> BatchParams:
     t_d[:, :, :2] += w_s.size
     rows = []
     for sc in model.scalings:
-        row = sc.kernel_row()
-        rows.append([row[0], row[19], row[20], row[21], sc.clearance, sc.omega, sc.force_scale, sc.power])
+        rows.append(region_row(sc.kernel_row(), sc.clearance, sc.omega, sc.force_scale, sc.power))
     width = max([W.shape[0] for s, d in folded for W, _ in s + d] + [4])
     return BatchParams(np.concatenate([w_s, w_d]), t_s, np.array([len(s) for s in static], dtype=np.int64),
                        t_d, np.array([len(d) for d in damping], dtype=np.int64), np.array(rows, dtype=np.float64),
@@ -898,16 +927,16 @@ def forces_batch(bp, x, v, out):
     y1 = np.empty(TILE)  # the tile's forces before the gain (allocated once per call: a small batch pays per call)
     y2 = np.empty(TILE)
     for r in range(nr):
-        kind, frame, n_extra = bp.regions[r, 0], bp.regions[r, 1], int(bp.regions[r, 2])
-        physics = kind >= 1.0
-        polar = frame >= 1.0
+        kind, frame, n_extra = bp.regions[r, REGION_KIND], bp.regions[r, REGION_FRAME], int(bp.regions[r, REGION_N_EXTRA])
+        physics = kind >= KIND_PHYSICS
+        polar = frame >= FRAME_POLAR
         for t0 in range(start[r], start[r + 1], TILE):
             m = min(TILE, start[r + 1] - t0)
             for j in range(m):
                 p = ent[t0 + j]
                 x1, x2, v1, v2 = x[p, 0], x[p, 1], v[p, 0], v[p, 1]
-                c, omega, fscale = bp.regions[r, 4], bp.regions[r, 5], bp.regions[r, 6]
-                if bp.regions[r, 3] == 1.0:
+                c, omega, fscale = bp.regions[r, REGION_CLEARANCE], bp.regions[r, REGION_OMEGA], bp.regions[r, REGION_FORCE_SCALE]
+                if bp.regions[r, REGION_SLEEVE] == SLEEVE_AWARE:
                     fscale = fscale * c * c * inv_c2
                     c = 1.0 / math.sqrt(inv_c2)
                 e2 = (x1 * x1 + x2 * x2) * inv_c2
@@ -923,7 +952,7 @@ def forces_batch(bp, x, v, out):
                     z0 = rr / c
                     z1 = (v1 * er1 + v2 * er2) / cw
                     z2 = (v1 * er2 - v2 * er1) / cw
-                    if frame == 2.0:
+                    if frame == FRAME_WHIRL:
                         ua = z0 - 2.0 * z2
                         ub = 2.0 * z1
                         drive = math.sqrt(ua * ua + ub * ub)
@@ -946,8 +975,9 @@ def forces_batch(bp, x, v, out):
                 g = 1.0
                 if physics:
                     d = 1.0 - e2
-                    g = fscale / (d * math.sqrt(d)) if bp.regions[r, 7] == 1.5 else fscale / d ** bp.regions[r, 7]
-                    if kind == 2.0:
+                    power = bp.regions[r, REGION_POWER]
+                    g = fscale / (d * math.sqrt(d)) if power == 1.5 else fscale / d ** power
+                    if kind == KIND_PHYSICS_V:
                         g *= 1.0 + math.sqrt(v1 * v1 + v2 * v2) / (c * omega)
                     g *= drive
                 post[0, j], post[1, j], post[2, j] = g, er1, er2
@@ -996,8 +1026,8 @@ WORKSPACE_STATES = 4096
 def _workspace_terms(key) -> tuple[tuple[int, int], tuple[int, int], tuple[int, int]]:
     """Scratch of a batched kernel call as (per state, fixed) elements: float64, int64, networks' type."""
     layout, _ = _batch_layout(key)
-    n_in = 3 if key[2][0][1] >= 1 else 4
-    nr = len(key[2])
+    n_in = 3 if key.regions[0].frame >= FRAME_POLAR else 4
+    nr = len(key.regions)
     width = max([k for r in layout for (_, _, k, _) in r] + [1])
     return (9, 2), (6, nr + 2), (n_in + 5, n_in * TILE + 3 * TILE + 2 * width * TILE + width)
 
@@ -1050,10 +1080,11 @@ def batch_shape_key(model) -> tuple | None:
     """
     key = shape_key(model)
     structure, act, regions, nb, blending, n_dom = key
-    if structure != "plain" or (regions[0][2] and any(len(r[5]) < 2 for r in regions)):
+    if structure != "plain" or (regions[0].n_extra and any(len(r.static) < 2 for r in regions)):
         return None
     rows = [sc.kernel_row() for sc in model.scalings]
-    common = {(int(r[0]) >= 1, int(r[19]), int(r[20]), bool(r[21] == 1.0), float(r[1]), float(r[2])) for r in rows}
+    common = {(int(r[ROW_KIND]) >= KIND_PHYSICS, int(r[ROW_FRAME]), int(r[ROW_N_EXTRA]), bool(r[ROW_SLEEVE] == SLEEVE_AWARE),
+               float(r[ROW_CLEARANCE]), float(r[ROW_OMEGA])) for r in rows}
     if len(common) != 1:
         return None
     return key
@@ -1062,9 +1093,9 @@ def batch_shape_key(model) -> tuple | None:
 def _batch_layout(key):
     """Per region: [(W offset, b offset, n_out, n_in)] of its folded layers in the flat weights; the size."""
     off, out = 0, []
-    for region in key[2]:
+    for region in key.regions:
         layers = []
-        for n_out, n_in in region[5]:
+        for n_out, n_in in region.static:
             layers.append((off, off + n_out * n_in, n_out, n_in))
             off += n_out * n_in + n_out
         out.append(layers)
@@ -1097,7 +1128,7 @@ def fast_batch_params(model, dtype: str = "float64") -> FastBatchParams:
     w = np.zeros(max(size, 1))
     out_bias = []  # the output layers' biases stay float64 (added after the network: module doc)
     for r, ((static, _), sc) in enumerate(zip(_folded_networks(model), model.scalings)):
-        physics = sc.kernel_row()[0] >= 1.0
+        physics = sc.kernel_row()[ROW_KIND] >= KIND_PHYSICS
         gain = sc.force_scale * (sc.clearance ** 2 if sc.sleeve_gain else 1.0) if physics else 1.0
         for k, ((W, b), (wo, bo, _, _)) in enumerate(zip(static, layout[r])):
             if k == len(static) - 1:
@@ -1197,14 +1228,14 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
     """
     structure, act, regions, nb, blending, n_dom = key
     layout, _ = _batch_layout(key)
-    kind0, frame, n_extra, sleeve = regions[0][0], regions[0][1], regions[0][2], regions[0][3]
-    physics = kind0 >= 1
-    polar = frame >= 1
+    kind0, frame, n_extra, sleeve = regions[0].kind, regions[0].frame, regions[0].n_extra, regions[0].sleeve
+    physics = kind0 >= KIND_PHYSICS
+    polar = frame >= FRAME_POLAR
     n_in = (3 if polar else 4)
-    any_kind2 = any(r[0] == 2 for r in regions)
+    any_kind2 = any(r.kind == KIND_PHYSICS_V for r in regions)
     nr = len(regions)
     width = max([n for r in layout for (_, _, n, _) in r] + [1])
-    uniform_gain = physics and len({(r[0], r[4]) for r in regions}) == 1 and regions[0][4] is not None
+    uniform_gain = physics and len({(r.kind, r.power) for r in regions}) == 1 and regions[0].power is not None
     ind1 = "    "
     ind2 = ind1 + "    "
     (a64, b64), (ai, bi), (aw, bw) = _workspace_terms(key)  # the sizes with_workspace allocates
@@ -1253,7 +1284,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
               f"{ind2}er1 = x1{ft} * inv", f"{ind2}er2 = x2{ft} * inv + at0",
               f"{ind2}z0 = rr{ft} * inv_c", f"{ind2}z1 = (v1{ft} * er1 + v2{ft} * er2) * inv_cw",
               f"{ind2}z2 = (v1{ft} * er2 - v2{ft} * er1) * inv_cw"]
-        if frame == 2:
+        if frame == FRAME_WHIRL:
             L += [f"{ind2}ua = z0 - {two} * z2", f"{ind2}ub = {two} * z1", f"{ind2}drive = math.sqrt(ua * ua + ub * ub)",
                   f"{ind2}zero = {one} if drive == {zero_} else {zero_}", f"{ind2}inv = {one} / (drive + zero)",
                   f"{ind2}z1 = ua * inv + zero", f"{ind2}z2 = ub * inv"]
@@ -1265,7 +1296,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
         L += [f"{ind2}Z[0, p] = x1", f"{ind2}Z[1, p] = x2", f"{ind2}Z[2, p] = v1", f"{ind2}Z[3, p] = v2"]
     if physics:
         L += [f"{ind2}d = {'f(1.0 - e2)' if f32 else '1.0 - e2'}"] + ([] if uniform_gain else [f"{ind2}DD[p] = d"])
-        L.append(f"{ind2}G[p] = gs{ft} * drive / ({_power_source('d', regions[0][4])})" if uniform_gain
+        L.append(f"{ind2}G[p] = gs{ft} * drive / ({_power_source('d', regions[0].power)})" if uniform_gain
                  else f"{ind2}G[p] = gs{ft} * drive")
         if any_kind2:
             L.append(f"{ind2}KV[p] = {one} + math.sqrt(v1{ft} * v1{ft} + v2{ft} * v2{ft}) * inv_cw")
@@ -1332,7 +1363,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
         L.append(f"{ind1}wx = sw[{o0} + {offs[6]}:{o0} + {offs[7]}]")
     for r, region in enumerate(regions):
         passes.append([len(L)])
-        kind, _, _, _, power = region[:5]
+        kind, power = region.kind, region.power
         layers = list(layout[r])
         ind3 = ind1 + "    "
         # a region's last tile is partial: its states are padded with zero inputs to a whole number of
@@ -1359,7 +1390,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
         if physics and not uniform_gain:
             gain += (f" * DD[p] ** -q[{4 + nb + 3 * n_dom + r}]" if power is None
                      else f" / ({_power_source('DD[p]', power)})")
-            if kind == 2:
+            if kind == KIND_PHYSICS_V:
                 gain += " * KV[p]"
         L += [f"{ind3}for j in range(mr):"]
         if gain != "went[t0 + j]":
