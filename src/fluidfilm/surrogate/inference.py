@@ -38,6 +38,7 @@ from fluidfilm import io
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict
 from fluidfilm.core.force_model import ValidityDomain, check_precision
 from fluidfilm.core.states import as_state_pairs
+from fluidfilm.surrogate.activations import ACTIVATIONS, exact64
 from fluidfilm.surrogate.contract import (FRAME_POLAR, FRAME_WHIRL, KIND_PHYSICS, KIND_PHYSICS_V, ROW_CLEARANCE,
                                          ROW_FORCE_SCALE, ROW_FRAME, ROW_IN_MEAN, ROW_IN_STD, ROW_KIND, ROW_N_EXTRA,
                                          ROW_OMEGA, ROW_OUT_MEAN, ROW_OUT_STD, ROW_POWER, ROW_SLEEVE, SLEEVE_AWARE)
@@ -48,16 +49,6 @@ from fluidfilm.surrogate.scaling import Scaling, check_whirl_use, network_inputs
 from fluidfilm.surrogate.transforms import (eps2_nb, film_gain_nb, from_polar_nb, radial_axis_nb, sleeve_force_scale_nb, speed_nb,
                          standardise_nb, to_polar_nb, unstandardise_nb, velocity_factor_nb, whirl_direction_nb)
 
-class Activation(IntEnum):
-    """Hidden-layer activation of the networks (the kernel reads the integer value)."""
-
-    TANH = 0
-    RELU = 1
-    SILU = 2
-    SIGMOID = 3
-    PADE_TANH = 4
-
-
 class Structure(IntEnum):
     """PLAIN: the network gives the force; DAMPING: y = S(position) + C(position, velocity) v."""
 
@@ -65,10 +56,7 @@ class Structure(IntEnum):
     DAMPING = 1
 
 
-#: activation name (as in configs and model.json) -> kernel code
-ACTIVATIONS = {a.name.lower(): int(a) for a in Activation}
 # plain ints for the compiled code
-_TANH, _RELU, _SILU, _SIGMOID = int(Activation.TANH), int(Activation.RELU), int(Activation.SILU), int(Activation.SIGMOID)
 _DAMPING = int(Structure.DAMPING)
 
 
@@ -81,7 +69,7 @@ class SurrogateParams(NamedTuple):
     weights: np.ndarray       # flat weights of all regions' networks (each W stored transposed)
     tables: np.ndarray        # (R, L, 4) int: per region and layer [weight offset, bias offset, n_in, n_out]
     n_layers: np.ndarray      # (R,) int
-    activation: int           # an ``Activation`` value
+    activation: int           # the activation's code (``surrogate.activations.ACTIVATIONS``)
     scalings: np.ndarray      # (R, ROW_LENGTH) ``Scaling.kernel_row()`` of each region (``surrogate.contract``)
     boundaries: np.ndarray    # (R-1,) eccentricity ratios between regions
     blend_width: float        # smoothstep blend across each boundary (0: hard switch)
@@ -110,27 +98,9 @@ def _dense(w, b, src, dst, n_in, n_out):
 
 @njit(cache=True, inline="always")
 def _activate(buf, n, act):
-    if act == _TANH:
-        # tanh through one exp (libm's tanh is about twice as slow); exact to rounding
-        for o in range(n):
-            x = buf[o]
-            t = math.exp(-2.0 * abs(x))
-            y = (1.0 - t) / (1.0 + t)
-            buf[o] = y if x >= 0.0 else -y
-    elif act == _RELU:
-        for o in range(n):
-            buf[o] = max(buf[o], 0.0)
-    elif act == _SILU:
-        for o in range(n):
-            buf[o] = buf[o] / (1.0 + math.exp(-buf[o]))
-    elif act == _SIGMOID:
-        for o in range(n):
-            buf[o] = 1.0 / (1.0 + math.exp(-buf[o]))
-    else:  # pade_tanh (surrogate.kernels.pade_tanh64)
-        for o in range(n):
-            x = buf[o]
-            x2 = x * x
-            buf[o] = x * (945.0 + x2 * (105.0 + x2)) / (945.0 + x2 * (420.0 + 15.0 * x2))
+    """The activation ``act`` (a registry code) over a layer, in its form exact to rounding (``exact64``)."""
+    for o in range(n):
+        buf[o] = exact64(act, buf[o])
 
 
 @njit(cache=True, inline="always")
@@ -453,7 +423,7 @@ class SurrogateForceModel:
         self.params = SurrogateParams(
             weights=np.concatenate([w for w, _ in packed]), tables=_stack_tables(tables),
             n_layers=np.array([t.shape[0] for _, t in packed], dtype=np.int64),
-            activation=int(Activation[activation.upper()]),
+            activation=ACTIVATIONS[activation],
             scalings=np.stack([s.kernel_row() for s in scalings]), boundaries=bounds, blend_width=self.blend_width,
             domain=self.domain, eps_max=self.eps_max,
             counter=self._counter, setting=self._setting, max_width=max(max_width, 5),

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from fluidfilm.surrogate.activations import pade_tanh
+from fluidfilm.surrogate.activations import REGISTRY
 from fluidfilm.surrogate.contract import (FRAME_POLAR, FRAME_WHIRL, KIND_PHYSICS, KIND_PHYSICS_V, ROW_CLEARANCE,
                                          ROW_FORCE_SCALE, ROW_FRAME, ROW_IN_MEAN, ROW_IN_STD, ROW_KIND, ROW_N_EXTRA,
                                          ROW_OMEGA, ROW_OUT_MEAN, ROW_OUT_STD, ROW_POWER, ROW_SLEEVE, SLEEVE_AWARE)
@@ -63,25 +63,10 @@ def _speed(v1, v2):
 
 
 def _activate(z, act):
-    """Activation on a layer of duals z (n, 5)."""
-    a = z[:, 0]
-    if act == "tanh":
-        y = np.tanh(a)
-        d = 1.0 - y * y
-    elif act == "relu":
-        y = np.maximum(a, 0.0)
-        d = (a > 0.0).astype(float)
-    elif act == "silu":
-        s = 1.0 / (1.0 + np.exp(-a))
-        y = a * s
-        d = s * (1.0 + a * (1.0 - s))
-    elif act == "sigmoid":
-        y = 1.0 / (1.0 + np.exp(-a))
-        d = y * (1.0 - y)
-    elif act == "pade_tanh":
-        y, d, _ = pade_tanh(a)
-    else:
+    """Activation on a layer of duals z (n, 5): its value and first derivative (``activations.REGISTRY``)."""
+    if act not in REGISTRY:
         raise ValueError(f"unknown activation {act!r}")
+    y, d, _ = REGISTRY[act].derivatives(z[:, 0])
     out = np.empty_like(z)
     out[:, 0] = y
     out[:, 1:] = d[:, None] * z[:, 1:]

@@ -77,6 +77,9 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 from fluidfilm.core.force_model import check_precision
+from fluidfilm.surrogate.activations import (ACTIVATIONS, pade_tanh32, pade_tanh64, relu64, sigmoid32,
+                                             sigmoid64, silu32, silu64, tanh32, tanh64, unit32, unit64, unit_name,
+                                             unit_names)
 from fluidfilm.surrogate.contract import (FRAME_POLAR, FRAME_WHIRL, KIND_PHYSICS, KIND_PHYSICS_V, REGION_CLEARANCE,
                                          REGION_FORCE_SCALE, REGION_FRAME, REGION_KIND, REGION_N_EXTRA, REGION_OMEGA,
                                          REGION_POWER, REGION_SLEEVE, ROW_CLEARANCE, ROW_FRAME, ROW_IN_MEAN,
@@ -88,128 +91,7 @@ __all__ = ["tanh64", "tanh32", "silu64", "silu32", "sigmoid64", "sigmoid32", "pa
            "batch_shape_key", "fast_batch_params", "batch_kernel_source", "batch_kernel", "with_workspace",
            "WORKSPACE_STATES"]
 
-# ---------------------------------------------------------------------------------------------- tanh
-
-# tanh(u) ~ u P(u^2) / Q(u^2), the [9/8] Pade approximant (a convergent of Lambert's continued fraction), at u =
-# x/4 with the 1/4 folded into the coefficients and p and q both scaled by 4 so that p = x (1 + ...): powers of
-# two, so every product rounds as the unscaled form's would, and a tiny x (subnormal too) comes back exactly
-# (scaling x by 1/4 first lost its last bits). Then both doublings in one step: with c = p q and s = p^2 + q^2,
-# tanh(2u) = 2c/s and tanh(4u) = 4cs/(4c^2 + s^2) = cs/(c^2 + (s/2)^2); one division at the end, and each
-# doubling contracts a relative error in p or q by (1 - t^2)/(1 + t^2). Clamped at |x| = 19.5, where tanh rounds
-# to 1. 19 vector operations and a division per 8 units, against 23 for the [7/6] approximant at x/8 doubled
-# three times that it replaced (the doublings were half of its cost). Accuracy: the largest relative error
-# against mpmath is a little lower (``benchmarks/bench_tanh64.py`` measures both); near saturation (|x| above
-# ~8) the fused step's last roundings all land on the result, so there it is a little higher than the old form's
-# (4.0e-16 against 3.3e-16 at most, mpmath, 8 <= |x| <= 19.5), and |tanh64| can round one ulp above 1 there (the
-# old form did too; tested to be never more). Measured and not kept: fewer doublings chosen per network from its
-# largest |pre-activation| (an [11/10] approximant with one doubling below 4.875): 99 against 73 ns per force,
-# the max-reduction and the branch sit on the one-state path's critical path.
-_P1, _P3, _P5, _P7, _P9 = (1.0, 4729725.0 / 34459425.0 / 4.0 ** 2, 135135.0 / 34459425.0 / 4.0 ** 4,
-                           990.0 / 34459425.0 / 4.0 ** 6, 1.0 / 34459425.0 / 4.0 ** 8)
-_Q0, _Q2, _Q4, _Q6, _Q8 = (4.0, 16216200.0 / 34459425.0 / 4.0, 945945.0 / 34459425.0 / 4.0 ** 3,
-                           13860.0 / 34459425.0 / 4.0 ** 5, 45.0 / 34459425.0 / 4.0 ** 7)
-TANH64_CLAMP = 19.5
-
-
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def tanh64(x):
-    """tanh in float64 from arithmetic only (vectorises); within 1.5e-15 relative of ``math.tanh`` (libm's own
-    error included; tests/test_surrogate_kernels.py), exactly odd, exactly x for tiny x."""
-    x = min(max(x, -TANH64_CLAMP), TANH64_CLAMP)
-    x2 = x * x
-    p = x * (_P1 + x2 * (_P3 + x2 * (_P5 + x2 * (_P7 + x2 * _P9))))
-    q = _Q0 + x2 * (_Q2 + x2 * (_Q4 + x2 * (_Q6 + x2 * _Q8)))
-    c = p * q
-    s = p * p + q * q
-    h = 0.5 * s
-    return (c * s) / (c * c + h * h)
-
-
-# Eigen's float32 tanh (TensorFlow/Eigen ``generic_fast_tanh_float``): a 13/6 rational function on
-# |x| <= 7.9053, the value +-1 beyond (tanh rounds to 1 in float32 there)
-_EA = np.array([4.89352455891786e-03, 6.37261928875436e-04, 1.48572235717979e-05, 5.12229709037114e-08,
-                -8.60467152213735e-11, 2.00018790482477e-13, -2.76076847742355e-16], dtype=np.float32)
-_EB = np.array([4.89352518554385e-03, 2.26843463243900e-03, 1.18534705686654e-04, 1.19825839466702e-06],
-               dtype=np.float32)
-_A1, _A3, _A5, _A7, _A9, _A11, _A13 = (np.float32(a) for a in _EA)
-_B0, _B2, _B4, _B6 = (np.float32(b) for b in _EB)
-_CLAMP32 = np.float32(7.90531110763549805)
-
-
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def tanh32(x):
-    """Eigen's rational tanh in float32 (vectorises); within 4e-7 relative of ``math.tanh``."""
-    x = min(max(x, -_CLAMP32), _CLAMP32)
-    x2 = x * x
-    p = x2 * _A13 + _A11
-    p = x2 * p + _A9
-    p = x2 * p + _A7
-    p = x2 * p + _A5
-    p = x2 * p + _A3
-    p = x2 * p + _A1
-    q = x2 * _B6 + _B4
-    q = x2 * q + _B2
-    q = x2 * q + _B0
-    # x (p / q), not Eigen's (x p) / q with its cut "x below 4e-4": x p underflows for subnormal x, while
-    # p / q -> A1 / B0 = 1 - 1.3e-7 keeps x to float32 precision without a compare and select per unit
-    # (three vector operations of the ~20 per unit: ~10 % of the float32 network's time on this machine)
-    return x * (p / q)
-
-
-# SiLU and the logistic sigmoid through tanh: sigma(x) = (1 + tanh(x / 2)) / 2, so that they vectorise like
-# tanh (math.exp does not: no SVML here; the active bearing's 4-64-64-2 SiLU network spent ~60 % of its
-# one-state force in 128 scalar exp calls).  tanh64 keeps them within round-off of x / (1 + exp(-x)): where
-# 1 + tanh cancels (x below about -20) the error is absolute, ~2e-16 of sigma (times x for SiLU), far below one unit of
-# the next layer's sum.  tanh32's clamp at |x / 2| = 7.9 puts sigma's error below 1.2e-7 absolute.
-
-
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def sigmoid64(x):
-    """The logistic sigmoid in float64 from ``tanh64`` (vectorises)."""
-    return 0.5 + 0.5 * tanh64(0.5 * x)
-
-
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def silu64(x):
-    """SiLU, x sigma(x), in float64 from ``tanh64`` (vectorises)."""
-    return x * sigmoid64(x)
-
-
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def sigmoid32(x):
-    """The logistic sigmoid in float32 from ``tanh32`` (vectorises)."""
-    return np.float32(0.5) + np.float32(0.5) * tanh32(np.float32(0.5) * x)
-
-
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def silu32(x):
-    """SiLU in float32 from ``tanh32`` (vectorises)."""
-    return x * sigmoid32(x)
-
-
-# pade_tanh: tanh's [5/4] Pade approximant taken as an activation in its own right (the universal networks are
-# trained with it: surrogate.universal_fit.units), x (945 + 105 x^2 + x^4) / (945 + 420 x^2 + 15 x^4): smooth and
-# increasing on the whole line, 6 vector operations and one division where tanh64 takes 19 and one.  No
-# approximation error: the network is this function, not an approximation of one (round-off only)
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def pade_tanh64(x):
-    """The ``pade_tanh`` activation in float64 (vectorises)."""
-    x2 = x * x
-    return x * (945.0 + x2 * (105.0 + x2)) / (945.0 + x2 * (420.0 + 15.0 * x2))
-
-
-@njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def pade_tanh32(x):
-    """The ``pade_tanh`` activation in float32 (vectorises)."""
-    x2 = x * x
-    return x * (np.float32(945.0) + x2 * (np.float32(105.0) + x2)) / (
-        np.float32(945.0) + x2 * (np.float32(420.0) + np.float32(15.0) * x2))
-
-
 # ---------------------------------------------------------------------------------------------- folding
-
-_ACT = {"tanh": 0, "relu": 1, "silu": 2, "sigmoid": 3, "pade_tanh": 4}
-
 
 def _fold_network(layers, in_mean, in_std, out_mean=None, out_std=None, out_rows=None):
     """Layers [(W (out, in), b)] with z = (raw - in_mean)/in_std folded into the first layer and, when
@@ -396,16 +278,8 @@ def float32_tail(typingctx, w, start):
 
 
 def _act_expr(act: str, x: str, f32: bool = False) -> str:
-    bits = "32" if f32 else "64"
-    if act == "tanh":
-        return f"tanh{bits}({x})"
-    if act == "relu":
-        return f"max({x}, np.float32(0.0))" if f32 else f"max({x}, 0.0)"
-    if act == "silu":
-        return f"silu{bits}({x})"
-    if act == "pade_tanh":
-        return f"pade_tanh{bits}({x})"
-    return f"sigmoid{bits}({x})"
+    """The activation's call in generated source: its compiled unit by name (``activations.unit_name``)."""
+    return f"{unit_name(act, f32)}({x})"
 
 
 def _net_source(chain, offs, inputs, act, lay, ind, out_names, base="", f32=False):
@@ -652,9 +526,7 @@ def one_state_function(source: str, label: str, units: dict[str, Any] | None = N
     compiles the same source with another tanh)."""
     # a module name outside the package: the integrator takes its uncached loops for this kernel
     # (numba cannot cache a function generated at run time; see rotor.integrate._library_types)
-    namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np, "tanh64": tanh64,
-                                 "silu64": silu64, "sigmoid64": sigmoid64, "tanh32": tanh32, "silu32": silu32,
-                                 "sigmoid32": sigmoid32, "pade_tanh64": pade_tanh64, "pade_tanh32": pade_tanh32,
+    namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np, **unit_names(),
                                  "float32_tail": float32_tail, **(units or {})}
     exec(compile(source, label, "exec"), namespace)
     return njit(error_model="numpy", fastmath={"contract", "reassoc"})(namespace["surrogate_kernel"])
@@ -787,42 +659,19 @@ def batch_params(model, dtype: str = "float64") -> BatchParams:
                        np.ascontiguousarray(model.boundaries if len(model.boundaries) else np.zeros(0),
                                             dtype=np.float64),
                        float(model.blend_width), np.ascontiguousarray(model.domain, dtype=np.float64),
-                       float(model.eps_max), model._counter, model._setting, _ACT[model.activation], int(width))
+                       float(model.eps_max), model._counter, model._setting, ACTIVATIONS[model.activation], int(width))
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract", "reassoc"})
 def _activate_tile(dst, n_out, n, act, f32):
+    """The activation ``act`` (a registry code, ``surrogate.activations``) over a tile's n_out rows of n states."""
     for o in range(n_out):
-        if act == 0:
-            if f32:
-                for p in range(n):
-                    dst[o, p] = tanh32(dst[o, p])
-            else:
-                for p in range(n):
-                    dst[o, p] = tanh64(dst[o, p])
-        elif act == 1:
+        if f32:
             for p in range(n):
-                dst[o, p] = max(dst[o, p], 0.0)
-        elif act == 2:
-            if f32:
-                for p in range(n):
-                    dst[o, p] = silu32(dst[o, p])
-            else:
-                for p in range(n):
-                    dst[o, p] = silu64(dst[o, p])
-        elif act == 4:
-            if f32:
-                for p in range(n):
-                    dst[o, p] = pade_tanh32(dst[o, p])
-            else:
-                for p in range(n):
-                    dst[o, p] = pade_tanh64(dst[o, p])
-        elif f32:
-            for p in range(n):
-                dst[o, p] = sigmoid32(dst[o, p])
+                dst[o, p] = unit32(act, dst[o, p])
         else:
             for p in range(n):
-                dst[o, p] = sigmoid64(dst[o, p])
+                dst[o, p] = unit64(act, dst[o, p])
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract", "reassoc"})
@@ -1196,7 +1045,15 @@ def _batch_net_source(layers, act_fn, ind, n_terms, bias0):
     return L
 
 
-_ACT_BATCH = {"tanh": "tanh_n", "relu": "relu_n", "silu": "silu_n", "sigmoid": "sigmoid_n", "pade_tanh": "pade_tanh_n"}
+def _batch_unit(act: str) -> str:
+    """The activation's unit in a batched kernel's source: ``<name>_n``, bound to the float64 or float32
+    unit by the module's imports (``_batch_units``)."""
+    return f"{act}_n"
+
+
+def _batch_units(f32: bool) -> dict[str, Any]:
+    """``_batch_unit`` name -> the compiled unit of the networks' precision, for every registered activation."""
+    return {_batch_unit(a): fn for a, fn in ((a, unit_names()[unit_name(a, f32)]) for a in ACTIVATIONS)}
 
 
 def batch_kernel_source(key, dtype: str = "float64") -> str:
@@ -1383,7 +1240,7 @@ def batch_kernel_source(key, dtype: str = "float64") -> str:
             L += [f"{ind3}for o in range({n_out0}):", f"{ind3}    wx[o] = w[{bo} + o]"]
             for k in range(n_extra):
                 L += [f"{ind3}    wx[o] += w[{wo} + o * {n_tot} + {n_in + k}] * bp.setting[{1 + k}]"]
-        L += _batch_net_source(layers, _ACT_BATCH[act], ind3, n_in, "wx[o]" if n_extra else "w[{bo} + o]")
+        L += _batch_net_source(layers, _batch_unit(act), ind3, n_in, "wx[o]" if n_extra else "w[{bo} + o]")
         ob = 4 + nb + 3 * n_dom + nr + 2 * r
         L += [f"{ind3}ob1 = q[{ob}]", f"{ind3}ob2 = q[{ob + 1}]"]
         gain = "went[t0 + j]"
@@ -1464,9 +1321,8 @@ def _outline_passes(L: list[str], passes: list[list[int]]) -> str:
     return "\n".join(helpers + body) + "\n"
 
 
-@njit(inline="always", error_model="numpy")
-def _relu(x):
-    return max(x, 0.0)
+#: (an older name of ``activations.relu64``)
+_relu = relu64
 
 
 _COMPILED_BATCH: dict[tuple, Any] = {}
@@ -1480,10 +1336,8 @@ batch_kernel_files = kernel_files
 #: "off" (or empty) compiles them in every process, as before the cache existed
 KERNEL_CACHE_ENV = "FLUIDFILM_KERNEL_CACHE"
 _ONE_STATE_HEADER = ["import math", "", "import numpy as np", "from numba import njit", "",
-                     "from fluidfilm.surrogate.kernels import (float32_tail, pade_tanh32, pade_tanh64, sigmoid32, "
-                     "sigmoid64, silu32, silu64,", "                                        tanh32, tanh64)"]
-_UNITS = {"float64": ("tanh64", "silu64", "sigmoid64", "pade_tanh64"),
-          "float32": ("tanh32", "silu32", "sigmoid32", "pade_tanh32")}
+                     "from fluidfilm.surrogate.kernels import float32_tail"] + [
+    f"from fluidfilm.surrogate.activations import {name}" for name in sorted(unit_names())]
 
 
 def kernel_cache_dir():
@@ -1512,10 +1366,13 @@ def kernel_module_source(source: str, header: list[str], jit_lines: list[str]) -
 
     import numba
 
-    here = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
+    from fluidfilm.surrogate import activations
+
+    # the unit functions it inlines live in activations.py: both files' bytes name the build
+    here = hashlib.sha256(Path(__file__).read_bytes() + Path(activations.__file__).read_bytes()).hexdigest()
     head = ["# Generated by fluidfilm.surrogate.kernels: the kernel of one surrogate shape. numba caches its",
             "# compiled code beside this file (cache=True). Do not edit: the name is the hash of this text.",
-            f"# Built against fluidfilm/surrogate/kernels.py sha256 {here}, numba {numba.__version__}."]
+            f"# Built against fluidfilm/surrogate/activations.py + kernels.py sha256 {here}, numba {numba.__version__}."]
     return "\n".join(head + header + ["", ""]) + source.rstrip("\n") + "\n\n\n" + "\n".join(jit_lines) + "\n"
 
 
@@ -1590,11 +1447,7 @@ def _exec_batch_kernel(key, dtype: str):
     """The batched kernel compiled from its source in this process only (no on-disk cache)."""
     source = batch_kernel_source(key, dtype)
     f32 = dtype == "float32"
-    namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np,
-                                 "tanh_n": tanh32 if f32 else tanh64, "relu_n": _relu,
-                                 "silu_n": silu32 if f32 else silu64,
-                                 "sigmoid_n": sigmoid32 if f32 else sigmoid64,
-                                 "pade_tanh_n": pade_tanh32 if f32 else pade_tanh64}
+    namespace: dict[str, Any] = {"__name__": "fluidfilm_generated", "math": math, "np": np, **_batch_units(f32)}
     exec(compile(source, f"<surrogate batch kernel {len(_COMPILED_BATCH)}>", "exec"), namespace)
     jit = njit(error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)
     # the passes, each compiled on its own, and the block that calls them
@@ -1628,11 +1481,9 @@ def batch_kernel(key, dtype: str = "float64"):
     fn = _COMPILED_BATCH.get((key, dtype))
     if fn is None:
         source = batch_kernel_source(key, dtype)
-        units = _UNITS[dtype]
-        header = ["import math", "", "import numpy as np", "from numba import njit", "",
-                  "from fluidfilm.surrogate.kernels import _relu as relu_n",
-                  f"from fluidfilm.surrogate.kernels import {units[0]} as tanh_n, {units[1]} as silu_n",
-                  f"from fluidfilm.surrogate.kernels import {units[2]} as sigmoid_n, {units[3]} as pade_tanh_n"]
+        header = ["import math", "", "import numpy as np", "from numba import njit", ""] + [
+            f"from fluidfilm.surrogate.activations import {unit_name(a, dtype == 'float32')} as {_batch_unit(a)}"
+            for a in ACTIVATIONS]
         # the passes, each compiled on its own, then the block that calls them and the kernel (as below)
         helpers = [name for name in re.findall(r"^def (\w+)\(", source, flags=re.M)
                    if name.startswith(("_pass", "_states_block"))] + ["batch_kernel"]

@@ -29,6 +29,7 @@ from torch import nn
 
 from fluidfilm.core.bearing import ConicalBearing
 from fluidfilm.data.schema import EXTRA_INPUTS, dataset_bearing, load_dataset
+from fluidfilm.surrogate.activations import REGISTRY, TRAINABLE_ACTIVATIONS
 from fluidfilm.surrogate.scaling import Scaling, check_whirl_use
 
 class _TanhFunction(torch.autograd.Function):
@@ -92,7 +93,8 @@ class NarrowInputLinear(nn.Linear):
         return _NarrowInputLinearFunction.apply(x, self.weight, self.bias)
 
 
-_ACT = {"tanh": Tanh, "relu": nn.ReLU, "silu": nn.SiLU, "sigmoid": nn.Sigmoid}
+#: the Lightning networks' activations (``surrogate.activations``), as torch modules (tanh: ``Tanh``)
+_ACT = {name: REGISTRY[name].torch_module(training=True) for name in TRAINABLE_ACTIVATIONS}
 
 
 def _mlp(n_in: int, n_out: int, width: int, depth: int, activation: str) -> nn.Sequential:

@@ -36,7 +36,7 @@ from torch import nn
 
 from fluidfilm import io
 from fluidfilm.data.spec import config_hash
-from fluidfilm.surrogate.activations import HIDDEN_ACTIVATIONS, pade_tanh
+from fluidfilm.surrogate.activations import HIDDEN_ACTIVATIONS, REGISTRY
 from fluidfilm.surrogate.fit import _exit_with_parent, side_by_side, torch_threads, worker_count
 from fluidfilm.surrogate.universal import WEIGHTS_DIR, slenderness_gain
 
@@ -157,12 +157,8 @@ def units(A, activation: str):
     torch): tanh (the paper's tansig), or ``pade_tanh`` (``surrogate.activations``: tanh's [5/4] Pade
     approximant as the activation itself, which the one-state float64 kernel evaluates exactly with 6 vector
     operations and a division where tanh takes 19 and a division)."""
-    if activation == "tanh":
-        H = torch.tanh(A) if isinstance(A, torch.Tensor) else np.tanh(A)
-        D = 1.0 - H * H
-        return H, D, -2.0 * H * D
-    if activation == "pade_tanh":
-        return pade_tanh(A)
+    if activation in HIDDEN_ACTIVATIONS:
+        return REGISTRY[activation].derivatives(A)
     raise ValueError(f"activation={activation!r}: choose one of {HIDDEN_ACTIVATIONS}")
 
 
@@ -215,7 +211,7 @@ class UniversalNet(L.LightningModule):
             raise ValueError(f"activation={activation!r}: choose one of {HIDDEN_ACTIVATIONS}")
         self.save_hyperparameters()
         self.automatic_optimization = False
-        self.net = nn.Sequential(nn.Linear(4, width), nn.Tanh() if activation == "tanh" else PadeTanh(),
+        self.net = nn.Sequential(nn.Linear(4, width), REGISTRY[activation].torch_module()(),
                                  nn.Linear(width, 2)).double()
         self.register_buffer("out_mean", torch.tensor(out_mean, dtype=torch.float64))
         self.register_buffer("out_std", torch.tensor(out_std, dtype=torch.float64))
