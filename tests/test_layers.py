@@ -232,7 +232,7 @@ def test_the_blocker_does_block():
     import subprocess
     import sys
 
-    code = _CORE_USE.format(heavy=HEAVY).split("import fluidfilm\n")[0] + "import fluidfilm.surrogate.training\n"
+    code = _CORE_USE.format(heavy=HEAVY).split("import fluidfilm\n")[0] + "import fluidfilm.surrogate.training.lightning\n"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
     proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode != 0 and "blocked:" in proc.stderr, proc.stderr[-3000:]

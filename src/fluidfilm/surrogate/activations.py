@@ -5,20 +5,20 @@ An activation is one ``Activation`` entry:
 - ``code``: the integer the generic numba kernels dispatch on (saved models name the activation, not
   the code);
 - ``exact64``: its compiled float64 form exact to rounding, for the generic one-state kernel
-  (``surrogate.inference.surrogate_force``: tanh through one ``exp``, SiLU and the sigmoid through
+  (``surrogate.kernels.generic.surrogate_force``: tanh through one ``exp``, SiLU and the sigmoid through
   ``exp``);
 - ``unit64`` / ``unit32``: its compiled forms from arithmetic alone, which vectorise, for the fast
   kernels (the generated one-state and batched kernels and the generic batched kernel): ``tanh64``
   (within 1.5e-15 relative of ``math.tanh``), ``tanh32`` (Eigen's, within 4e-7), SiLU and the sigmoid
   through them; generated kernels call them by name (``unit_name``), imported from this module;
 - ``derivatives``: its value and first and second derivatives (f, f', f'') on NumPy arrays (for tanh
-  and ``pade_tanh`` torch tensors too): the exact Jacobian (``surrogate.jacobian``) takes (f, f'), the
-  universal fit's Levenberg-Marquardt steps all three (``surrogate.universal_fit.units``);
+  and ``pade_tanh`` torch tensors too): the exact Jacobian (``surrogate.kernels.jacobian``) takes (f, f'), the
+  universal fit's Levenberg-Marquardt steps all three (``surrogate.training.universal_fit.units``);
 - ``torch``: where its torch module lives (``"module:Class"``, imported when asked for:
   ``torch_module``), and ``torch_training`` the faster equivalent the Lightning networks train with
   where there is one (tanh: ``surrogate.training.Tanh``);
 - ``trainable`` / ``universal``: whether the Lightning networks (``surrogate.training.ForceMLP``) and
-  the universal fit (``surrogate.universal_fit``) offer it.
+  the universal fit (``surrogate.training.universal_fit``) offer it.
 
 Adding an activation: its compiled forms and derivatives here, one ``Activation`` entry in
 ``REGISTRY``, one branch in each of the three dispatchers (``exact64``, ``unit64``, ``unit32``:
@@ -32,7 +32,7 @@ activation in its own right:
 
 It is smooth and increasing on the whole line (f'(x) > 0 everywhere; f' has its least value about 0.0046 near
 |x| = 3.9), within 4e-4 of tanh for |x| < 3, and grows like x / 15 beyond, where tanh saturates.  Networks
-trained with it (the universal bearing's: ``surrogate.universal_fit``) are evaluated without approximation error (round-off only) by
+trained with it (the universal bearing's: ``surrogate.training.universal_fit``) are evaluated without approximation error (round-off only) by
 6 vector operations and one division per 8 units (``pade_tanh64``), where a tanh exact to
 round-off costs 19 and one (``tanh64``).
 
@@ -280,12 +280,12 @@ class Activation:
 #: name (as in configs and model.json) -> its ``Activation``; the codes are the order here
 REGISTRY: dict[str, Activation] = {a.name: a for a in (
     Activation("tanh", 0, _tanh_exact, tanh64, tanh32, _tanh_derivatives, "torch.nn:Tanh",
-               "fluidfilm.surrogate.training:Tanh", universal=True),
+               "fluidfilm.surrogate.training.lightning:Tanh", universal=True),
     Activation("relu", 1, _relu_exact, relu64, relu32, _relu_derivatives, "torch.nn:ReLU"),
     Activation("silu", 2, _silu_exact, silu64, silu32, _silu_derivatives, "torch.nn:SiLU"),
     Activation("sigmoid", 3, _sigmoid_exact, sigmoid64, sigmoid32, _sigmoid_derivatives, "torch.nn:Sigmoid"),
     Activation("pade_tanh", 4, _pade_tanh_exact, pade_tanh64, pade_tanh32, pade_tanh,
-               "fluidfilm.surrogate.universal_fit:PadeTanh", trainable=False, universal=True),
+               "fluidfilm.surrogate.training.universal_fit:PadeTanh", trainable=False, universal=True),
 )}
 #: activation name -> kernel code
 ACTIVATIONS = {a.name: a.code for a in REGISTRY.values()}
