@@ -132,7 +132,7 @@ ROSS_FF_STAMP   := $(ROSS_VENV)/.fluidfilm
 # universal_train) into the package, with their checksums; commit them, then `dvc repro universal_evaluate`
 .PHONY: universal-weights
 universal-weights: setup
-	$(PY) -c "from fluidfilm.studies.universal import install_weights; install_weights('models/universal', 'src/fluidfilm/surrogate/universal_weights')"
+	$(PY) -c "from fluidfilm.studies.universal_study import install_weights; install_weights('models/universal', 'src/fluidfilm/surrogate/universal_weights')"
 
 # the kernels generated for a surrogate's shape are Python source that numba compiles: write the universal
 # model's (one-state and batched, float64 and float32) into build/kernels/ to read them

@@ -211,7 +211,7 @@ class StiffnessBenchmark:
 
     @classmethod
     def from_reference(cls, reference, eps_values: Sequence[float], h_rel: float = 1e-4) -> "StiffnessBenchmark":
-        from fluidfilm.studies import characteristics as study
+        from fluidfilm.studies import characteristics_study as study
 
         loads = study.loads_for_eccentricities(reference, list(eps_values))
         return cls(loads, study.coefficient_table({"reference": reference}, loads, {"default": h_rel}))
@@ -220,7 +220,7 @@ class StiffnessBenchmark:
         """Largest error of the direct (Kxx, Kyy, Cxx, Cyy) and cross terms over the loads, each relative to
         the reference coefficient (floored at a tenth of its matrix's largest; ``study.coefficient_errors``).
         None where the model finds no equilibrium under one of the loads."""
-        from fluidfilm.studies import characteristics as study
+        from fluidfilm.studies import characteristics_study as study
 
         try:
             table = study.coefficient_table({"model": model}, self.loads, {})

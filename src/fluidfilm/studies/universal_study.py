@@ -230,7 +230,7 @@ def kc_along_locus(cfg) -> pd.DataFrame:
     """K and C of the shipped model and of the converged reference at the reference's equilibria with eps
     ``kc_eps``, for each held-out L/D (Gumbel and Swift-Stieber); ``coefficient_errors`` rows."""
     from fluidfilm import ReynoldsSolver
-    from fluidfilm.studies.characteristics import coefficient_errors, coefficient_table, loads_for_eccentricities
+    from fluidfilm.studies.characteristics_study import coefficient_errors, coefficient_table, loads_for_eccentricities
     from fluidfilm.surrogate.universal import universal_bearing
 
     ev = cfg.evaluate
