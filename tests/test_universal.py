@@ -709,3 +709,34 @@ def test_the_evaluation_says_whether_the_pipelines_training_gave_the_shipped_wei
     assert "gumbel: the shipped weights, bit for bit" in text and "swift-stieber: other weights" in text
     assert compare_weights(tmp_path / "nothing")["gumbel"] == {"missing": True}
 
+
+def test_the_config_sets_the_fits_settings_by_their_names():
+    """conf/universal.yaml's ``train`` block is checked against ``UniversalFitSettings``, where the fit's defaults
+    are written once: every key is one of its fields (or the pipeline's own: rules, workers), each value of the
+    field's kind (a per-rule mapping where the pipeline takes one), and what the pipeline passes builds one."""
+    import dataclasses
+
+    import yaml
+
+    from fluidfilm.studies.universal_study import derivative_weight_for, for_rule
+    from fluidfilm.surrogate.training.universal_fit import UniversalFitSettings
+
+    from pathlib import Path
+
+    train = yaml.safe_load((Path(__file__).resolve().parents[1] / "conf" / "universal.yaml").read_text())["train"]
+    fields = {f.name: f.default for f in dataclasses.fields(UniversalFitSettings)}
+    own = {"rules", "workers"}
+    assert set(train) - own <= set(fields), sorted(set(train) - own - set(fields))
+    per_rule = ("steps", "max_minutes", "refine_steps", "refine_minutes")
+    for rule in train["rules"]:
+        values = {k: v for k, v in train.items() if k not in own}
+        values |= {k: for_rule(values[k], rule, k) for k in per_rule if k in values}
+        values["derivative_weight"] = derivative_weight_for(values["derivative_weight"], rule)
+        settings = UniversalFitSettings(**values)   # an unknown or misspelt key would be a TypeError here
+        for name, default in fields.items():
+            value = getattr(settings, name)
+            if default is not None and not isinstance(default, (tuple, list)) and not isinstance(value, list):
+                assert isinstance(value, type(default)) or (isinstance(default, float) and isinstance(value, int)), \
+                    (name, value, default)
+    with pytest.raises(TypeError):
+        UniversalFitSettings(boundries=(0.5,))

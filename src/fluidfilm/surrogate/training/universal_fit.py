@@ -22,10 +22,13 @@ from __future__ import annotations
 
 from typing import Any
 
+import dataclasses
 import hashlib
 import json
 import os
 import time
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import lightning as L
@@ -616,23 +619,13 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
         return out
 
 
-def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.87), blend_width: float = 0.04,
-                    overlap: int = 1, power: float = 2.0, width: int = 64, steps=3000,
-                    max_minutes=None, floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0,
-                    work_dir=None, logger_for=None, what: str = "", derivative_weight: float = 0.0,
-                    derivative_rows: str = "static", refine_minutes=None, refine_steps=3000,
-                    workers: int | None = None, activation: str = "tanh") -> dict:
-    """Fit the universal networks of one cavitation rule, one per eccentricity region.
-
-    Two phases per region: a fit to the values G (Levenberg-Marquardt from a random start), then, if
-    ``derivative_weight`` > 0, the same fit continued on the values and their derivatives d/deps and d/dalpha
-    (``derivative_rows``; a Sobolev fit): a value error of a few tenths of a per cent becomes a few per cent in
-    stiffness and damping at high eccentricity (docs/universal.md), so the derivatives are fitted directly.
+@dataclass(frozen=True)
+class UniversalFitSettings:
+    """The settings of a universal fit and their defaults, written once: ``train_universal``'s and the pipeline's
+    (conf/universal.yaml's ``train`` block names these fields: tests/test_universal.py checks it).
 
     Parameters
     ----------
-    frame : DataFrame
-        Rows of the dimensionless dataset (one cavitation rule).
     boundaries : sequence of float, default (0.3, 0.5, 0.65, 0.78, 0.87)
         Eccentricity ratios between the regions.
     blend_width : float, default 0.04
@@ -655,6 +648,49 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         Rows held out (at random) for the validation metrics.
     seed : int, default 0
         Seed.
+    derivative_weight : float, default 0.0
+        Weight of the derivative residuals in the second phase (``train_region``); 0: no second phase.
+    derivative_rows : {"static", "all"}, default "static"
+        The rows with derivative targets (``derivative_targets``).
+    refine_minutes : float, sequence of float or None, default None
+        A wall-time cap on the second phase per region, or one per region (None: none).
+    refine_steps : int or sequence of int, default 3000
+        Levenberg-Marquardt steps of the second phase per region, or one count per region.
+    activation : {"tanh", "pade_tanh"}, default "tanh"
+        Hidden activation of every region's network (``units``); a fit's finished files are named by it (tanh's
+        without a tag).
+    """
+
+    boundaries: Sequence[float] = (0.3, 0.5, 0.65, 0.78, 0.87)
+    blend_width: float = 0.04
+    overlap: int = 1
+    power: float = 2.0
+    width: int = 64
+    steps: int | Sequence[int] = 3000
+    max_minutes: float | Sequence[float] | None = None
+    floor_share: float = 0.01
+    val_fraction: float = 0.1
+    seed: int = 0
+    derivative_weight: float = 0.0
+    derivative_rows: str = "static"
+    refine_minutes: float | Sequence[float] | None = None
+    refine_steps: int | Sequence[int] = 3000
+    activation: str = "tanh"
+
+
+def train_universal(frame: pd.DataFrame, *, work_dir=None, logger_for=None, what: str = "",
+                    workers: int | None = None, **settings: Any) -> dict:
+    """Fit the universal networks of one cavitation rule, one per eccentricity region.
+
+    Two phases per region: a fit to the values G (Levenberg-Marquardt from a random start), then, if
+    ``derivative_weight`` > 0, the same fit continued on the values and their derivatives d/deps and d/dalpha
+    (``derivative_rows``; a Sobolev fit): a value error of a few tenths of a per cent becomes a few per cent in
+    stiffness and damping at high eccentricity (docs/universal.md), so the derivatives are fitted directly.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        Rows of the dimensionless dataset (one cavitation rule).
     work_dir : path-like or None, default None
         Where each finished region is kept (``region<r>.npz``) and each running fit checkpoints: a rerun
         skips finished regions and resumes the running one.
@@ -664,23 +700,15 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         fits the region: picklable when ``workers`` > 1 (``workflow.tracking.ChildRunFactory.logger_for``).
     what : str, default ""
         Prefix of the progress lines.
-    derivative_weight : float, default 0.0
-        Weight of the derivative residuals in the second phase (``train_region``); 0: no second phase.
-    derivative_rows : {"static", "all"}, default "static"
-        The rows with derivative targets (``derivative_targets``).
-    refine_minutes : float, sequence of float or None, default None
-        A wall-time cap on the second phase per region, or one per region (None: none).
-    refine_steps : int or sequence of int, default 3000
-        Levenberg-Marquardt steps of the second phase per region, or one count per region.
     workers : int or None, default None
         Regions fitted side by side in worker processes (None: one per core; 1: one after the other in this
         process). Each fit uses one torch thread whatever ``workers`` is: BLAS sums in another order with
         another thread count, and Levenberg-Marquardt carries round-off into other weights within a few
         hundred steps, so one thread per fit is what makes the weights the same on any machine of the same
         arithmetic (another CPU's BLAS kernels may sum in another order).
-    activation : {"tanh", "pade_tanh"}, default "tanh"
-        Hidden activation of every region's network (``units``); a fit's finished files are named by it (tanh's
-        without a tag).
+    **settings
+        The fit's settings: the fields of ``UniversalFitSettings`` (their defaults where not given; an unknown
+        name is a TypeError).
 
     Returns
     -------
@@ -689,13 +717,8 @@ def train_universal(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.
         ``train_seconds`` (all regions, one core each), ``train_wall_s``, ``workers`` and the validation errors over all regions (``val_rel_median``,
         ``val_rel_p99``, ``val_rel_max``: each the worst region's).
     """
-    return train_universals({"": dict(frame=frame, boundaries=boundaries, blend_width=blend_width, overlap=overlap,
-                                      power=power, width=width, steps=steps, max_minutes=max_minutes,
-                                      floor_share=floor_share, val_fraction=val_fraction, seed=seed,
-                                      work_dir=work_dir, logger_for=logger_for, what=what,
-                                      derivative_weight=derivative_weight, derivative_rows=derivative_rows,
-                                      refine_minutes=refine_minutes, refine_steps=refine_steps,
-                                      activation=activation)},
+    return train_universals({"": dict(frame=frame, work_dir=work_dir, logger_for=logger_for, what=what,
+                                      **dataclasses.asdict(UniversalFitSettings(**settings)))},
                             workers=workers)[""]
 
 
@@ -730,13 +753,16 @@ def train_universals(fits: dict, workers: int | None = None) -> dict:
     return out
 
 
-def _region_jobs(frame: pd.DataFrame, *, boundaries=(0.3, 0.5, 0.65, 0.78, 0.87), blend_width: float = 0.04,
-                 overlap: int = 1, power: float = 2.0, width: int = 64, steps=3000, max_minutes=None,
-                 floor_share: float = 0.01, val_fraction: float = 0.1, seed: int = 0, work_dir=None,
-                 logger_for=None, what: str = "", derivative_weight: float = 0.0, derivative_rows: str = "static",
-                 refine_minutes=None, refine_steps=3000, activation: str = "tanh") -> tuple[list[dict], dict]:
-    """``train_universal``'s settings checked and cut into one job per region (``_fit_region``), with the
-    model's settings that the result carries."""
+def _region_jobs(frame: pd.DataFrame, *, work_dir=None, logger_for=None, what: str = "",
+                 **settings: Any) -> tuple[list[dict], dict]:
+    """``train_universal``'s settings (``UniversalFitSettings``) checked and cut into one job per region
+    (``_fit_region``), with the model's settings that the result carries."""
+    st = UniversalFitSettings(**settings)
+    boundaries, blend_width, overlap, power, width = st.boundaries, st.blend_width, st.overlap, st.power, st.width
+    steps, max_minutes, floor_share, val_fraction, seed = (st.steps, st.max_minutes, st.floor_share,
+                                                           st.val_fraction, st.seed)
+    derivative_weight, derivative_rows, refine_minutes, refine_steps, activation = (
+        st.derivative_weight, st.derivative_rows, st.refine_minutes, st.refine_steps, st.activation)
     bounds = [float(b) for b in boundaries]
     if any(b1 - b0 <= blend_width for b0, b1 in zip(bounds, bounds[1:])) or not all(0 < b < 1 for b in bounds):
         raise ValueError(f"boundaries {bounds} must increase inside (0, 1) by more than blend_width={blend_width!r}")
