@@ -40,7 +40,7 @@ class Layout:
     One float64 vector holds everything the kernel reads, the model's mutable setting and domain counter
     included (the model's ``setting_array`` and counter are views of it): numba passes an array argument
     without reference counting, while each array taken out of a tuple costs an atomic increment and
-    decrement per call (measured: 16 of them, ~60 ns of a ~220 ns force).
+    decrement per call (what the 16 of them cost: docs/fast_surrogates.md).
     """
 
     def __init__(self, key):
@@ -104,7 +104,7 @@ def float32_tail(typingctx, w, start):
     """A float32 pointer to the bytes of ``w`` from float64 index ``start`` on (``pack``'s float32 copy).
 
     An array view (``w[start:].view(np.float32)``) costs a reference-count increment and decrement per call
-    (~4 ns of a ~65 ns float32 force, measured); the pointer borrows ``w``'s memory, which the caller holds.
+    (docs/fast_surrogates.md has its cost); the pointer borrows ``w``'s memory, which the caller holds.
     """
     if not (isinstance(w, types.Array) and w.dtype == types.float64 and w.ndim == 1 and w.layout == "C"
             and isinstance(start, types.Integer)):

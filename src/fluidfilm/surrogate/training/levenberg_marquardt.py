@@ -163,7 +163,7 @@ def normal_equations(theta: np.ndarray, Z: np.ndarray, Y: np.ndarray, n_hidden: 
     U^T U, U^T E and E^T E come from one symmetric rank-k update (BLAS syrk)
     on [U, E]: one row per sample (not per sample and output) and 301
     columns.  That is about half the time of a syrk on the outputs'
-    Jacobian rows stacked (30 vs 67 ms for 8400 samples, one core) and a
+    Jacobian rows stacked (docs/dataset_and_surrogates.md) and a
     small part of J^T J from the full Jacobian (``normal_equations_dense``,
     which the tests compare to 1e-15).
 
@@ -250,9 +250,9 @@ class TorchNormalEquations:
     here a general matrix product: torch has no symmetric rank-k update), summed in another order: the
     results equal the NumPy path's to round-off, not bit for bit, so a run on a device and one on the
     CPU take the same steps while no comparison of errors falls within round-off of a tie (the tests
-    compare both on a small problem).  Why: at the paper's full scale (3.2 M training rows) an epoch is
-    ~17 s on this project's two cores and the validation rule needs thousands of them; a GPU does an epoch
-    in well under a second.
+    compare both on a small problem).  Why: at the paper's full scale (3.2 M training rows) an epoch takes
+    seconds on this project's two cores and the validation rule needs thousands of them; a GPU does an epoch
+    in well under a second (docs/dataset_and_surrogates.md has the timings).
 
     Parameters
     ----------

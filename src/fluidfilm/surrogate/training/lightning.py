@@ -35,9 +35,8 @@ from fluidfilm.surrogate.scaling import Scaling, check_whirl_use
 class _TanhFunction(torch.autograd.Function):
     """tanh(x) = 2 sigmoid(2x) - 1, with tanh's own backward (1 - y^2) g.
 
-    Why: torch 2.13's CPU ``tanh`` is not vectorised (550 us for the 4096 x 64 hidden layer of a training
-    step, one thread) while ``sigmoid`` is (55 us), so this form takes a third off the step
-    (benchmarks/bench_training_step.py).  It differs from ``torch.tanh`` by at most 1.8e-7 (absolute,
+    Why: torch 2.13's CPU ``tanh`` is not vectorised while ``sigmoid`` is, so this form takes a third off the
+    training step (benchmarks/bench_training_step.py; the timings are in docs/dataset_and_surrogates.md).  It differs from ``torch.tanh`` by at most 1.8e-7 (absolute,
     float32), the rounding of the float32 sum 2 s - 1
     (tests/test_surrogate.py::test_training_layers_equal_torchs_own_in_value_and_gradient).
     """
@@ -64,9 +63,9 @@ class Tanh(nn.Module):
 class _NarrowInputLinearFunction(torch.autograd.Function):
     """x W^T + b with the weight's gradient formed as (x^T g)^T.
 
-    Why: autograd's g^T x, a (width x rows) by (rows x 4) product with the transposed operand first,
-    takes MKL 210 us for 4096 rows at one thread; x^T g, the same products (summed in BLAS's order, so equal
-    to round-off), takes 35 us.  Only the first layer has so few inputs.
+    Why: autograd's g^T x, a (width x rows) by (rows x 4) product with the transposed operand first, is
+    six times slower in MKL than x^T g, the same products (summed in BLAS's order, so equal to round-off;
+    timings in docs/dataset_and_surrogates.md).  Only the first layer has so few inputs.
     """
 
     @staticmethod
