@@ -19,6 +19,8 @@
 #                                  benchmarks/bench_ross_peer.py, then the ROSS adapter's report (bench_ross_adapter.py)
 #   make ross-env / test-ross      build .venv-ross only / run the ROSS adapter's tests in it
 #   make universal-weights         copy the trained universal surrogate (models/universal) into the package
+#   make kernel-source             the generated kernels of the universal surrogate, as Python files to read:
+#                                  build/kernels/ (fluidfilm.surrogate.kernels.write_kernel_sources)
 #   make train-time-ci             the training-time study at 3x the pipeline's subsample (12,000 per
 #                                  seed) until its 95 % interval is +-10 points (hours here:
 #                                  docs/paper_experiment.md): reports/train_time_ci.json
@@ -130,7 +132,13 @@ ROSS_FF_STAMP   := $(ROSS_VENV)/.fluidfilm
 # universal_train) into the package, with their checksums; commit them, then `dvc repro universal_evaluate`
 .PHONY: universal-weights
 universal-weights: setup
-	$(PY) -c "from fluidfilm.studies.universal import install_weights; install_weights('models/universal', 'src/fluidfilm/surrogate/universal_weights')"
+	$(PY) -c "from fluidfilm.studies.universal_study import install_weights; install_weights('models/universal', 'src/fluidfilm/surrogate/universal_weights')"
+
+# the kernels generated for a surrogate's shape are Python source that numba compiles: write the universal
+# model's (one-state and batched, float64 and float32) into build/kernels/ to read them
+.PHONY: kernel-source
+kernel-source: setup
+	$(PY) -c "from fluidfilm import paper_bearing; from fluidfilm.surrogate.kernels import write_kernel_sources; from fluidfilm.surrogate.universal import universal_bearing; print(*write_kernel_sources(universal_bearing(paper_bearing()), 'build/kernels'), sep='\n')"
 
 .PHONY: train-time-ci
 train-time-ci: setup

@@ -14,7 +14,7 @@ import time
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from fluidfilm.surrogate.levenberg_marquardt import (LMSettings, init_nguyen_widrow, levenberg_marquardt, mlp_sse,
+from fluidfilm.surrogate.training.levenberg_marquardt import (LMSettings, init_nguyen_widrow, levenberg_marquardt, mlp_sse,
                                                      normal_equations, normal_equations_dense)
 
 

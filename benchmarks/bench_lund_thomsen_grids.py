@@ -4,7 +4,7 @@ convergence and Richardson extrapolation.
     python benchmarks/bench_lund_thomsen_grids.py [--quick]
 
 Every row of both tables (21; ``--quick``: three L/D 0.5 rows on the three coarsest grids, no file) through
-``studies.characteristics.lund_thomsen_point`` (equilibrium + central-difference coefficients, grooved
+``studies.characteristics_study.lund_thomsen_point`` (equilibrium + central-difference coefficients, grooved
 Swift-Stieber solver) on the doubling ladder 36x16, 72x31, 144x61, 288x121 (the mesh width halves in both
 directions from one grid to the next, and the 20 deg grooves cover whole node spans on each) and on 288x61, the
 grid ``bench_ross_peer.py`` quotes.  Per grid: the largest coefficient error over the rows
@@ -27,7 +27,7 @@ import numpy as np
 from fluidfilm.characteristics import published as pub
 from fluidfilm.io import write_json
 from fluidfilm.perf.benchmarking import machine, write_benchmark
-from fluidfilm.studies import characteristics as study
+from fluidfilm.studies import characteristics_study as study
 
 LADDER = [(36, 16), (72, 31), (144, 61), (288, 121)]
 QUOTED = (288, 61)
@@ -98,7 +98,7 @@ def main() -> None:
     if args.quick:
         return
     notes = (f"{len(rows)} rows (both L/D), equilibrium + seven printed coefficients per row by "
-             f"studies.characteristics.lund_thomsen_point; error: lund_thomsen_err_pct (beyond half a printed unit). "
+             f"studies.characteristics_study.lund_thomsen_point; error: lund_thomsen_err_pct (beyond half a printed unit). "
              f"Observed order over the quantities eps, phi and the seven coefficients of every row (a sequence whose "
              f"differences change sign has none). Load average {load0[0]:.1f} before, {load1[0]:.1f} after "
              f"(2 cores shared with other work).")

@@ -13,7 +13,7 @@ point: the load of this shared machine hits both alike, and the ratios are taken
    isoviscous, Swift-Stieber on both sides.  ROSS: ``FixedGeometryBearing`` as in its own literature test
    (``ross/tests/test_fluid_film_literature.py``), ``thermal_type=None``, at its default mesh (40 x 20 elements
    per pad) and a refined one; its constructor computes the equilibrium and the coefficients, so it is the
-   timed call.  Ours: ``studies.characteristics.lund_thomsen_point`` (equilibrium + central-difference
+   timed call.  Ours: ``studies.characteristics_study.lund_thomsen_point`` (equilibrium + central-difference
    coefficients) on ``lund_thomsen_bearing`` grids.  Error: ``lund_thomsen_err_pct`` (|value - published|
    beyond half a printed unit, relative to max(|published|, 0.1 x the matrix's largest term)), the same
    measure for both sides.
@@ -49,7 +49,7 @@ from fluidfilm.characteristics import static
 from fluidfilm.core.bearing import JournalBearing
 from fluidfilm.perf.benchmarking import write_benchmark
 from fluidfilm.reynolds.feed import GroovedReynoldsSolver
-from fluidfilm.studies import characteristics as study
+from fluidfilm.studies import characteristics_study as study
 
 NAMES = pub.LUND_THOMSEN_COEFFICIENTS
 LT_D, LT_C, LT_MU, LT_RPM = 0.1, 100e-6, 0.02, 3000.0

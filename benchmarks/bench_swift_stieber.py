@@ -29,7 +29,7 @@ from fluidfilm.io import write_json
 from fluidfilm.perf.benchmarking import machine, median_seconds, write_benchmark
 from fluidfilm.reynolds import kernels
 from fluidfilm.reynolds.feed import GroovedReynoldsSolver
-from fluidfilm.studies import characteristics as study
+from fluidfilm.studies import characteristics_study as study
 
 
 @njit

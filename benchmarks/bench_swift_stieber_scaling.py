@@ -59,8 +59,8 @@ def row(ld: float, n_theta: int, n_states: int) -> list[str]:
             # would not tell a free node at p = 0 from a cavitated one
             final = np.zeros((n_theta, (nz - 1) // 2 + 2), dtype=np.bool_)
             t0 = time.perf_counter()
-            it = kernels.active_set_field(solver.params, x[i, 0], x[i, 1], v[i, 0], v[i, 1], p, fixed, True,
-                                          n_theta * nz, transform, final, False)
+            it = kernels.active_set_field(solver.params, (x[i, 0], x[i, 1], v[i, 0], v[i, 1]), p, fixed,
+                                          kernels.ActiveSetOptions(True, n_theta * nz, transform), final, False)
             t[transform].append(time.perf_counter() - t0)
             if it < 0:
                 raise RuntimeError(f"the active-set iteration did not settle at L/D {ld}, {n_theta} x {nz}, state {i}")

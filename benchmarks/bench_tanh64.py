@@ -36,7 +36,7 @@ from fluidfilm import load_surrogate, paper_bearing, universal_bearing
 from fluidfilm.perf import write_benchmark
 from fluidfilm.perf.speed import _kernel_loop, best_shaped_surrogate, median_seconds
 from fluidfilm.surrogate import kernels
-from fluidfilm.surrogate.kernels import _P1, _P3, _P5, _P7, _P9, _Q0, _Q2, _Q4, _Q6, _Q8, pade_tanh64, tanh32, tanh64
+from fluidfilm.surrogate.activations import _P1, _P3, _P5, _P7, _P9, _Q0, _Q2, _Q4, _Q6, _Q8, pade_tanh64, tanh32, tanh64
 
 FLAGS = {"error_model": "numpy", "fastmath": {"contract"}}
 

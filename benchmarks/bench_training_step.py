@@ -32,7 +32,7 @@ from torch import nn
 
 from fluidfilm.perf.benchmarking import write_benchmark
 from fluidfilm.progress import quiet_third_party
-from fluidfilm.surrogate.training import ForceMLP, _Batches, _mlp
+from fluidfilm.surrogate.training.lightning import ForceMLP, _Batches, _mlp
 
 BATCH = 4096
 

@@ -3,10 +3,10 @@
     python experiments/characteristics.py                 # the DVC stage
     python experiments/characteristics.py characteristics=quick models.best=/path/to/best ...
 
-The study is fluidfilm.studies.characteristics; config conf/characteristics.yaml.
+The study is fluidfilm.studies.characteristics_study; config conf/characteristics.yaml.
 """
-from fluidfilm.studies import characteristics
+from fluidfilm.studies import characteristics_study
 from fluidfilm.workflow.entry import main
 
 if __name__ == "__main__":
-    main(characteristics, "the bearing-characteristics study")
+    main(characteristics_study, "the bearing-characteristics study", name="characteristics")

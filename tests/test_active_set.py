@@ -178,7 +178,8 @@ def fields_both_ways(params, n_theta, x, v, fixed, project=True):
         if project:
             np.maximum(p, 0.0, out=p)
         p[fixed] = params.p_supply
-        it = kernels.active_set_field(params, x[0], x[1], v[0], v[1], p, fixed, project, 10_000, transform)
+        it = kernels.active_set_field(params, (x[0], x[1], v[0], v[1]), p, fixed,
+                                      kernels.ActiveSetOptions(project, 10_000, transform))
         assert it > 0
         out.append(p)
     return out

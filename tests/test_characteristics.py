@@ -102,7 +102,7 @@ def test_lund_thomsen_two_axial_groove_coefficients():
     """At Lund & Thomsen's Sommerfeld numbers (L/D = 0.5, the five rows both public typings share): eps within
     0.01, attitude within 1 deg, each of the eight coefficients within 3 % beyond the print's rounding
     (relative to max(|published|, 0.1 x the matrix's largest published term), as ``coefficient_errors``)."""
-    from fluidfilm.studies import characteristics as study
+    from fluidfilm.studies import characteristics_study as study
     from fluidfilm.characteristics.published import LUND_THOMSEN_1978, LUND_THOMSEN_TWO_TYPINGS
 
     assert len(LUND_THOMSEN_TWO_TYPINGS) == 5
@@ -121,7 +121,7 @@ def test_lund_thomsen_two_axial_groove_coefficients():
 def test_lund_thomsen_groove_is_twenty_degrees_on_the_grid():
     """The held arc of each groove spans 20 deg on the stage's grid (a node count that misses it would be a
     different bearing), and the two grooves sit at +-90 deg from the load line."""
-    from fluidfilm.studies import characteristics as study
+    from fluidfilm.studies import characteristics_study as study
 
     s = study.lund_thomsen_bearing(0.5, (288, 61))
     fixed = np.flatnonzero(s.gparams.fixed)
@@ -322,7 +322,7 @@ def test_coefficient_errors_floor_and_share_of_the_matrix():
     """rel_err floors the denominator at a tenth of the matrix scale; scale_rel_err divides by the scale itself."""
     import pandas as pd
 
-    from fluidfilm.studies import characteristics as study
+    from fluidfilm.studies import characteristics_study as study
 
     ref = dict(model="reference", load_N=10.0, eps=0.3, Kxx=10.0, Kxy=-1.0, Kyx=0.5, Kyy=8.0,
                Cxx=20.0, Cxy=2.0, Cyx=2.0, Cyy=16.0)
@@ -342,7 +342,7 @@ def test_coefficient_error_summary_per_equilibrium():
     """The summary's maxima are those of the rows, split by kind, coefficient and the reference's eccentricity."""
     import pandas as pd
 
-    from fluidfilm.studies import characteristics as study
+    from fluidfilm.studies import characteristics_study as study
 
     rows = []
     for eps, kxx, kxy in ((0.3, 0.01, 0.2), (0.8, 0.05, 0.02)):
@@ -360,7 +360,7 @@ def test_coarse_grid_coefficients_converge_to_the_fine_grid():
     """Why the surrogates' K/C are judged against the grid-converged reference: on the paper's 30 x 30 grid
     the coefficients at eps 0.8 are several per cent off a 120 x 120 grid, and they approach it as the grid
     is refined (60 x 60 closer) -- the coarse grid's K/C are a discretisation error, not a target."""
-    from fluidfilm.studies import characteristics as study
+    from fluidfilm.studies import characteristics_study as study
 
     b = paper_bearing()
     grids = {n: ReynoldsSolver(b, n, n, cavitation="gumbel") for n in (30, 60, 120)}

@@ -15,9 +15,10 @@ import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 import yaml  # noqa: E402
 
-from fluidfilm.studies import characteristics as study  # noqa: E402
+from fluidfilm.studies import characteristics_study as study  # noqa: E402
 from fluidfilm.studies import plots  # noqa: E402
-from fluidfilm.studies.figure_style import CAPTIONS, limit_with_outliers, readable_log_ticks  # noqa: E402
+from fluidfilm.reporting.captions import CAPTIONS  # noqa: E402
+from fluidfilm.studies.figure_style import limit_with_outliers, readable_log_ticks  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

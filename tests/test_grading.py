@@ -194,7 +194,7 @@ def test_a_force_with_a_kink_at_rest_gets_the_symmetric_derivative_and_an_undefi
     import sys
 
     from fluidfilm import ReynoldsSolver
-    from fluidfilm.studies import characteristics as study
+    from fluidfilm.studies import characteristics_study as study
     from fluidfilm.surrogate.jacobian import surrogate_jacobian
     from fluidfilm.surrogate import SurrogateForceModel
 

@@ -232,7 +232,7 @@ def test_the_blocker_does_block():
     import subprocess
     import sys
 
-    code = _CORE_USE.format(heavy=HEAVY).split("import fluidfilm\n")[0] + "import fluidfilm.surrogate.training\n"
+    code = _CORE_USE.format(heavy=HEAVY).split("import fluidfilm\n")[0] + "import fluidfilm.surrogate.training.lightning\n"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
     proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode != 0 and "blocked:" in proc.stderr, proc.stderr[-3000:]
@@ -250,3 +250,78 @@ def test_the_ross_element_without_ross_names_the_extra():
     assert not isinstance(object(), fr.FluidFilmBearingElement)
     with pytest.raises(ImportError, match=r'pip install "fluidfilm\[ross\]"'):
         fr.FluidFilmBearingElement(n=0, model=None, load=(0.0, -100.0))
+
+
+#: the rooms (subpackages) and the rooms each may import directly besides itself and the root's utilities
+#: (``fluidfilm.io``, ``fluidfilm.progress``): the table of docs/architecture.md, checked against it below
+ROOMS: dict[str, tuple[str, ...]] = {
+    "core": (),
+    "reynolds": ("core",),
+    "rotor": ("core", "reynolds"),
+    "characteristics": ("core", "reynolds", "rotor"),
+    "interop": ("core", "characteristics"),
+    "data": ("core", "reynolds"),
+    "surrogate": ("core", "data"),
+    "control": ("core", "rotor"),
+    "estimation": ("core", "characteristics", "surrogate"),
+    "perf": ("core", "rotor", "surrogate"),
+    "reporting": ("characteristics", "perf"),
+    "workflow": ("core", "perf", "reporting", "reynolds", "surrogate"),
+    "studies": ("core", "reynolds", "rotor", "characteristics", "interop", "data", "surrogate", "control",
+                "estimation", "perf", "reporting", "workflow"),
+}
+UTILITIES = ("fluidfilm.io", "fluidfilm.progress")
+
+
+def _room_imports(module: str) -> set[str]:
+    """The rooms a module imports directly (not through what they import), the utilities left out."""
+    out = set()
+    for dep in _deps_of(module):
+        if dep in UTILITIES or dep == "fluidfilm":
+            continue
+        room = dep.split(".")[1]
+        if room not in ROOMS:
+            out.add(dep)  # a root module other than the utilities (fluidfilm._conformance)
+        else:
+            out.add(room)
+    return out
+
+
+def test_every_room_is_in_the_table():
+    rooms = sorted(p.parent.name for p in (SRC / "fluidfilm").glob("*/__init__.py"))
+    assert rooms == sorted(ROOMS), "a room without a row in ROOMS (and docs/architecture.md), or a row without a room"
+
+
+@pytest.mark.parametrize("room", sorted(ROOMS))
+def test_each_room_imports_only_what_its_row_allows(room):
+    offenders = {}
+    for module in _modules(room) + [f"fluidfilm.{room}"]:
+        extra = _room_imports(module) - set(ROOMS[room]) - {room}
+        if extra:
+            offenders[module] = sorted(extra)
+    assert not offenders, f"imports against docs/architecture.md's table: {offenders}"
+
+
+def test_the_architecture_page_states_the_rooms_rules():
+    """docs/architecture.md's table names each room's allowed imports as ROOMS does."""
+    import re
+
+    page = (SRC.parent / "docs" / "architecture.md").read_text()
+    rows = {}
+    for line in page.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 3 and re.fullmatch(r"`\w+`", cells[0]) and cells[0].strip("`") in ROOMS:
+            allowed = cells[2]
+            rows[cells[0].strip("`")] = (tuple(ROOMS) if allowed == "every room" else
+                                         tuple(re.findall(r"`(\w+)`", allowed)))
+    assert set(rows) == set(ROOMS), sorted(set(ROOMS) ^ set(rows))
+    for room, allowed in ROOMS.items():
+        want = set(allowed) if room != "studies" else set(ROOMS) - {"studies"}
+        got = set(rows[room]) - {room}
+        assert got == want, (room, sorted(got), sorted(want))
+
+
+def test_the_room_check_sees_a_real_import():
+    """It can fail: the rotor's integrator imports core, the dataset's generator the solver."""
+    assert "core" in _room_imports("fluidfilm.rotor.integrate")
+    assert "reynolds" in _room_imports("fluidfilm.data.generate")

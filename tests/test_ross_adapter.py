@@ -73,7 +73,7 @@ def test_coefficients_in_ross_frame_agree_with_ross_own_engine():
 
     from fluidfilm.characteristics import coefficients as coef
     from fluidfilm.characteristics import static
-    from fluidfilm.studies import characteristics as study
+    from fluidfilm.studies import characteristics_study as study
 
     s = study.lund_thomsen_bearing(0.5, (72, 31))
     load = study.load_at_sommerfeld(s.bearing, 0.917)

@@ -397,7 +397,7 @@ def test_a_sobolev_fit_learns_a_teachers_derivatives_and_resumes_to_the_same_wei
 
 
 def test_a_derivative_weight_per_rule_must_name_the_rule():
-    from fluidfilm.studies.universal import derivative_weight_for
+    from fluidfilm.studies.universal_study import derivative_weight_for
     from fluidfilm.workflow.config_check import ConfigError
 
     assert derivative_weight_for({"gumbel": 2.0, "swift-stieber": 0.5}, "gumbel") == 2.0
@@ -406,7 +406,7 @@ def test_a_derivative_weight_per_rule_must_name_the_rule():
 
 
 def test_a_per_rule_or_per_region_setting_is_refused_naming_the_value():
-    from fluidfilm.studies.universal import for_rule
+    from fluidfilm.studies.universal_study import for_rule
     from fluidfilm.surrogate.universal_fit import train_universal
     from fluidfilm.workflow.config_check import ConfigError
 
@@ -481,7 +481,7 @@ def test_region_layout_refusals():
 # the K and C goal (direct 2 %, cross 5 % along the equilibrium locus) on one held-out bearing at the locus's
 # hardest point (eps 0.9, where the values-only fit missed it by 8.7 % / 18 %) and at a region boundary (0.5)
 def test_stiffness_and_damping_along_the_locus_on_a_bearing_it_never_saw():
-    from fluidfilm.studies.characteristics import coefficient_errors, coefficient_table, loads_for_eccentricities
+    from fluidfilm.studies.characteristics_study import coefficient_errors, coefficient_table, loads_for_eccentricities
 
     b = JournalBearing(length=0.09, diameter=0.05, clearance=75e-6, speed_rpm=5000.0, viscosity=0.02)  # L/D 1.8
     ref = ReynoldsSolver(b, 144, 81)
@@ -584,7 +584,7 @@ def test_the_equal_accuracy_speed_up_is_the_median_of_side_by_side_rounds(monkey
 
     from fluidfilm import ReynoldsSolver
     from fluidfilm.perf import speed
-    from fluidfilm.studies.universal import reference_cost_at_equal_accuracy
+    from fluidfilm.studies.universal_study import reference_cost_at_equal_accuracy
 
     # the clocks replaced by seconds that say what was timed: the reference's grid (n_theta), one state or
     # batched, the model's precision; each call a new round's value (i), so medians and ratios are of rounds
@@ -635,7 +635,7 @@ def test_the_equal_accuracy_speed_up_is_the_median_of_side_by_side_rounds(monkey
 def test_the_matched_grid_is_the_coarsest_whose_median_and_p99_are_the_models_or_less():
     import pandas as pd
 
-    from fluidfilm.studies.universal import matched_grid
+    from fluidfilm.studies.universal_study import matched_grid
 
     rng = np.random.default_rng(0)
     base = rng.lognormal(-7.0, 0.5, 400)                     # one grid's errors; each finer grid's half
@@ -667,7 +667,7 @@ def test_the_configured_step_counts_refit_the_shipped_weights_bit_for_bit(tmp_pa
     from omegaconf import OmegaConf
 
     from fluidfilm.data.universal import UniversalSpec, generate_universal, load_universal
-    from fluidfilm.studies.universal import derivative_weight_for, for_rule
+    from fluidfilm.studies.universal_study import derivative_weight_for, for_rule
     from fluidfilm.surrogate.universal import load_weights
     from fluidfilm.surrogate.universal_fit import train_universal
 
@@ -692,7 +692,7 @@ def test_the_configured_step_counts_refit_the_shipped_weights_bit_for_bit(tmp_pa
 
 def test_the_evaluation_says_whether_the_pipelines_training_gave_the_shipped_weights(tmp_path):
     from fluidfilm.reporting.readme import _weights_reproduced
-    from fluidfilm.studies.universal import compare_weights
+    from fluidfilm.studies.universal_study import compare_weights
     from fluidfilm.surrogate.universal import WEIGHTS_DIR
 
     shutil.copytree(WEIGHTS_DIR, tmp_path / "models")
@@ -708,3 +708,35 @@ def test_the_evaluation_says_whether_the_pipelines_training_gave_the_shipped_wei
     text = _weights_reproduced(found)
     assert "gumbel: the shipped weights, bit for bit" in text and "swift-stieber: other weights" in text
     assert compare_weights(tmp_path / "nothing")["gumbel"] == {"missing": True}
+
+
+def test_the_config_sets_the_fits_settings_by_their_names():
+    """conf/universal.yaml's ``train`` block is checked against ``UniversalFitSettings``, where the fit's defaults
+    are written once: every key is one of its fields (or the pipeline's own: rules, workers), each value of the
+    field's kind (a per-rule mapping where the pipeline takes one), and what the pipeline passes builds one."""
+    import dataclasses
+
+    import yaml
+
+    from fluidfilm.studies.universal_study import derivative_weight_for, for_rule
+    from fluidfilm.surrogate.training.universal_fit import UniversalFitSettings
+
+    from pathlib import Path
+
+    train = yaml.safe_load((Path(__file__).resolve().parents[1] / "conf" / "universal.yaml").read_text())["train"]
+    fields = {f.name: f.default for f in dataclasses.fields(UniversalFitSettings)}
+    own = {"rules", "workers"}
+    assert set(train) - own <= set(fields), sorted(set(train) - own - set(fields))
+    per_rule = ("steps", "max_minutes", "refine_steps", "refine_minutes")
+    for rule in train["rules"]:
+        values = {k: v for k, v in train.items() if k not in own}
+        values |= {k: for_rule(values[k], rule, k) for k in per_rule if k in values}
+        values["derivative_weight"] = derivative_weight_for(values["derivative_weight"], rule)
+        settings = UniversalFitSettings(**values)   # an unknown or misspelt key would be a TypeError here
+        for name, default in fields.items():
+            value = getattr(settings, name)
+            if default is not None and not isinstance(default, (tuple, list)) and not isinstance(value, list):
+                assert isinstance(value, type(default)) or (isinstance(default, float) and isinstance(value, int)), \
+                    (name, value, default)
+    with pytest.raises(TypeError):
+        UniversalFitSettings(boundries=(0.5,))

@@ -17,8 +17,8 @@ from importlib import metadata as _metadata
 
 from fluidfilm.core.bearing import ConicalBearing, JournalBearing, bearing_from_dict, paper_bearing
 from fluidfilm.reynolds import CAVITATION_MODELS, ConicalReynoldsSolver, GradedReynoldsModel, ReynoldsSolver
-from fluidfilm.rotor import (LinearBearing, Rotor, SpeedSchedule, Trajectory, equilibrium, equilibrium_locus,
-                             load_along_gravity, simulate)
+from fluidfilm.characteristics.static import equilibrium, equilibrium_locus, load_along_gravity
+from fluidfilm.rotor import LinearBearing, Rotor, SpeedSchedule, Trajectory, simulate
 from fluidfilm.surrogate import SurrogateForceModel, load_surrogate
 from fluidfilm.surrogate.universal import universal_bearing
 

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from fluidfilm.reynolds.feed import GroovedReynoldsSolver
     from fluidfilm.reynolds.sparse_reference import SparseReferenceModel
     from fluidfilm.rotor.linear import LinearBearing
-    from fluidfilm.surrogate.inference import SurrogateForceModel
+    from fluidfilm.surrogate.model import SurrogateForceModel
     from fluidfilm.surrogate.universal import UniversalBearingModel
 
     def _force_models(a: ReynoldsSolver, b: GradedReynoldsModel, c: ConicalReynoldsSolver,

@@ -54,7 +54,7 @@ def test_a_residual_above_tolerance_raises_naming_the_load():
 
 
 def test_a_study_of_several_models_records_a_missing_equilibrium_as_nan_not_numbers(solver):
-    from fluidfilm.studies import characteristics as study
+    from fluidfilm.studies import characteristics_study as study
     models = {"reference": solver, "half": _HalfStrength(24.5)}
     with pytest.raises(ValueError, match=r"\(0.0, 24.5\)"):
         study.coefficient_table(models, [24.5], {})

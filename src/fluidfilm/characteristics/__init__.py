@@ -22,8 +22,8 @@ independent check), ``published`` (typed-in tables with sources).
 """
 from fluidfilm.characteristics import coefficients, film, published, shortbearing, stability, static
 from fluidfilm.characteristics.coefficients import NAMES as COEFFICIENT_NAMES
-from fluidfilm.characteristics.static import (equilibrium, film_solver, load_along_gravity, sommerfeld_sweep,
-                                              static_point)
+from fluidfilm.characteristics.static import (equilibrium, equilibrium_locus, film_solver, load_along_gravity,
+                                              sommerfeld_sweep, static_point)
 from fluidfilm.characteristics.stability import lund, operating_point, threshold_speed
 
 
@@ -32,6 +32,6 @@ from fluidfilm.characteristics.stability import lund, operating_point, threshold
 bearing_characteristics = operating_point
 
 
-__all__ = ["bearing_characteristics", "equilibrium", "load_along_gravity", "film_solver", "sommerfeld_sweep", "static_point", "lund",
+__all__ = ["bearing_characteristics", "equilibrium", "equilibrium_locus", "load_along_gravity", "film_solver", "sommerfeld_sweep", "static_point", "lund",
            "operating_point", "threshold_speed", "COEFFICIENT_NAMES", "coefficients", "film", "published",
            "shortbearing", "stability", "static"]

@@ -12,7 +12,7 @@ towards +X1).  The dimensionless names follow the same axes, **x = X1
 the literature often puts x ALONG the load: Lund & Thomsen's tables
 (``published.LUND_THOMSEN_1978``) do, so their Kxy is our Kyx (K[1, 0]);
 ``published.LUND_THOMSEN_INDEX`` maps their names to our K, C and the
-Lund & Thomsen comparison (``studies.characteristics.lund_thomsen_point``)
+Lund & Thomsen comparison (``studies.characteristics_study.lund_thomsen_point``)
 reports in their frame under their names.
 
 Derivatives by central differences of ``model.forces`` for every model:

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pandas as pd
 from scipy.optimize import brentq, least_squares
 
 from fluidfilm.core.force_model import ForceModel
@@ -255,9 +256,9 @@ def equilibrium(model, load, guess: tuple[float, float] | None = None, eps_max: 
                 tol: float = 1e-12, residual_tol: float = 1e-6) -> dict:
     """Journal position where the film force of ``model`` (at rest) balances ``load`` = (W1, W2) [N].
 
-    The one equilibrium solver of the workspace (``fluidfilm.equilibrium``,
-    ``fluidfilm.rotor.equilibrium`` and ``characteristics.equilibrium`` are
-    this function).  A trust-region least-squares solve (scipy) of
+    The one equilibrium solver of the workspace (``fluidfilm.equilibrium`` and
+    ``characteristics.equilibrium`` are this function; ``equilibrium_locus``
+    follows it over load magnitudes).  A trust-region least-squares solve (scipy) of
     F_film(X, 0) + W = 0 in polar unknowns (eps, psi), eps bounded in
     [0, eps_max], started from ``guess`` if given, then from the
     short-bearing (Ocvirk) solution at the same Sommerfeld number, then from
@@ -356,3 +357,43 @@ def equilibrium(model, load, guess: tuple[float, float] | None = None, eps_max: 
                          f"{res:.3g}, tolerance {residual_tol:g})")
     return {"eps": eps, "X": X, "X1": float(X[0]), "X2": float(X[1]), "attitude_deg": attitude_deg(X, F),
             "residual": res, "load_N": w, "sommerfeld": s, "short_bearing_start_eps": e0}
+
+
+#: the columns of ``equilibrium_locus`` (the scalar keys of ``equilibrium``)
+LOCUS_COLUMNS = ("eps", "X1", "X2", "attitude_deg", "residual", "load_N", "sommerfeld")
+
+
+def equilibrium_locus(model, loads, direction_deg: float = 0.0) -> pd.DataFrame:
+    """Equilibrium positions for load magnitudes ``loads`` [N] along ``direction_deg``.
+
+    Parameters
+    ----------
+    model : force model
+        Anything with ``.forces(X, V)`` and ``.bearing``.
+    loads : sequence of float
+        Load magnitudes [N], each positive and finite; solved by continuation
+        from the smallest.
+    direction_deg : float
+        Direction of the load [deg] from +X2 towards +X1 (0 = gravity).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per load, columns ``LOCUS_COLUMNS`` (as ``equilibrium``).
+
+    Examples
+    --------
+    >>> from fluidfilm import ReynoldsSolver, paper_bearing
+    >>> locus = equilibrium_locus(ReynoldsSolver(paper_bearing(), 30, 30), [5.0, 50.0])
+    >>> bool(locus.eps.is_monotonic_increasing)
+    True
+    """
+    a = math.radians(direction_deg)
+    rows = []
+    guess = None
+    c = model.bearing.clearance
+    for load in sorted(check_magnitude("load", v, "N") for v in loads):
+        r = equilibrium(model, (load * math.sin(a), load * math.cos(a)), guess=guess)
+        guess = (r["eps"], math.atan2(r["X1"] / c, r["X2"] / c))
+        rows.append({k: r[k] for k in LOCUS_COLUMNS})
+    return pd.DataFrame(rows, columns=list(LOCUS_COLUMNS))

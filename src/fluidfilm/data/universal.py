@@ -25,7 +25,7 @@ Columns of each row: ``ld`` (L/D), ``eps``, ``alpha`` [rad], ``G_r``, ``G_t`` (d
 the same solver, steps ``DERIVATIVE_STEP``), ``cavitation`` (0 Gumbel, 1 Swift-Stieber), ``n_theta``, ``n_z``.
 The derivatives are what the bearing's stiffness and damping are made of: along the static line (alpha = 0,
 the journal at rest) K comes from dG/deps and C from dG/dalpha and the homogeneity, so the networks are
-fitted to them as well as to G (``surrogate.universal_fit``).
+fitted to them as well as to G (``surrogate.training.universal_fit``).
 """
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ and the other docs/*.md (the tables their discussion needs). A generated block l
 
 and ``RENDERERS[name](reports_dir)`` produces its content from the files under ``reports/`` that
 ``make reproduce`` writes (``metrics.json``, ``reproduce_timing.json``, ``control.json``, ...); the tables
-the paper-comparison report shows too are drawn by the same functions (``fluidfilm.reporting.tables``).
+the paper-comparison report shows too are drawn by the same functions (``fluidfilm.reporting.report``).
 ``make reproduce`` runs this after ``dvc repro``; ``tests/test_pipeline.py``
 (``test_readme_tables_are_generated_from_the_reports``) checks that the committed pages agree with the
 committed reports.
@@ -397,9 +397,9 @@ def _stage_outputs(root: Path) -> dict[str, tuple[str, bool]]:
 
 
 def render_figures(reports: Path) -> str:
-    """Every figure the pipeline draws, with its caption (``studies.figure_style.CAPTIONS``): the image where
+    """Every figure the pipeline draws, with its caption (``reporting.captions.CAPTIONS``): the image where
     it is committed, otherwise its path and the stage that draws it."""
-    from fluidfilm.studies.figure_style import CAPTIONS
+    from fluidfilm.reporting.captions import CAPTIONS
 
     outs = _stage_outputs(reports.parent)
     parts = []
@@ -681,7 +681,7 @@ def render_universal(reports: Path) -> str:
     if "reference_equal_accuracy" in u:  # evaluations before 2026-12-02 did not time the reference
         same = u["reference_equal_accuracy"]
         goal = g.get("speedup_equal_accuracy", 100)
-        # two yardsticks for "as accurate" (studies.universal.reference_cost_at_equal_accuracy): the
+        # two yardsticks for "as accurate" (studies.universal_study.reference_cost_at_equal_accuracy): the
         # convergence check's grid, and the grid whose own median and p99 errors match the model's (suffix
         # _matched; evaluations since 2026-12-05, tenth session)
         floor = any(r.get("grid_at_ladder_floor") for r in same)

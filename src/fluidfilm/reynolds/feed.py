@@ -99,7 +99,8 @@ def grooved_field(gparams, x1, x2, v1, v2, p, warm=None, warm_in=False):
         it = kernels.sor_sweeps(params, y1, y2, w1, w2, p, fixed, ss, params.sor_omega, params.sor_tol,
                                 params.sor_max_iter)
     else:
-        it = kernels.active_set_field(params, y1, y2, w1, w2, p, fixed, ss, n * nz, True, warm, warm_in)
+        it = kernels.active_set_field(params, (y1, y2, w1, w2), p, fixed, kernels.ActiveSetOptions(ss, n * nz, True),
+                                      warm, warm_in)
     if cav == kernels.CAV_GUMBEL:
         for i in range(n):
             for j in range(nz):

@@ -84,6 +84,8 @@ fields, compiled by numba to a plain struct.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
 
@@ -913,49 +915,24 @@ def mode_one_film(params, aw, ae, an, rhs, fixed):
     return free
 
 
+class ActiveSetOptions(NamedTuple):
+    """What ``active_set_field`` solves: the complementarity problem (``project``: Swift-Stieber) or one
+    linear solve, in at most ``max_iter`` linear solves, each by the axial sine transform where that is
+    cheaper (``transform``; else the envelope Cholesky factorisation alone)."""
+
+    project: bool
+    max_iter: int
+    transform: bool
+
+
 @njit(cache=True, error_model="numpy")
-def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transform=True, warm=None, warm_in=False):
-    """The discrete Reynolds equation solved directly, as a linear complementarity problem if ``project``.
-
-    Same discrete problem as ``sor_sweeps`` (the node columns ``fixed`` held at their values in ``p``, the
-    end rows of ``p`` prescribed) and, with ``project``, the same complementarity problem as
-    ``psor_swift_stieber``: p >= 0, G(p) = A p - rhs <= 0 where p = 0, G(p) = 0 where p > 0.  A
-    primal-dual active-set iteration (Hintermueller, Ito & Kunisch 2003): with the active (cavitated)
-    nodes held at p = 0, the Reynolds equation of the other nodes is solved directly; then free nodes with
-    p < 0 become active and active nodes with G > 0 (the film would push pressure into them) are released,
-    until the set no longer changes, which is then the exact solution of the discrete problem.  -A is a
-    symmetric M-matrix, for which the iteration terminates in finitely many steps from any start.  The
-    first free set is where the interior of ``p`` is > 0 on entry (the clipped Gumbel field: the
-    Swift-Stieber film contains the full-Sommerfeld film), widened in theta by ``AS_WIDEN`` of the
-    circumference.  Without ``project``: one linear solve.
-
-    Each solve is a sparse Cholesky factorisation of the free nodes' equations in envelope storage,
-    ordered column by column (theta outer, z inner) starting after a column with the fewest free nodes
-    (a held groove column if any), kept from one iteration to the next while it stays the fewest, so the
-    periodic wrap rarely costs anything and the factor rows before the first changed node are reused (the
-    film edge nearer the end of the ordering moving alone refactors only the columns after it).  With
-    ``p_supply == 0`` the field is symmetric about mid-length and only the lower half of the axial nodes is
-    solved (the mirror folded into the top row; with an odd number of interior rows the centre row is
-    halved to keep the matrix symmetric).
-
-    With ``transform`` (the default) a solve goes instead by the axial sine transform where that is cheaper
-    (``capacitance_field``: wholly cavitated or held node columns cut the ring into runs, each one symmetric
-    tridiagonal system per axial mode, the active nodes inside a run held at zero by a small capacitance
-    system): same free set, same discrete equations, the same solution to round-off.  ``warm``: a bool
-    array (n_theta, rows solved + 2) that receives the final free set; with ``warm_in`` its content is the
-    first free set (an earlier nearby state's) instead of the widened film of ``p``.
-
-    ``p``: full (n_theta, n_z) field, updated in place.  Returns the number of linear solves, or -1 if
-    ``max_iter`` solves did not settle the active set.
-    """
+def _first_free_set(params, eqs, p, fixed, project, warm, warm_in, mh, symmetric):
+    """The first free (solved, uncavitated) node set of ``active_set_field``, (n_theta, mh + 2): every node
+    without ``project``; else the earlier state's set (``warm`` with ``warm_in``), the first axial mode's film
+    (a symmetric field), or the clipped Gumbel film of ``p`` widened by ``AS_WIDEN`` of the circumference.
+    ``eqs``: the node equations (aw, ae, an, ap, rhs)."""
+    aw, ae, an, _, rhs = eqs
     n = params.n_theta
-    nz = p.shape[1]
-    m = nz - 2
-    aw, ae, an, ap, rhs = node_equations(params, x1, x2, v1, v2)
-    symmetric = params.p_supply == 0.0
-    mh = (m + 1) // 2 if symmetric else m  # rows solved: j = 1..mh
-    centre = symmetric and m % 2 == 1  # row mh is the mid-plane row (halved)
-    folded = symmetric and m % 2 == 0  # row mh's upper neighbour is its own mirror
     # free[i, j]: node solved for (j = 1..mh); held columns are never free
     free = np.zeros((n, mh + 2), dtype=np.bool_)
     for i in range(n):
@@ -994,164 +971,257 @@ def active_set_field(params, x1, x2, v1, v2, p, fixed, project, max_iter, transf
             for j in range(1, mh + 1):
                 if f2[(i + 1) % n, j] or f2[(i - 1) % n, j]:
                     free[i, j] = True
-    # the envelope factorisation's work arrays, allocated on its first use (the transform path needs none)
+    return free
+
+
+@njit(cache=True, error_model="numpy")
+def _field_max(p, fixed, mh):
+    """The largest pressure of the solved rows (held columns aside)."""
+    pmax = 0.0
+    for i in range(p.shape[0]):
+        if not fixed[i]:
+            for j in range(1, mh + 1):
+                if p[i, j] > pmax:
+                    pmax = p[i, j]
+    return pmax
+
+
+@njit(cache=True, error_model="numpy")
+def _update_active_set(eqs, p, free, fixed, mh, thr):
+    """One primal-dual update of the free set in place: free nodes with p < -thr become active, active nodes
+    where the film would push pressure in (G > thr ap) are released.  Returns whether the set changed."""
+    aw, ae, an, ap, rhs = eqs
+    n = free.shape[0]
+    changed = False
+    for i in range(n):
+        if fixed[i]:
+            continue
+        im = i - 1 if i > 0 else n - 1
+        ip = i + 1 if i < n - 1 else 0
+        for j in range(1, mh + 1):
+            if free[i, j]:
+                if p[i, j] < -thr:
+                    free[i, j] = False
+                    changed = True
+            else:
+                g = aw[i] * p[im, j] + ae[i] * p[ip, j] + an[i] * (p[i, j - 1] + p[i, j + 1]) - rhs[i]
+                if g > thr * ap[i]:
+                    free[i, j] = True
+                    changed = True
+    return changed
+
+
+class EnvelopeWork(NamedTuple):
+    """The envelope Cholesky solve's arrays (``_envelope_solve``), kept from one solve of an active-set
+    iteration to the next so that an unchanged start of the ordering reuses its factor rows."""
+
+    idx: np.ndarray       # (n_theta, mh + 2) int64: each node's unknown number (-1: not free)
+    first: np.ndarray     # lowest-numbered coupled unknown of each row (the envelope)
+    start: np.ndarray     # each row's first entry in the envelope storage
+    node_i: np.ndarray    # each unknown's node
+    node_j: np.ndarray
+    y: np.ndarray         # right-hand side
+    x: np.ndarray         # solution
+    inv_diag: np.ndarray  # the factor's inverse diagonal
+    col_count: np.ndarray  # free nodes per column
+    order: np.ndarray     # int64 [nu_old, c0]: the last ordering's unknowns and the column it starts after
+
+
+@njit(cache=True, error_model="numpy")
+def _envelope_work(n, mh):
+    """``EnvelopeWork`` for an (n, mh) node set (``_envelope_work(0, 0)``: empty, not yet needed)."""
     cap = n * mh
-    idx = np.empty((0, 0), dtype=np.int64)
-    first = np.empty(0, dtype=np.int64)
-    start = np.empty(0, dtype=np.int64)
-    node_i = np.empty(0, dtype=np.int64)
-    node_j = np.empty(0, dtype=np.int64)
-    y = np.empty(0)
-    x = np.empty(0)
-    inv_diag = np.empty(0)
+    return EnvelopeWork(np.empty((n, mh + 2) if n else (0, 0), dtype=np.int64), np.empty(cap, dtype=np.int64),
+                        np.empty(cap + 1 if n else 0, dtype=np.int64), np.empty(cap, dtype=np.int64),
+                        np.empty(cap, dtype=np.int64), np.empty(cap), np.empty(cap), np.empty(cap),
+                        np.empty(n, dtype=np.int64), np.array([0, -1], dtype=np.int64))
+
+
+@njit(cache=True, error_model="numpy")
+def _envelope_solve(eqs, p, free, fixed, dims, work, env):
+    """One linear solve of ``active_set_field`` by the envelope Cholesky factorisation: the free nodes ordered
+    column by column after a column with the fewest of them, their equations assembled (active nodes at
+    p = 0, held columns and end rows known), factorised from the first node whose place changed, solved and
+    written back into ``p`` (mirrored onto the upper half of a symmetric field).  ``dims``: (n, m, mh, nz,
+    symmetric, centre, folded); returns the envelope storage (grown where it had to)."""
+    aw, ae, an, ap, rhs = eqs
+    n, m, mh, nz, symmetric, centre, folded = dims
+    idx, first, start, node_i, node_j = work.idx, work.first, work.start, work.node_i, work.node_j
+    y, x, inv_diag, count = work.y, work.x, work.inv_diag, work.col_count
+    nu_old, c0 = work.order[0], work.order[1]
+    # order: the columns after one with the fewest free nodes (held columns have none), that one last
+    best = mh + 1
+    for i in range(n):
+        cnt = 0
+        for j in range(1, mh + 1):
+            if free[i, j]:
+                cnt += 1
+        count[i] = cnt
+        if cnt < best:
+            best = cnt
+    if c0 < 0 or count[c0] > best:
+        for i in range(n):
+            if count[i] == best:
+                c0 = i
+                break
+        nu_old = 0  # a new ordering: nothing to reuse
+    # number the free nodes; r0 = the first whose node differs from the last ordering's
+    nu = 0
+    r0 = -1
+    for t in range(n):
+        i = (c0 + 1 + t) % n
+        for j in range(mh + 2):
+            if 1 <= j <= mh and free[i, j]:
+                if r0 < 0 and (nu >= nu_old or node_i[nu] != i or node_j[nu] != j):
+                    r0 = nu
+                idx[i, j] = nu
+                node_i[nu] = i
+                node_j[nu] = j
+                nu += 1
+            else:
+                idx[i, j] = -1
+    if r0 < 0:
+        r0 = nu
+    nu_old = nu
+    # envelope from r0 on: the lowest-numbered coupled unknown of each row
+    total = start[r0] if r0 > 0 else 0
+    for r in range(r0, nu):
+        i, j = node_i[r], node_j[r]
+        im = i - 1 if i > 0 else n - 1
+        ip = i + 1 if i < n - 1 else 0
+        f = r
+        for q in (idx[im, j], idx[ip, j], idx[i, j - 1], idx[i, j + 1]):
+            if 0 <= q < f:
+                f = q
+        first[r] = f
+        start[r] = total
+        total += r - f + 1
+    start[nu] = total
+    if env.shape[0] < total:
+        grown = np.empty(2 * total)
+        grown[: env.shape[0]] = env
+        env = grown
+    # assemble K = -(rows of A) on the free nodes (scaled by 1/2 on a centre row) and its right-hand side
+    for r in range(r0, nu):
+        i, j = node_i[r], node_j[r]
+        im = i - 1 if i > 0 else n - 1
+        ip = i + 1 if i < n - 1 else 0
+        s = 0.5 if (centre and j == mh) else 1.0
+        sr = start[r] - first[r]
+        for k in range(start[r], start[r + 1]):
+            env[k] = 0.0
+        env[sr + r] = s * (ap[i] - an[i] if (folded and j == mh) else ap[i])
+        br = -rhs[i]
+        # theta neighbours: free (matrix), held (known value), active (p = 0)
+        q = idx[im, j]
+        if q >= 0:
+            if q < r:
+                env[sr + q] -= s * aw[i]
+        elif fixed[im]:
+            br += aw[i] * p[im, j]
+        q = idx[ip, j]
+        if q >= 0:
+            if q < r:
+                env[sr + q] -= s * ae[i]
+        elif fixed[ip]:
+            br += ae[i] * p[ip, j]
+        # axial neighbour below: the end row (known) or a node (twice on a centre row: its mirror above)
+        a_dn = 2.0 * an[i] if (centre and j == mh) else an[i]
+        q = idx[i, j - 1]
+        if j == 1:
+            br += a_dn * p[i, 0]
+        elif 0 <= q < r:
+            env[sr + q] -= s * a_dn
+        # axial neighbour above: a node, the far end row, or nothing (the mirror, folded or centre)
+        if not symmetric and j == m:
+            br += an[i] * p[i, nz - 1]
+        else:
+            q = idx[i, j + 1]
+            if 0 <= q < r:
+                env[sr + q] -= s * an[i]
+        y[r] = s * br
+    envelope_cholesky(first, start, env, inv_diag, r0, nu)
+    envelope_solve(first, start, env, inv_diag, r0, nu, y, x)
+    # write the field back (active nodes at 0), mirrored onto the upper half
+    for i in range(n):
+        if fixed[i]:
+            continue
+        for j in range(1, mh + 1):
+            q = idx[i, j]
+            val = x[q] if q >= 0 else 0.0
+            p[i, j] = val
+            if symmetric:
+                p[i, m + 1 - j] = val
+    work.order[0] = nu_old
+    work.order[1] = c0
+    return env
+
+
+@njit(cache=True, error_model="numpy")
+def active_set_field(params, state, p, fixed, opts, warm=None, warm_in=False):
+    """The discrete Reynolds equation solved directly, as a linear complementarity problem if ``project``.
+
+    Same discrete problem as ``sor_sweeps`` (the node columns ``fixed`` held at their values in ``p``, the
+    end rows of ``p`` prescribed) and, with ``project``, the same complementarity problem as
+    ``psor_swift_stieber``: p >= 0, G(p) = A p - rhs <= 0 where p = 0, G(p) = 0 where p > 0.  A
+    primal-dual active-set iteration (Hintermueller, Ito & Kunisch 2003): with the active (cavitated)
+    nodes held at p = 0, the Reynolds equation of the other nodes is solved directly; then free nodes with
+    p < 0 become active and active nodes with G > 0 (the film would push pressure into them) are released,
+    until the set no longer changes, which is then the exact solution of the discrete problem.  -A is a
+    symmetric M-matrix, for which the iteration terminates in finitely many steps from any start.  The
+    first free set is where the interior of ``p`` is > 0 on entry (the clipped Gumbel field: the
+    Swift-Stieber film contains the full-Sommerfeld film), widened in theta by ``AS_WIDEN`` of the
+    circumference.  Without ``project``: one linear solve.
+
+    Each solve is a sparse Cholesky factorisation of the free nodes' equations in envelope storage,
+    ordered column by column (theta outer, z inner) starting after a column with the fewest free nodes
+    (a held groove column if any), kept from one iteration to the next while it stays the fewest, so the
+    periodic wrap rarely costs anything and the factor rows before the first changed node are reused (the
+    film edge nearer the end of the ordering moving alone refactors only the columns after it).  With
+    ``p_supply == 0`` the field is symmetric about mid-length and only the lower half of the axial nodes is
+    solved (the mirror folded into the top row; with an odd number of interior rows the centre row is
+    halved to keep the matrix symmetric).
+
+    With ``transform`` a solve goes instead by the axial sine transform where that is cheaper
+    (``capacitance_field``: wholly cavitated or held node columns cut the ring into runs, each one symmetric
+    tridiagonal system per axial mode, the active nodes inside a run held at zero by a small capacitance
+    system): same free set, same discrete equations, the same solution to round-off.  ``warm``: a bool
+    array (n_theta, rows solved + 2) that receives the final free set; with ``warm_in`` its content is the
+    first free set (an earlier nearby state's) instead of the widened film of ``p``.
+
+    ``state``: the journal's (x1, x2, v1, v2); ``opts``: an ``ActiveSetOptions`` (``project``, ``max_iter``,
+    ``transform``).  ``p``: full (n_theta, n_z) field, updated in place.  Returns the number of linear solves,
+    or -1 if ``max_iter`` solves did not settle the active set.  The first free set is
+    ``_first_free_set``'s, each update of the set ``_update_active_set``'s.
+    """
+    x1, x2, v1, v2 = state
+    project, max_iter, transform = opts.project, opts.max_iter, opts.transform
+    n = params.n_theta
+    nz = p.shape[1]
+    m = nz - 2
+    eqs = node_equations(params, x1, x2, v1, v2)
+    aw, ae, an, ap, rhs = eqs
+    symmetric = params.p_supply == 0.0
+    mh = (m + 1) // 2 if symmetric else m  # rows solved: j = 1..mh
+    centre = symmetric and m % 2 == 1  # row mh is the mid-plane row (halved)
+    folded = symmetric and m % 2 == 0  # row mh's upper neighbour is its own mirror
+    free = _first_free_set(params, eqs, p, fixed, project, warm, warm_in, mh, symmetric)
+    # the envelope factorisation's work arrays, allocated on its first use (the transform path needs none)
+    work = _envelope_work(0, 0)
     env = np.empty(0)
-    count = np.empty(0, dtype=np.int64)
-    nu_old = 0
-    c0 = -1
+    dims = (n, m, mh, nz, symmetric, centre, folded)
     for it in range(max_iter):
         if transform and capacitance_field(params, aw, ae, an, rhs, free, fixed, p, m, mh, symmetric):
-            nu_old = 0  # the envelope factor no longer matches: a later envelope solve starts afresh
+            work.order[0] = 0  # the envelope factor no longer matches: a later envelope solve starts afresh
         else:
-            if idx.shape[0] == 0:
-                idx = np.empty((n, mh + 2), dtype=np.int64)
-                first = np.empty(cap, dtype=np.int64)
-                start = np.empty(cap + 1, dtype=np.int64)
-                node_i = np.empty(cap, dtype=np.int64)
-                node_j = np.empty(cap, dtype=np.int64)
-                y = np.empty(cap)
-                x = np.empty(cap)
-                inv_diag = np.empty(cap)
-                count = np.empty(n, dtype=np.int64)
-            # order: the columns after one with the fewest free nodes (held columns have none), that one last
-            best = mh + 1
-            for i in range(n):
-                cnt = 0
-                for j in range(1, mh + 1):
-                    if free[i, j]:
-                        cnt += 1
-                count[i] = cnt
-                if cnt < best:
-                    best = cnt
-            if c0 < 0 or count[c0] > best:
-                for i in range(n):
-                    if count[i] == best:
-                        c0 = i
-                        break
-                nu_old = 0  # a new ordering: nothing to reuse
-            # number the free nodes; r0 = the first whose node differs from the last ordering's
-            nu = 0
-            r0 = -1
-            for t in range(n):
-                i = (c0 + 1 + t) % n
-                for j in range(mh + 2):
-                    if 1 <= j <= mh and free[i, j]:
-                        if r0 < 0 and (nu >= nu_old or node_i[nu] != i or node_j[nu] != j):
-                            r0 = nu
-                        idx[i, j] = nu
-                        node_i[nu] = i
-                        node_j[nu] = j
-                        nu += 1
-                    else:
-                        idx[i, j] = -1
-            if r0 < 0:
-                r0 = nu
-            nu_old = nu
-            # envelope from r0 on: the lowest-numbered coupled unknown of each row
-            total = start[r0] if r0 > 0 else 0
-            for r in range(r0, nu):
-                i, j = node_i[r], node_j[r]
-                im = i - 1 if i > 0 else n - 1
-                ip = i + 1 if i < n - 1 else 0
-                f = r
-                for q in (idx[im, j], idx[ip, j], idx[i, j - 1], idx[i, j + 1]):
-                    if 0 <= q < f:
-                        f = q
-                first[r] = f
-                start[r] = total
-                total += r - f + 1
-            start[nu] = total
-            if env.shape[0] < total:
-                grown = np.empty(2 * total)
-                grown[: env.shape[0]] = env
-                env = grown
-            # assemble K = -(rows of A) on the free nodes (scaled by 1/2 on a centre row) and its right-hand side
-            for r in range(r0, nu):
-                i, j = node_i[r], node_j[r]
-                im = i - 1 if i > 0 else n - 1
-                ip = i + 1 if i < n - 1 else 0
-                s = 0.5 if (centre and j == mh) else 1.0
-                sr = start[r] - first[r]
-                for k in range(start[r], start[r + 1]):
-                    env[k] = 0.0
-                env[sr + r] = s * (ap[i] - an[i] if (folded and j == mh) else ap[i])
-                br = -rhs[i]
-                # theta neighbours: free (matrix), held (known value), active (p = 0)
-                q = idx[im, j]
-                if q >= 0:
-                    if q < r:
-                        env[sr + q] -= s * aw[i]
-                elif fixed[im]:
-                    br += aw[i] * p[im, j]
-                q = idx[ip, j]
-                if q >= 0:
-                    if q < r:
-                        env[sr + q] -= s * ae[i]
-                elif fixed[ip]:
-                    br += ae[i] * p[ip, j]
-                # axial neighbour below: the end row (known) or a node (twice on a centre row: its mirror above)
-                a_dn = 2.0 * an[i] if (centre and j == mh) else an[i]
-                q = idx[i, j - 1]
-                if j == 1:
-                    br += a_dn * p[i, 0]
-                elif 0 <= q < r:
-                    env[sr + q] -= s * a_dn
-                # axial neighbour above: a node, the far end row, or nothing (the mirror, folded or centre)
-                if not symmetric and j == m:
-                    br += an[i] * p[i, nz - 1]
-                else:
-                    q = idx[i, j + 1]
-                    if 0 <= q < r:
-                        env[sr + q] -= s * an[i]
-                y[r] = s * br
-            envelope_cholesky(first, start, env, inv_diag, r0, nu)
-            envelope_solve(first, start, env, inv_diag, r0, nu, y, x)
-            # write the field back (active nodes at 0), mirrored onto the upper half
-            for i in range(n):
-                if fixed[i]:
-                    continue
-                for j in range(1, mh + 1):
-                    q = idx[i, j]
-                    val = x[q] if q >= 0 else 0.0
-                    p[i, j] = val
-                    if symmetric:
-                        p[i, m + 1 - j] = val
-        pmax = 0.0
-        for i in range(n):
-            if not fixed[i]:
-                for j in range(1, mh + 1):
-                    if p[i, j] > pmax:
-                        pmax = p[i, j]
+            if work.idx.shape[0] == 0:
+                work = _envelope_work(n, mh)
+            env = _envelope_solve(eqs, p, free, fixed, dims, work, env)
+        pmax = _field_max(p, fixed, mh)
         if not project:
             return it + 1
         # update the active set; unchanged means solved
-        changed = False
-        thr = AS_TOL * pmax
-        for i in range(n):
-            if fixed[i]:
-                continue
-            im = i - 1 if i > 0 else n - 1
-            ip = i + 1 if i < n - 1 else 0
-            for j in range(1, mh + 1):
-                if free[i, j]:
-                    if p[i, j] < -thr:
-                        free[i, j] = False
-                        changed = True
-                else:
-                    g = aw[i] * p[im, j] + ae[i] * p[ip, j] + an[i] * (p[i, j - 1] + p[i, j + 1]) - rhs[i]
-                    if g > thr * ap[i]:
-                        free[i, j] = True
-                        changed = True
-        if not changed:
+        if not _update_active_set(eqs, p, free, fixed, mh, AS_TOL * pmax):
             if warm is not None:
                 warm[:, :] = free
             # round-off negatives (above -thr) are the zeros of cavitated nodes
@@ -1191,7 +1261,8 @@ def swift_stieber_field(params, x1, x2, v1, v2, p):
             raise RuntimeError("projected SOR (Swift-Stieber cavitation) did not converge; raise sor_max_iter")
     else:
         n = params.n_theta
-        it = active_set_field(params, x1, x2, v1, v2, p, np.zeros(n, dtype=np.bool_), True, n * p.shape[1])
+        it = active_set_field(params, (x1, x2, v1, v2), p, np.zeros(n, dtype=np.bool_),
+                              ActiveSetOptions(True, n * p.shape[1], True))
         if it < 0:
             raise RuntimeError("the active-set iteration (Swift-Stieber cavitation) did not settle")
     return it

@@ -9,7 +9,7 @@ import numpy as np
 from fluidfilm import io
 from fluidfilm.rotor.cases import case_summary, run_case
 from fluidfilm.rotor.integrate import Trajectory
-from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors
+from fluidfilm.surrogate.training.fit import fit_surrogate, held_out_errors
 from fluidfilm.workflow.entry import plain
 
 INPUTS = ("dataset_dir", "testset_dir", "reference_dir")

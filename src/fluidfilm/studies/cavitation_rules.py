@@ -123,7 +123,7 @@ def run_up_job(job: dict) -> dict:
     model = film(bearing, r["grid"], job["rule"], job["s"])
     rotor = Rotor(mass=r["mass"], imbalance=r["imbalance"])
     schedule = SpeedSchedule.table([0.0, r["duration_s"]], [60.0 * r["f_start_hz"], 60.0 * r["f_end_hz"]])
-    from fluidfilm.rotor.equilibrium import equilibrium
+    from fluidfilm.characteristics.static import equilibrium
 
     x0 = equilibrium(model, load_along_gravity(rotor.mass * rotor.gravity))["X"]
     t0 = time.perf_counter()

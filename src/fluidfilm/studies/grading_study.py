@@ -6,7 +6,7 @@ eccentricity sections meet) and one surrogate configuration:
 1. its dataset, made with the reference model, or found in the cache (``cached_dataset``: keyed by the
    dataset's identity and by the source of the code that computes the forces, so a repeated grading
    is never regenerated and a changed solver never reuses old forces);
-2. a surrogate trained on it (``fluidfilm.surrogate.fit``);
+2. a surrogate trained on it (``fluidfilm.surrogate.training.fit``);
 3. the surrogate judged on what does not depend on the grading: the held-out random test set, the
    states along the seven reference orbits (``OrbitBenchmark.force_errors``), the seven cases
    themselves by the Fig. 4 rule (``OrbitBenchmark.verdicts``) and the stiffness and damping
@@ -211,7 +211,7 @@ class StiffnessBenchmark:
 
     @classmethod
     def from_reference(cls, reference, eps_values: Sequence[float], h_rel: float = 1e-4) -> "StiffnessBenchmark":
-        from fluidfilm.studies import characteristics as study
+        from fluidfilm.studies import characteristics_study as study
 
         loads = study.loads_for_eccentricities(reference, list(eps_values))
         return cls(loads, study.coefficient_table({"reference": reference}, loads, {"default": h_rel}))
@@ -220,7 +220,7 @@ class StiffnessBenchmark:
         """Largest error of the direct (Kxx, Kyy, Cxx, Cyy) and cross terms over the loads, each relative to
         the reference coefficient (floored at a tenth of its matrix's largest; ``study.coefficient_errors``).
         None where the model finds no equilibrium under one of the loads."""
-        from fluidfilm.studies import characteristics as study
+        from fluidfilm.studies import characteristics_study as study
 
         try:
             table = study.coefficient_table({"model": model}, self.loads, {})
@@ -402,7 +402,7 @@ def run(cfg):
     from fluidfilm.data import load_test_set
     from fluidfilm.data.spec import check_reference
     from fluidfilm.reynolds import ReynoldsSolver
-    from fluidfilm.surrogate.fit import fit_surrogate, training_digest
+    from fluidfilm.surrogate.training.fit import fit_surrogate, training_digest
     from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
     from fluidfilm.workflow.entry import current_job, plain
     from fluidfilm.workflow.tracking import Logged

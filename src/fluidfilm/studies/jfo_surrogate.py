@@ -193,7 +193,7 @@ def fit(z: np.ndarray, F: np.ndarray, is_val: np.ndarray, bearing: JournalBearin
     import torch
 
     from fluidfilm.progress import epoch_log_callback, quiet_third_party
-    from fluidfilm.surrogate.training import ForceMLP, TargetStop, _Batches
+    from fluidfilm.surrogate.training.lightning import ForceMLP, TargetStop, _Batches
 
     quiet_third_party()
     # one intra-op thread: the reference's cases run in worker processes beside the fit, and torch's threads

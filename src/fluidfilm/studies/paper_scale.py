@@ -139,8 +139,8 @@ def verdicts(rows: list[dict], structure: str) -> dict:
 # --------------------------------------------------------------------------- one model
 def point_key(point: Mapping, protocol: Mapping, meta: Mapping, seed: int) -> str:
     """What one model's record depends on (the data's content, the point, the protocol, the code: the
-    training recipe's version, ``surrogate.protocol.RECIPE_VERSION``)."""
-    from fluidfilm.surrogate.protocol import RECIPE_VERSION
+    training recipe's version, ``surrogate.training.protocol.RECIPE_VERSION``)."""
+    from fluidfilm.surrogate.training.protocol import RECIPE_VERSION
     # the threads and the progress lines do not change the weights; the device changes them by round-off
     # only, and a run continues on another device from the same checkpoint (the record says which device)
     proto = {k: v for k, v in protocol.items() if k not in ("workers", "progress_every_s", "threads", "device")}
@@ -155,7 +155,7 @@ def evaluate(model, reference, references: dict, testset: pd.DataFrame, cfg: Map
              loads: Mapping[str, np.ndarray], locus_factors) -> dict:
     """Band errors, locus errors, equilibrium offsets and cases a-g of one trained model."""
     from fluidfilm.rotor.cases import case_summary, run_case
-    from fluidfilm.surrogate.protocol import band_test_errors
+    from fluidfilm.surrogate.training.protocol import band_test_errors
 
     out: dict = {"bands": band_test_errors(model, testset, floor_N=float(cfg["error_floor_N"]))}
     w_a = np.asarray(loads["a"])
@@ -191,7 +191,7 @@ def size_label(n_samples: int | None) -> str:
 def train_point(frame, meta, point: Mapping, protocol: Mapping, seed: int, ckpt_dir: Path, reference):
     """Train one model of the study (``point``: n_samples, structure, boundaries, scaling, static_rows,
     network_protocol); returns the force model and the training report."""
-    from fluidfilm.surrogate.protocol import train_protocol_model
+    from fluidfilm.surrogate.training.protocol import train_protocol_model
 
     bounds = [] if point["structure"] == "single" else list(point["boundaries"])
     extra = static_rows(frame, reference) if point.get("static_rows") else None
@@ -368,7 +368,7 @@ def run(cfg):
     """Train and evaluate every model of ``points(cfg)``; write the report and the figure."""
     from fluidfilm.perf.benchmarking import machine
     from fluidfilm.rotor.cases import rotor_for_case, run_case
-    from fluidfilm.surrogate.training import read_dataset
+    from fluidfilm.surrogate.training.lightning import read_dataset
     from fluidfilm.workflow import tracking
     from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg
     from fluidfilm.workflow.entry import plain

@@ -1,8 +1,8 @@
 """Train a surrogate (single or split by eccentricity) and save it under models/<name>/
 (``experiments/train_surrogate.py``, config conf/train_surrogate.yaml).
 
-Two trainers: Lightning (``fluidfilm.surrogate.fit``) or, with ``protocol`` set, the paper's protocol
-(``fluidfilm.surrogate.protocol``).  The model is written beside the old one and swapped in whole, with
+Two trainers: Lightning (``fluidfilm.surrogate.training.fit``) or, with ``protocol`` set, the paper's protocol
+(``fluidfilm.surrogate.training.protocol``).  The model is written beside the old one and swapped in whole, with
 its report and model card; the job's MLflow run gets the metrics, one child run per network and the model.
 """
 from __future__ import annotations
@@ -14,8 +14,8 @@ from pathlib import Path
 
 from fluidfilm import GradedReynoldsModel, io
 from fluidfilm.perf.speed import sample_states, time_per_force_eval
-from fluidfilm.surrogate.fit import fit_surrogate, held_out_errors, training_digest
-from fluidfilm.surrogate.training import read_dataset
+from fluidfilm.surrogate.training.fit import fit_surrogate, held_out_errors, training_digest
+from fluidfilm.surrogate.training.lightning import read_dataset
 from fluidfilm.workflow import sweeps, tracking
 from fluidfilm.workflow.entry import current_job, plain
 
@@ -68,11 +68,11 @@ def model_card(name: str, report: dict, metrics: dict, cfg: dict) -> str:
 
 
 def train_by_protocol(cfg, c: dict, name: str, parent):
-    """The paper's protocol (or Adam under its rules; fluidfilm.surrogate.protocol): one hidden tanh layer per
+    """The paper's protocol (or Adam under its rules; fluidfilm.surrogate.training.protocol): one hidden tanh layer per
     network, each network's final numbers and curves as a child run of ``parent`` (None: not logged)."""
     import pandas as pd
 
-    from fluidfilm.surrogate.protocol import band_test_errors, train_protocol_model
+    from fluidfilm.surrogate.training.protocol import band_test_errors, train_protocol_model
 
     m = c["model"]
     if m["depth"] != 1 or m["activation"] != "tanh":

@@ -33,8 +33,9 @@ from scipy.stats import bootstrap
 
 from fluidfilm import io
 from fluidfilm.perf.benchmarking import machine
-from fluidfilm.surrogate import levenberg_marquardt, protocol as protocol_module, scaling
-from fluidfilm.surrogate.protocol import band_sq_errors, subsample, time_to_accuracy, train_protocol_model
+from fluidfilm.surrogate import scaling
+from fluidfilm.surrogate.training import levenberg_marquardt, protocol as protocol_module
+from fluidfilm.surrogate.training.protocol import band_sq_errors, subsample, time_to_accuracy, train_protocol_model
 
 
 def _net_summary(n: Mapping) -> dict:
@@ -249,7 +250,7 @@ def check(cfg) -> None:
 
 def run(cfg):
     """The paper's training-time comparison (see ``experiments/train_time.py``); returns the MLflow record."""
-    from fluidfilm.surrogate.training import read_dataset
+    from fluidfilm.surrogate.training.lightning import read_dataset
     from fluidfilm.workflow import tracking
     from fluidfilm.workflow.entry import plain
 

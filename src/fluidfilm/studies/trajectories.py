@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 
 from fluidfilm import io
-from fluidfilm.rotor import equilibrium_locus
+from fluidfilm.characteristics.static import equilibrium_locus
 from fluidfilm.rotor.cases import case_summary, run_case
 from fluidfilm.studies.plots import plot_equilibrium_locus, plot_orbits
 from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg

@@ -36,7 +36,8 @@ from fluidfilm import io
 from fluidfilm.core.bearing import JournalBearing, bearing_from_dict
 from fluidfilm.core.force_model import ValidityDomain
 from fluidfilm.core.states import as_state_pairs
-from fluidfilm.surrogate.inference import ACTIVATIONS, _mlp, pack_network
+from fluidfilm.surrogate.activations import ACTIVATIONS
+from fluidfilm.surrogate.kernels.generic import _mlp, pack_network
 
 #: the saved model's file names
 WEIGHTS_FILE = "film_memory.npz"

@@ -44,6 +44,9 @@ c_r = c + S tan(alpha), and the physics force scale carries (c/c_r)^2: by the
 film's similarity law (tests/test_conical.py) the scaled target then hardly
 depends on S at all, and the network only learns what the law leaves over.
 
+How the compiled kernels read a scaling (``Scaling.kernel_row``: 22 float64 entries) is laid out and
+documented once, in ``surrogate.contract``.
+
 Pure numpy, so that inference needs no torch.
 """
 from __future__ import annotations
@@ -52,14 +55,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from fluidfilm.surrogate import contract as row
 from fluidfilm.surrogate import transforms as tf
+from fluidfilm.surrogate.contract import FRAME_CODES, KIND_CODES
 
 SCALINGS = ("standard", "physics", "physics_v", "minmax")
 FRAMES = ("cartesian", "polar", "whirl")
-#: frame -> kernel code (kernel_row[19])
-FRAME_CODES = {"cartesian": 0.0, "polar": 1.0, "whirl": 2.0}
-# minmax is an affine map like standard (only its centre and half-range differ): same kernel code
-KIND_CODES = {"standard": 0.0, "physics": 1.0, "physics_v": 2.0, "minmax": 0.0}
 AFFINE = ("standard", "minmax")
 
 
@@ -156,7 +157,7 @@ class Scaling:
     extras: tuple = ()
     sleeve_gain: float = 0.0
 
-    MAX_INPUTS = 5
+    MAX_INPUTS = row.MAX_INPUTS
 
     def __post_init__(self):
         # the kernel applies |u| with the physics gain only: an affine whirl scaling would silently drop it
@@ -304,12 +305,22 @@ class Scaling:
         return cls(**d)
 
     def kernel_row(self) -> np.ndarray:
-        """Flat parameters for the compiled kernel (21): 0 kind, 1 c, 2 omega, 3 force_scale, 4 power,
-        5-9 input means (padded to 5), 10-14 input stds, 15-16 output means, 17-18 output stds,
-        19 frame, 20 number of extra inputs, 21 sleeve-aware (clearance from the current setting)."""
-        pad = self.MAX_INPUTS - len(self.in_mean)
-        return np.concatenate([[KIND_CODES[self.kind], self.clearance, self.omega, self.force_scale, self.power],
-                               np.concatenate([self.in_mean, np.zeros(pad)]),
-                               np.concatenate([self.in_std, np.ones(pad)]), self.out_mean, self.out_std,
-                               [FRAME_CODES[self.frame], float(len(self.extras)),
-                                1.0 if self.sleeve_gain else 0.0]])
+        """The scaling as the compiled kernels read it: ``contract.ROW_LENGTH`` (22) float64 entries, laid
+        out and documented in ``surrogate.contract`` (the input centres and spreads padded to
+        ``MAX_INPUTS`` with 0 and 1)."""
+        out = np.zeros(row.ROW_LENGTH)
+        n = len(self.in_mean)
+        out[row.ROW_KIND] = KIND_CODES[self.kind]
+        out[row.ROW_CLEARANCE] = self.clearance
+        out[row.ROW_OMEGA] = self.omega
+        out[row.ROW_FORCE_SCALE] = self.force_scale
+        out[row.ROW_POWER] = self.power
+        out[row.ROW_IN_MEAN:row.ROW_IN_MEAN + n] = self.in_mean
+        out[row.ROW_IN_STD:row.ROW_IN_STD + row.MAX_INPUTS] = 1.0
+        out[row.ROW_IN_STD:row.ROW_IN_STD + n] = self.in_std
+        out[row.ROW_OUT_MEAN:row.ROW_OUT_MEAN + 2] = self.out_mean
+        out[row.ROW_OUT_STD:row.ROW_OUT_STD + 2] = self.out_std
+        out[row.ROW_FRAME] = FRAME_CODES[self.frame]
+        out[row.ROW_N_EXTRA] = float(len(self.extras))
+        out[row.ROW_SLEEVE] = row.SLEEVE_AWARE if self.sleeve_gain else 0.0
+        return out

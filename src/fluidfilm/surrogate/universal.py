@@ -36,7 +36,7 @@ import numpy as np
 
 from fluidfilm.core.bearing import JournalBearing
 from fluidfilm.core.states import as_state_pairs
-from fluidfilm.surrogate.inference import SurrogateForceModel
+from fluidfilm.surrogate.model import SurrogateForceModel
 from fluidfilm.surrogate.scaling import Scaling
 
 __all__ = ["universal_bearing", "UniversalBearingModel", "slenderness_gain", "WEIGHTS_DIR", "UNIVERSAL_RULES",

@@ -263,11 +263,13 @@ def _task(study: ModuleType, name: str, root: Path) -> Callable:
     return task
 
 
-def main(study: ModuleType, what: str, resume: str = "run the same command again") -> None:
-    """Run ``study.run(cfg)`` as the entry point ``experiments/<name>.py`` (``name``: the study module's)."""
+def main(study: ModuleType, what: str, resume: str = "run the same command again", name: str | None = None) -> None:
+    """Run ``study.run(cfg)`` as the entry point ``experiments/<name>.py`` with the config ``conf/<name>.yaml``
+    (``name``: the study module's own by default; a study module named apart from the library room it uses
+    passes its entry point's: ``experiments/characteristics.py`` runs ``studies.characteristics_study``)."""
     import hydra
 
-    name = study.__name__.rsplit(".", 1)[-1]
+    name = name or study.__name__.rsplit(".", 1)[-1]
     # the workspace of the entry point that runs (a scratch copy of it, too: the pipeline's quick profile),
     # else the one this package lies in
     script = Path(sys.argv[0]).resolve()

@@ -29,14 +29,14 @@ from torch import nn
 
 from fluidfilm.core.bearing import ConicalBearing
 from fluidfilm.data.schema import EXTRA_INPUTS, dataset_bearing, load_dataset
+from fluidfilm.surrogate.activations import REGISTRY, TRAINABLE_ACTIVATIONS
 from fluidfilm.surrogate.scaling import Scaling, check_whirl_use
 
 class _TanhFunction(torch.autograd.Function):
     """tanh(x) = 2 sigmoid(2x) - 1, with tanh's own backward (1 - y^2) g.
 
-    Why: torch 2.13's CPU ``tanh`` is not vectorised (550 us for the 4096 x 64 hidden layer of a training
-    step, one thread) while ``sigmoid`` is (55 us), so this form takes a third off the step
-    (benchmarks/bench_training_step.py).  It differs from ``torch.tanh`` by at most 1.8e-7 (absolute,
+    Why: torch 2.13's CPU ``tanh`` is not vectorised while ``sigmoid`` is, so this form takes a third off the
+    training step (benchmarks/bench_training_step.py; the timings are in docs/dataset_and_surrogates.md).  It differs from ``torch.tanh`` by at most 1.8e-7 (absolute,
     float32), the rounding of the float32 sum 2 s - 1
     (tests/test_surrogate.py::test_training_layers_equal_torchs_own_in_value_and_gradient).
     """
@@ -63,9 +63,9 @@ class Tanh(nn.Module):
 class _NarrowInputLinearFunction(torch.autograd.Function):
     """x W^T + b with the weight's gradient formed as (x^T g)^T.
 
-    Why: autograd's g^T x, a (width x rows) by (rows x 4) product with the transposed operand first,
-    takes MKL 210 us for 4096 rows at one thread; x^T g, the same products (summed in BLAS's order, so equal
-    to round-off), takes 35 us.  Only the first layer has so few inputs.
+    Why: autograd's g^T x, a (width x rows) by (rows x 4) product with the transposed operand first, is
+    six times slower in MKL than x^T g, the same products (summed in BLAS's order, so equal to round-off;
+    timings in docs/dataset_and_surrogates.md).  Only the first layer has so few inputs.
     """
 
     @staticmethod
@@ -92,7 +92,8 @@ class NarrowInputLinear(nn.Linear):
         return _NarrowInputLinearFunction.apply(x, self.weight, self.bias)
 
 
-_ACT = {"tanh": Tanh, "relu": nn.ReLU, "silu": nn.SiLU, "sigmoid": nn.Sigmoid}
+#: the Lightning networks' activations (``surrogate.activations``), as torch modules (tanh: ``Tanh``)
+_ACT = {name: REGISTRY[name].torch_module(training=True) for name in TRAINABLE_ACTIVATIONS}
 
 
 def _mlp(n_in: int, n_out: int, width: int, depth: int, activation: str) -> nn.Sequential:

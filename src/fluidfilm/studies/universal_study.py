@@ -2,7 +2,7 @@
 saw (``experiments/universal.py``; ``part`` = dataset | train | evaluate).
 
 - ``dataset``: the dimensionless dataset (``data.universal``) on Dask, resumable, checksummed.
-- ``train``: one network per cavitation rule (``surrogate.universal_fit``, Lightning, logged to MLflow),
+- ``train``: one network per cavitation rule (``surrogate.training.universal_fit``, Lightning, logged to MLflow),
   written to ``models_dir`` as ``<rule>.npz`` + ``SHA256SUMS``.  The package ships a copy of these under
   ``src/fluidfilm/surrogate/universal_weights`` (``make universal-weights`` copies them there): the
   evaluation below always measures the shipped weights, what a user gets.
@@ -102,7 +102,7 @@ def derivative_weight_for(value, rule: str) -> float:
 
 def _train(cfg) -> Logged:
     from fluidfilm.data.universal import load_universal
-    from fluidfilm.surrogate.universal_fit import train_universals, write_weights
+    from fluidfilm.surrogate.training.universal_fit import train_universals, write_weights
     from fluidfilm.workflow import tracking
 
     out = Path(cfg.models_dir)
@@ -230,7 +230,7 @@ def kc_along_locus(cfg) -> pd.DataFrame:
     """K and C of the shipped model and of the converged reference at the reference's equilibria with eps
     ``kc_eps``, for each held-out L/D (Gumbel and Swift-Stieber); ``coefficient_errors`` rows."""
     from fluidfilm import ReynoldsSolver
-    from fluidfilm.studies.characteristics import coefficient_errors, coefficient_table, loads_for_eccentricities
+    from fluidfilm.studies.characteristics_study import coefficient_errors, coefficient_table, loads_for_eccentricities
     from fluidfilm.surrogate.universal import universal_bearing
 
     ev = cfg.evaluate
