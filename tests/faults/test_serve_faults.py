@@ -72,6 +72,9 @@ def test_serve_stops_its_whole_server_group_on_a_signal(tmp_path, sig):
         assert _group_members(pgid) == []
         assert not _listening(port)
         with socket.socket() as s:  # the port is free to bind again
+            # SO_REUSEADDR: the probe's own connection above leaves the port in TIME_WAIT, which a plain bind
+            # refuses under load (EADDRINUSE); on Linux a bind with it still fails while anything listens there
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             s.bind(("127.0.0.1", port))
     finally:
         if proc.poll() is None:
