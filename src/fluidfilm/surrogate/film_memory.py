@@ -325,7 +325,7 @@ class MemorySurrogate:
         path = Path(path)
         path.mkdir(parents=True, exist_ok=True)
         p = self.params
-        arrays = {f"W{i}": W for i, (W, _) in enumerate(self._layers)}
+        arrays: dict[str, Any] = {f"W{i}": W for i, (W, _) in enumerate(self._layers)}
         arrays.update({f"b{i}": b for i, (_, b) in enumerate(self._layers)})
         arrays.update(in_mean=p.in_mean, in_std=p.in_std, out_mean=p.out_mean, out_std=p.out_std)
         with io.atomic_path(path / WEIGHTS_FILE) as tmp:
