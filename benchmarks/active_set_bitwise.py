@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import math
 import sys
-from pathlib import Path
 
 import numpy as np
+
+from fluidfilm.perf.benchmarking import save_or_check
 
 C = 120e-6
 
@@ -94,23 +95,7 @@ def evaluate() -> dict[str, np.ndarray]:
 
 
 def main(argv: list[str]) -> int:
-    if len(argv) != 3 or argv[1] not in ("save", "check"):
-        print(__doc__)
-        return 2
-    res = evaluate()
-    path = Path(argv[2])
-    if argv[1] == "save":
-        np.savez(path, **res)
-        print(f"saved {len(res)} arrays to {path}")
-        return 0
-    with np.load(path) as ref:
-        keys = set(ref.files) | set(res)
-        bad = [k for k in sorted(keys) if k not in ref.files or k not in res
-               or not np.array_equal(ref[k], res[k], equal_nan=True)]
-    for k in bad:
-        print(f"DIFFERS {k}")
-    print(f"{len(keys) - len(bad)} of {len(keys)} arrays equal (np.array_equal)" + ("" if bad else ": bit for bit"))
-    return 1 if bad else 0
+    return save_or_check(argv, __doc__, evaluate)
 
 
 if __name__ == "__main__":

@@ -22,6 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fluidfilm.perf.benchmarking import save_or_check
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
@@ -187,29 +189,7 @@ def evaluate() -> dict[str, np.ndarray]:
 
 
 def main(argv: list[str]) -> int:
-    if len(argv) != 3 or argv[1] not in ("save", "check"):
-        print(__doc__)
-        return 2
-    res = evaluate()
-    path = Path(argv[2])
-    if argv[1] == "save":
-        np.savez(path, **res)
-        print(f"saved {len(res)} arrays to {path}")
-        return 0
-    with np.load(path) as ref:
-        keys = set(ref.files) | set(res)
-        bad = 0
-        for k in sorted(keys):
-            if k not in ref.files or k not in res:
-                print(f"MISSING {k}")
-                bad += 1
-            elif not np.array_equal(ref[k], res[k], equal_nan=True):
-                a, b = ref[k], res[k]
-                diff = np.nanmax(np.abs(a - b)) if a.shape == b.shape else f"shape {a.shape} vs {b.shape}"
-                print(f"DIFFERS {k}: {diff}")
-                bad += 1
-    print(f"{len(keys) - bad} of {len(keys)} arrays equal (np.array_equal)" + ("" if bad else ": bit for bit"))
-    return 1 if bad else 0
+    return save_or_check(argv, __doc__, evaluate)
 
 
 if __name__ == "__main__":

@@ -191,3 +191,34 @@ def render(path: Path) -> str:
     if data.get("notes"):
         lines += ["", data["notes"]]
     return "\n".join(lines) + "\n"
+
+
+def save_or_check(argv: list[str], doc: str, evaluate) -> int:
+    """The bit-for-bit scripts' command line (``benchmarks/*_bitwise.py save|check FILE``): ``save`` writes the
+    arrays ``evaluate()`` returns to FILE; ``check`` compares them with FILE's by ``np.array_equal`` and prints
+    each that is missing or differs (with its largest difference); exit status 1 where any does."""
+    import numpy as np
+
+    if len(argv) != 3 or argv[1] not in ("save", "check"):
+        print(doc)
+        return 2
+    res = evaluate()
+    path = Path(argv[2])
+    if argv[1] == "save":
+        np.savez(path, **res)
+        print(f"saved {len(res)} arrays to {path}")
+        return 0
+    with np.load(path) as ref:
+        keys = set(ref.files) | set(res)
+        bad = 0
+        for k in sorted(keys):
+            if k not in ref.files or k not in res:
+                print(f"MISSING {k}")
+                bad += 1
+            elif not np.array_equal(ref[k], res[k], equal_nan=True):
+                a, b = ref[k], res[k]
+                diff = np.nanmax(np.abs(a - b)) if a.shape == b.shape else f"shape {a.shape} vs {b.shape}"
+                print(f"DIFFERS {k}: {diff}")
+                bad += 1
+    print(f"{len(keys) - bad} of {len(keys)} arrays equal (np.array_equal)" + ("" if bad else ": bit for bit"))
+    return 1 if bad else 0

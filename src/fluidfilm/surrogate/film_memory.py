@@ -73,9 +73,9 @@ class MemoryParams(NamedTuple):
 
 
 @njit(cache=True)
-def _lagged(ep, hist, k):
-    """The journal's position at k lag steps before the history's clock, linear between its samples."""
-    frac = (hist[0, 0] - hist[0, 1]) / ep.lag_dt
+def _lagged(hist, k, frac):
+    """The journal's position k lag steps before the history's clock, linear between its samples; ``frac``:
+    the clock's place between the latest sample and the next, (clock - t_last) / lag_dt."""
     # sample j (j = 0 the latest, at time hist[0, 1]) lies in row j + 1
     a = hist[k, 0] * frac + hist[k + 1, 0] * (1.0 - frac)
     b = hist[k, 1] * frac + hist[k + 1, 1] * (1.0 - frac)
@@ -118,8 +118,9 @@ def memory_stage(ep, k_omega, x1, x2, v1, v2, dt, tol, th_n, content, p, th):
     """One RK4 stage (``rotor.film_memory``'s stage interface): the network with the committed history
     ``th_n``; returns (F1, F2, 0 sweeps, 0 status)."""
     _count_domain(ep, x1, x2)
+    frac = (th_n[0, 0] - th_n[0, 1]) / ep.lag_dt  # once per stage, not per lag
     for k in range(1, ep.n_lags + 1):
-        a, b = _lagged(ep, th_n, k)
+        a, b = _lagged(th_n, k, frac)
         ep.z[2 + 2 * k] = (a - x1) * ep.inv_c
         ep.z[3 + 2 * k] = (b - x2) * ep.inv_c
     f1, f2 = _network_force(ep, x1, x2, v1, v2)
