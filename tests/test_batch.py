@@ -304,3 +304,23 @@ def test_the_stage_batched_loop_is_compiled_once_and_then_loaded_from_numbas_cac
     assert (hits, misses) == (0, 2)  # one loop per kernel signature (the two models' parameters differ)
     hits, misses = probe()
     assert (hits, misses) == (2, 0)
+
+
+@pytest.mark.filterwarnings("ignore:.*outside the training domain:RuntimeWarning")
+def test_threads_do_not_change_the_domain_counts_of_a_batch_as_long_as_the_domain_table():
+    """The threads' chunks slice the per-trajectory arrays, not the domain table: a batch of as many trajectories
+    as the table has rows (1 + 2 bands) once counted trajectory 2 by a table that was its last band alone."""
+    from golden_models import models
+
+    model = models()["surrogate_split"][0]
+    assert len(model.validity.bands) == 2
+    c = model.clearance
+    x0 = np.array([[0.0, 0.45 * c], [0.55 * c, 0.0], [0.0, 0.7 * c]])
+    v0 = np.array([[0.0, 0.0], [0.0, 0.06], [0.2, 0.0]])
+    runs = [simulate_batch(model, Rotor(mass=2.5, imbalance=2e-4), 2e-3, 1e-5, x0, v0, threads=threads,
+                           stage_batched=True, precision="float64") for threads in (1, 2, 3)]
+    lockstep = simulate_batch(model, Rotor(mass=2.5, imbalance=2e-4), 2e-3, 1e-5, x0, v0, stage_batched=False)
+    assert lockstep.n_outside_domain.min() > 0
+    for batch in runs:
+        assert batch.n_outside_domain.tolist() == lockstep.n_outside_domain.tolist()
+        assert batch.status == lockstep.status

@@ -607,7 +607,9 @@ def _stage_chunks(model, precision, n_threads, consts, *args):
 
     def chunk_args(c: int, steps: tuple) -> tuple:
         lo, hi = int(edges[c]), int(edges[c + 1])
-        rows = [a[lo:hi] if isinstance(a, np.ndarray) and a.shape[:1] == (n,) else a for a in args]
+        # the per-trajectory arrays, not the domain table (args[0], the whole batch's even where it has n rows)
+        rows = [a[lo:hi] if k > 0 and isinstance(a, np.ndarray) and a.shape[:1] == (n,) else a
+                for k, a in enumerate(args)]
         rows[at] = steps
         return (consts[lo:hi], *rows)
 
