@@ -37,8 +37,9 @@ with more substeps: it ends the trajectory as a contact):
   keep scratch rows in their parameters, which threads would share).
 
 Chunks, as ``simulate``'s: both loops run steps ``steps[0]`` to ``steps[1] - 1`` per call, the running
-state carried between calls in a packed (N, 5) array (position, velocity, largest |X|^2) beside the status
-and time arrays, so a run in chunks equals one call to the bit.  Between chunks ``simulate_batch`` moves the
+state carried between calls in a ``BatchRun`` (a packed (N, 5) state: position, velocity, largest |X|^2;
+status, time, counters and the recorded rows, one row per trajectory in each) under a ``StepRule`` (the run's
+scalars), so a run in chunks equals one call to the bit.  Between chunks ``simulate_batch`` moves the
 progress bar and re-checks the step of every running trajectory (``_StepCheck``).  Each loop counts every
 trajectory's force evaluations outside the model's validity domain in column 1 of ``evals`` (column 0: all
 its evaluations), by the one-state kernels' rule (``integrate.outside_domain``).
@@ -59,6 +60,7 @@ import time
 import warnings
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, typeof
@@ -74,19 +76,12 @@ from fluidfilm.rotor.integrate import (CONTACT, CONTACT_STAGE, NONFINITE, OK, OU
 from fluidfilm.rotor.model import Rotor
 
 
-def _steps_at(args: tuple) -> int:
-    """Where the loop arguments hold ``steps`` (None until a chunk gives it)."""
-    return next(i for i, a in enumerate(args) if a is None)
-
-
 @contextlib.contextmanager
-def _lockstep_chunks(kernel, params, setting, settings_arr, consts, *args):
+def _lockstep_chunks(kernel, params, setting, settings_arr, consts, dom, rule, run):
     """``_rk4_batch`` as ``advance(steps)`` (``_stage_chunks``' contract, one thread)."""
-    at = _steps_at(args)
-
     def advance(steps: tuple) -> None:
-        run_loop(_rk4_batch, _rk4_batch_uncached, kernel, params, setting, settings_arr, consts,
-                 *args[:at], steps, *args[at + 1:])
+        run_loop(_rk4_batch, _rk4_batch_uncached, kernel, params, setting, settings_arr, consts, dom, rule, steps,
+                 run)
     yield advance
 
 
@@ -136,20 +131,51 @@ class BatchTrajectory:
                           n_outside_domain=int(self.n_outside_domain[p]) if self.n_outside_domain.size else 0)
 
 
+class BatchRun(NamedTuple):
+    """What both batch loops carry from chunk to chunk and record: one row per trajectory in every field, so
+    a thread's part of the batch is a slice of each (``_run_rows``)."""
+
+    state: np.ndarray    #: (N, 5): x1, x2, v1, v2 and the largest |X|^2 reached (the running state)
+    out_x: np.ndarray    #: (N, n_out, 2): recorded positions, NaN past ``n_rec`` (``_fill_unrecorded``)
+    out_v: np.ndarray    #: (N, n_out, 2): recorded velocities
+    n_rec: np.ndarray    #: (N,) int64: rows recorded
+    status: np.ndarray   #: (N,) int64: ``OK`` while running, then how the trajectory stopped
+    t_stop: np.ndarray   #: (N,): the current time (the stopping time once stopped)
+    evals: np.ndarray    #: (N, 2) int64: force evaluations, and those outside the model's domain
+
+
+class StepRule(NamedTuple):
+    """The run's integration rule, ``simulate``'s arguments of the same names (floats and ints)."""
+
+    t0: float
+    dt: float
+    record_every: int
+    eps_stop: float
+    eps_substep: float
+    max_substeps: int
+
+
+def _run_rows(run: BatchRun, lo: int, hi: int) -> BatchRun:
+    """Trajectories lo..hi-1 of the batch (views)."""
+    return BatchRun(*(a[lo:hi] for a in run))
+
+
 @njit(cache=True, inline="always")
-def _start_row(p, state, t0, out_x, out_v, n_rec, status, t_stop, evals):
+def _start_row(p, run, t0):
     """Trajectory p's first recorded row and counters (both batch loops, at step 0)."""
-    out_x[p, 0, 0], out_x[p, 0, 1] = state[p, 0], state[p, 1]
-    out_v[p, 0, 0], out_v[p, 0, 1] = state[p, 2], state[p, 3]
-    n_rec[p] = 1
-    status[p] = 0
-    t_stop[p] = t0
-    evals[p, 0] = 0
-    evals[p, 1] = 0
+    state = run.state
+    run.out_x[p, 0, 0], run.out_x[p, 0, 1] = state[p, 0], state[p, 1]
+    run.out_v[p, 0, 0], run.out_v[p, 0, 1] = state[p, 2], state[p, 3]
+    run.n_rec[p] = 1
+    run.status[p] = 0
+    run.t_stop[p] = t0
+    run.evals[p, 0] = 0
+    run.evals[p, 1] = 0
 
 
 @njit(cache=True, inline="always")
 def _record_row(p, out_x, out_v, n_rec, x1, x2, v1, v2):
+    """Trajectory p's next recorded row (the arrays of a ``BatchRun``, read once outside the loops)."""
     r = n_rec[p]
     out_x[p, r, 0], out_x[p, r, 1] = x1, x2
     out_v[p, r, 0], out_v[p, r, 1] = v1, v2
@@ -157,11 +183,12 @@ def _record_row(p, out_x, out_v, n_rec, x1, x2, v1, v2):
 
 
 @njit(cache=True, nogil=True)
-def _fill_unrecorded(out_x, out_v, n_rec):
+def _fill_unrecorded(run):
     """NaN in every row past trajectory p's ``n_rec[p]`` recorded ones.  The outputs are allocated empty and
     filled here, by the thread that ran the chunk, rather than by ``np.full`` before the run: a serial fill
     of the 16 MB of a 1024 x 500 step batch (first touch of every page) took ~6 ms, 4 % of the two-thread
     run, on the project machine."""
+    out_x, out_v, n_rec = run.out_x, run.out_v, run.n_rec
     nan = np.nan
     for p in range(out_x.shape[0]):
         for r in range(n_rec[p], out_x.shape[1]):
@@ -170,18 +197,18 @@ def _fill_unrecorded(out_x, out_v, n_rec):
 
 
 @njit(cache=True)
-def _rk4_batch(kernel, params, setting, settings, consts, dom, state, t0, dt, steps, record_every, eps_stop,
-               eps_substep, max_substeps, out_x, out_v, n_rec, status, t_stop, evals):
+def _rk4_batch(kernel, params, setting, settings, consts, dom, rule, steps, run):
     """Lockstep RK4 of N trajectories, steps ``steps[0]`` to ``steps[1] - 1`` of ``steps[2]`` (a chunk of the
-    run: the running trajectories carried in ``state``, ``status``, ``t_stop``; module doc of
-    ``simulate_batch``); each one's arithmetic is ``integrate._rk4_run``'s."""
+    run: the running trajectories carried in ``run``; module doc of ``simulate_batch``); each one's arithmetic
+    is ``integrate._rk4_run``'s."""
     step0, step1, n_steps = steps
+    state, out_x, out_v, n_rec, status, t_stop, evals = run
     n_traj = state.shape[0]
     n_set = settings.shape[1]
     n_running = 0
     for p in range(n_traj):
         if step0 == 0:
-            _start_row(p, state, t0, out_x, out_v, n_rec, status, t_stop, evals)
+            _start_row(p, run, rule.t0)
         n_running += 1 if status[p] == 0 else 0
     for step in range(step0, step1):
         if n_running == 0:
@@ -195,9 +222,10 @@ def _rk4_batch(kernel, params, setting, settings, consts, dom, state, t0, dt, st
                   consts[p, 6], consts[p, 7], consts[p, 8])
             x1, x2, v1, v2 = state[p, 0], state[p, 1], state[p, 2], state[p, 3]
             # no retry of a step whose stage left the clearance (simulate's retry=True): it ends the trajectory
-            x1, x2, v1, v2, t, n, st, n_out = _rk4_step(kernel, params, cp, x1, x2, v1, v2, t_stop[p], t0, step, dt,
-                                                        eps_substep, max_substeps, eps_stop * eps_stop * consts[p, 6],
-                                                        False, dom, consts[p, 9])
+            x1, x2, v1, v2, t, n, st, n_out = _rk4_step(kernel, params, cp, x1, x2, v1, v2, t_stop[p], rule.t0, step,
+                                                        rule.dt, rule.eps_substep, rule.max_substeps,
+                                                        rule.eps_stop * rule.eps_stop * consts[p, 6], False, dom,
+                                                        consts[p, 9])
             evals[p, 0] += n
             evals[p, 1] += n_out
             state[p, 0], state[p, 1], state[p, 2], state[p, 3] = x1, x2, v1, v2
@@ -206,41 +234,168 @@ def _rk4_batch(kernel, params, setting, settings, consts, dom, state, t0, dt, st
             if st != 0:
                 status[p] = st
                 n_running -= 1
-            if st != 0 or (step + 1) % record_every == 0:
+            if st != 0 or (step + 1) % rule.record_every == 0:
                 _record_row(p, out_x, out_v, n_rec, x1, x2, v1, v2)
     if step1 == n_steps:
-        _fill_unrecorded(out_x, out_v, n_rec)
+        _fill_unrecorded(run)
 
 
 # kernels the on-disk cache cannot take (a user's model, an ensemble's members): an uncached twin
 _rk4_batch_uncached = _uncached(_rk4_batch, _rk4_step=_rk4_step_uncached)
 
 
+# --- the stage-batched loop -------------------------------------------------------------------------------
+# Its state is held per component and per ENTRY of the running list (``Entries``), its scratch per substep
+# (``StageWork``); both are allocated once per chunk and handed to the loop's functions whole.  The helpers
+# that run over the entries in every stage (``_stage_states``, ``_film_accelerations``, ``_late_stage``,
+# ``_rk4_update``) are inlined: one substep of 1024 linear-bearing entries took 4.1-4.3 ns per force so,
+# 4.6-4.9 as separate functions and 4.6-5.2 before the packing (loaded 2-core machine); the per-step and
+# per-chunk ones are separate functions, compiled once whatever the kernel.
+
+class Entries(NamedTuple):
+    """The stage-batched loop's running trajectories: entry j is trajectory ``run[j]`` (the arrays compacted,
+    in order, when one stops); n entries each, the first ``n_run`` in use."""
+
+    run: np.ndarray   #: (n,) int64: the trajectory of each entry
+    X1: np.ndarray    #: (n,): the state, per component: positions, velocities and time
+    X2: np.ndarray
+    V1: np.ndarray
+    V2: np.ndarray
+    T: np.ndarray
+    C: np.ndarray     #: (11, n): ``consts`` per column, the stopping radius^2 (eps_stop^2 c^2) and 1/c^2
+    K: np.ndarray     #: (n,) int64: substeps of this step
+    ST: np.ndarray    #: (n,) int64: status of this step
+    NE: np.ndarray    #: (2, n) int64: force evaluations of this step, and those outside the domain
+
+
+class StageWork(NamedTuple):
+    """The scratch of one substep (``_substep``), n entries each."""
+
+    act: np.ndarray   #: (n,) int64: the entries stepping in this substep (where not all: ``ident`` False)
+    tq: np.ndarray    #: (n,): the stage times
+    acc: tuple        #: per RK4 stage, (ax, ay, ok): accelerations and whether the state was inside the clearance
+    scratch: tuple    #: (sx1, sx2, sv1, sv2): stage states copied out where one lies outside the clearance
+    buf: tuple        #: (xs, vs, fs), (2 n,) each: the kernel's column-major states and forces (``_accelerations``)
+    rows: np.ndarray  #: (n,) int64: each entry's row in the kernel's call, -1 outside the clearance
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
-def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok, xsb, vsb, fsb, rows, sx1, sx2,
-                   sv1, sv2, dom, NE):
-    """One RK4 stage of the m entries ``act[:m]`` (``ident``: entries 0..m-1) at the stage states q and times
-    tq: the film forces in ONE call ``fn(bp, xs, vs, fs)`` of the states inside the clearance (column-major
-    (r, 2) views of the flat buffers xsb, vsb, fsb), then
-    ``_acceleration``'s arithmetic per entry (the same expressions, so the same bits for the same forces).
-    ``C[k, j]``: entry j's constants (``simulate_batch``'s ``consts`` per column).  cos/sin(omega t) are
-    computed once per distinct phase: every entry without substeps shares its time.
+def _load_entries(consts, eps_stop, t0, step0, run):
+    """The entries of the trajectories still running at the chunk's start (``run.status`` OK, in order), their
+    first rows recorded at step 0; returns (entries, n_run)."""
+    n = run.state.shape[0]
+    E = Entries(np.empty(n, dtype=np.int64), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+                np.empty((11, n)), np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64),
+                np.zeros((2, n), dtype=np.int64))
+    state, status, t_stop = run.state, run.status, run.t_stop
+    ent, X1, X2, V1, V2, T, C = E.run, E.X1, E.X2, E.V1, E.V2, E.T, E.C
+    n_run = 0
+    for p in range(n):
+        if step0 == 0:
+            _start_row(p, run, t0)
+        if status[p] != OK:
+            continue
+        j = n_run
+        X1[j], X2[j], V1[j], V2[j], T[j] = state[p, 0], state[p, 1], state[p, 2], state[p, 3], t_stop[p]
+        ent[j] = p
+        for k in range(9):
+            C[k, j] = consts[p, k]
+        C[9, j] = eps_stop * eps_stop * consts[p, 6]
+        C[10, j] = consts[p, 9]
+        n_run += 1
+    return E, n_run
 
-    The stage states are views of the kernel's buffers (``_substep``: qx1 = xsb[:m], qx2 = xsb[m:2m], qv1,
-    qv2 likewise in vsb), so when every state lies inside the clearance (the rule) the kernel reads them where
-    the stage wrote them: no copy (copying them cost ~1.2 ns per force, a scalar loop). Otherwise they are
-    copied out to the scratch rows s* and the states inside gathered back, in order.
 
-    With an active domain table ``dom`` (``integrate.domain_rule``), each entry's evaluations outside the
-    model's domain are counted in ``NE[1, j]`` (``integrate.outside_domain``, the states inside the
-    clearance: those whose forces are evaluated)."""
-    r = 0
+@njit(cache=True, nogil=True)
+def _stage_work(n):
+    """A ``StageWork`` for n entries (allocated once per chunk)."""
+    acc = ((np.empty(n), np.empty(n), np.empty(n, dtype=np.bool_)),
+           (np.empty(n), np.empty(n), np.empty(n, dtype=np.bool_)),
+           (np.empty(n), np.empty(n), np.empty(n, dtype=np.bool_)),
+           (np.empty(n), np.empty(n), np.empty(n, dtype=np.bool_)))
+    return StageWork(np.empty(n, dtype=np.int64), np.empty(n), acc,
+                     (np.empty(n), np.empty(n), np.empty(n), np.empty(n)),
+                     (np.empty(2 * n), np.empty(2 * n), np.empty(2 * n)), np.empty(n, dtype=np.int64))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _substep_counts(E, n_run, es2, max_substeps):
+    """Each entry's substeps of this step (``integrate._rk4_step``'s rule), its status and counts reset;
+    returns the largest."""
+    X1, X2, C, K, ST, NE = E.X1, E.X2, E.C, E.K, E.ST, E.NE
+    far = 0
+    for j in range(n_run):
+        far += 1 if (X1[j] * X1[j] + X2[j] * X2[j]) / C[6, j] > es2 else 0
+        K[j] = 1
+        ST[j] = OK
+        NE[0, j] = 0
+        NE[1, j] = 0
+    kmax = 1
+    if far > 0:
+        for j in range(n_run):
+            e2 = (X1[j] * X1[j] + X2[j] * X2[j]) / C[6, j]
+            if e2 > es2:
+                k = int(math.ceil(((1.0 - es2) / (1.0 - e2)) ** 1.5))
+                if k > max_substeps:
+                    k = max_substeps
+                K[j] = k
+                if k > kmax:
+                    kmax = k
+    return kmax
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _stepping(E, act, n_run, sub):
+    """The entries that take part in substep ``sub`` (substeps left, not stopped) into ``act``; returns how many."""
+    K, ST = E.K, E.ST
+    m = 0
+    for j in range(n_run):
+        if K[j] > sub and ST[j] == OK:
+            act[m] = j
+            m += 1
+    return m
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _end_step(E, n_run, step, record_every, run):
+    """After a step: each entry's counts, time and largest |X|^2 into ``run``, its row recorded where it
+    stopped or the step is a recorded one, and the running entries compacted (in order); returns their
+    number."""
+    ent, X1, X2, V1, V2, T, C, ST, NE = E.run, E.X1, E.X2, E.V1, E.V2, E.T, E.C, E.ST, E.NE
+    state, out_x, out_v, n_rec, status, t_stop, evals = run
+    keep = 0
+    for j in range(n_run):
+        p = ent[j]
+        evals[p, 0] += NE[0, j]
+        evals[p, 1] += NE[1, j]
+        t_stop[p] = T[j]  # the trajectory's current time (its stopping time once it stops)
+        state[p, 4] = max(state[p, 4], X1[j] * X1[j] + X2[j] * X2[j])
+        st = ST[j]
+        if st != 0:
+            status[p] = st
+        if st != 0 or (step + 1) % record_every == 0:
+            _record_row(p, out_x, out_v, n_rec, X1[j], X2[j], V1[j], V2[j])
+        if st == 0:
+            if keep != j:
+                ent[keep] = p
+                X1[keep], X2[keep], V1[keep], V2[keep], T[keep] = X1[j], X2[j], V1[j], V2[j], T[j]
+                for k in range(11):
+                    C[k, keep] = C[k, j]
+            keep += 1
+    return keep
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _stage_states(E, W, m, ident, q):
+    """How many of the stage states q (qx1, qx2, qv1, qv2) lie inside the clearance, all of them copied out to
+    the scratch rows ``W.scratch`` where some do not (``_accelerations`` gathers those inside back); returns
+    (xs, vs, fs, inside): the kernel's (inside, 2) column-major views of the buffers ``W.buf``, and that
+    count."""
+    qx1, qx2, qv1, qv2 = q
+    sx1, sx2, sv1, sv2 = W.scratch
+    xsb, vsb, fsb = W.buf
+    C, act = E.C, W.act
     inside = 0
-    if dom[0, 1] < math.inf:
-        for i in range(m):
-            j = i if ident else act[i]
-            evaluated = 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
-            NE[1, j] += evaluated * outside_domain(dom, C[10, j], qx1[i], qx2[i], qv1[i], qv2[i])
     for i in range(m):
         j = i if ident else act[i]
         inside += 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
@@ -253,6 +408,34 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
     xs = xsb[:2 * inside].reshape((2, inside)).T
     vs = vsb[:2 * inside].reshape((2, inside)).T
     fs = fsb[:2 * inside].reshape((2, inside)).T
+    return xs, vs, fs, inside
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _accelerations(fn, bp, dom, E, W, m, ident, q, acc):
+    """One RK4 stage of the m entries ``W.act[:m]`` (``ident``: entries 0..m-1) at the stage states q (qx1,
+    qx2, qv1, qv2) and times ``W.tq``: the film forces in ONE call ``fn(bp, xs, vs, fs)`` of the states
+    inside the clearance (column-major (r, 2) views of the flat buffers ``W.buf``), then
+    ``_acceleration``'s arithmetic per entry into ``acc`` (ax, ay, ok; ``_film_accelerations``).
+    ``E.C[k, j]``: entry j's constants (``simulate_batch``'s ``consts`` per column).
+
+    The stage states are views of the kernel's buffers (``_substep``: qx1 = xs[:m], qx2 = xs[m:2m], qv1,
+    qv2 likewise in vs), so when every state lies inside the clearance (the rule) the kernel reads them where
+    the stage wrote them: no copy (copying them cost ~1.2 ns per force, a scalar loop). Otherwise they are
+    copied out to the scratch rows ``W.scratch`` and the states inside gathered back, in order.
+
+    With an active domain table ``dom`` (``integrate.domain_rule``), each entry's evaluations outside the
+    model's domain are counted in ``E.NE[1, j]`` (``integrate.outside_domain``, the states inside the
+    clearance: those whose forces are evaluated)."""
+    qx1, qx2, qv1, qv2 = q
+    C, NE, act, rows, ok = E.C, E.NE, W.act, W.rows, acc[2]
+    if dom[0, 1] < math.inf:
+        for i in range(m):
+            j = i if ident else act[i]
+            evaluated = 1 if qx1[i] * qx1[i] + qx2[i] * qx2[i] < C[6, j] else 0
+            NE[1, j] += evaluated * outside_domain(dom, C[10, j], qx1[i], qx2[i], qv1[i], qv2[i])
+    xs, vs, fs, inside = _stage_states(E, W, m, ident, q)
+    r = 0
     if inside == m:
         # every state inside the clearance: already in place
         for i in range(m):
@@ -260,6 +443,7 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
             rows[i] = i
         r = m
     else:
+        sx1, sx2, sv1, sv2 = W.scratch
         for i in range(m):
             j = i if ident else act[i]
             x1, x2 = sx1[i], sx2[i]
@@ -273,7 +457,18 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
             r += 1
     if r > 0:
         fn(bp, xs, vs, fs)
-    if ident and inside == m:
+    _film_accelerations(E.C, W, m, ident, inside == m, fs, acc)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _film_accelerations(C, W, m, ident, all_inside, fs, acc):
+    """``_acceleration``'s arithmetic per entry (the same expressions, so the same bits for the same forces):
+    the film forces ``fs[W.rows[i]]`` with the imbalance (ramped), the static load and gravity, times 1/m, into
+    ``acc`` (ax, ay); 0 for an entry outside the clearance.  cos/sin(omega t) are computed once per distinct
+    phase: every entry without substeps shares its time."""
+    ax, ay = acc[0], acc[1]
+    tq, rows, act = W.tq, W.rows, W.act
+    if ident and all_inside:
         # the common stage: every entry inside, one phase for all, no ramp (checked): without branches
         t = tq[0]
         ph = C[2, 0] * t
@@ -312,9 +507,13 @@ def _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, ax, ay, ok,
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _late_stage(f, p1, p2, q1, q2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq):
-    """Stage states 3 (f = 0.5: P = a, Q = b) and 4 (f = 1: P = b, Q = c) of RK4: position X + f h (V + h/2 P),
-    velocity V + f h Q, time T + f h; ``_rk4_step``'s expressions (f h = h exactly for f = 1)."""
+def _late_stage(f, P, Q, E, W, m, ident, dt, q):
+    """Stage states 3 (f = 0.5: P = a, Q = b) and 4 (f = 1: P = b, Q = c) of RK4 into q: position
+    X + f h (V + h/2 P), velocity V + f h Q, time T + f h (``W.tq``); ``_rk4_step``'s expressions (f h = h
+    exactly for f = 1).  P, Q: stages' (ax, ay, ok)."""
+    p1, p2, q1, q2 = P[0], P[1], Q[0], Q[1]
+    qx1, qx2, qv1, qv2 = q
+    X1, X2, V1, V2, T, K, act, tq = E.X1, E.X2, E.V1, E.V2, E.T, E.K, W.act, W.tq
     for i in range(m):
         j = i if ident else act[i]
         h = dt / K[j]
@@ -325,28 +524,43 @@ def _late_stage(f, p1, p2, q1, q2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1,
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _substep(fn, bp, C, dom, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE, qx1, qx2, qv1, qv2, tq,
-             a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs, rows):
-    """Substep ``sub`` of the entries ``act[:m]`` (``ident``: every entry, none substepping): four stages and
+def _substep(fn, bp, dom, E, W, m, ident, sub, step, rule):
+    """Substep ``sub`` of the entries ``W.act[:m]`` (``ident``: every entry, none substepping): four stages and
     the update, ``_rk4_step``'s arithmetic per entry.  The stage states are written into the kernel's flat
-    buffers xs, vs (``_accelerations``); qx1, qx2, qv1, qv2 as passed are its scratch rows."""
-    sx1, sx2, sv1, sv2 = qx1, qx2, qv1, qv2
-    qx1, qx2, qv1, qv2 = xs[:m], xs[m:2 * m], vs[:m], vs[m:2 * m]
+    buffers ``W.buf`` (``_accelerations``)."""
+    X1, X2, V1, V2, T, K, act, tq = E.X1, E.X2, E.V1, E.V2, E.T, E.K, W.act, W.tq
+    dt = rule.dt
+    xs, vs = W.buf[0], W.buf[1]
+    q = (xs[:m], xs[m:2 * m], vs[:m], vs[m:2 * m])
+    qx1, qx2, qv1, qv2 = q
+    A, B, Cs, D = W.acc
     # stage 1: the state itself
     for i in range(m):
         j = i if ident else act[i]
         qx1[i], qx2[i], qv1[i], qv2[i], tq[i] = X1[j], X2[j], V1[j], V2[j], T[j]
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, a1, a2, ok1, xs, vs, fs, rows, sx1, sx2, sv1, sv2, dom, NE)
+    _accelerations(fn, bp, dom, E, W, m, ident, q, A)
+    a1, a2 = A[0], A[1]
     for i in range(m):
         j = i if ident else act[i]
         h = dt / K[j]
         qx1[i], qx2[i] = X1[j] + 0.5 * h * V1[j], X2[j] + 0.5 * h * V2[j]
         qv1[i], qv2[i], tq[i] = V1[j] + 0.5 * h * a1[i], V2[j] + 0.5 * h * a2[i], T[j] + 0.5 * h
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, b1, b2, ok2, xs, vs, fs, rows, sx1, sx2, sv1, sv2, dom, NE)
-    _late_stage(0.5, a1, a2, b1, b2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, c1, c2, ok3, xs, vs, fs, rows, sx1, sx2, sv1, sv2, dom, NE)
-    _late_stage(1.0, b1, b2, c1, c2, act, ident, m, K, dt, X1, X2, V1, V2, T, qx1, qx2, qv1, qv2, tq)
-    _accelerations(fn, bp, C, act, ident, m, qx1, qx2, qv1, qv2, tq, d1, d2, ok4, xs, vs, fs, rows, sx1, sx2, sv1, sv2, dom, NE)
+    _accelerations(fn, bp, dom, E, W, m, ident, q, B)
+    _late_stage(0.5, A, B, E, W, m, ident, dt, q)
+    _accelerations(fn, bp, dom, E, W, m, ident, q, Cs)
+    _late_stage(1.0, B, Cs, E, W, m, ident, dt, q)
+    _accelerations(fn, bp, dom, E, W, m, ident, q, D)
+    _rk4_update(E, W, m, ident, sub, step, rule)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _rk4_update(E, W, m, ident, sub, step, rule):
+    """The RK4 update of substep ``sub`` from the four stages' accelerations ``W.acc``, per entry: the new
+    state, or the old one and the status where a stage left the clearance (contact) or the state is not
+    finite (divergence); a contact at eps_stop (``E.C[9]``)."""
+    X1, X2, V1, V2, T, K, ST, NE, C, act = E.X1, E.X2, E.V1, E.V2, E.T, E.K, E.ST, E.NE, E.C, W.act
+    (a1, a2, ok1), (b1, b2, ok2), (c1, c2, ok3), (d1, d2, ok4) = W.acc
+    t0, dt = rule.t0, rule.dt
     for i in range(m):
         j = i if ident else act[i]
         k = K[j]
@@ -378,122 +592,44 @@ def _substep(fn, bp, C, dom, act, ident, m, sub, step, t0, dt, K, ST, X1, X2, V1
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _rk4_stages(fn, bp, consts, dom, state, t0, dt, steps, record_every, eps_stop, eps_substep, max_substeps,
-                out_x, out_v, n_rec, status, t_stop, evals):
+def _rk4_stages(fn, bp, consts, dom, rule, steps, run):
     """RK4 of N trajectories with the force model evaluated once per stage for all running ones: steps
     ``steps[0]`` to ``steps[1] - 1`` of ``steps[2]`` (a chunk, as ``_rk4_batch``).
 
     Per trajectory, the arithmetic of ``_rk4_batch`` (``integrate._rk4_step`` without the retry): the same
     substep counts, stage states, stopping rules and recorded rows.  The state is held per component
-    (X1, X2, V1, V2, T) and per ENTRY of the running list ``run`` (entry j is trajectory ``run[j]``; the
-    arrays are compacted, in order, when a trajectory stops), the constants per column ``C[k, j]``.  A step
-    in which no entry substeps runs every loop over the entries 0..m-1 (contiguous); otherwise per substep
-    the entries still stepping (a trajectory with k substeps takes part in the first k; one that stopped in
-    this step drops out) are a second list ``act``.  Every stage gathers its entries' states inside the
-    clearance and calls ``fn`` once on them.  A chunk starts from the state carried in ``state`` (rows x1,
-    x2, v1, v2 and the largest |X|^2 so far), ``t_stop`` (the current time) and ``status`` (the running
-    trajectories, in order: the list a single call would hold at that step), and leaves it there."""
+    (X1, X2, V1, V2, T) and per ENTRY of the running list (``Entries``: entry j is trajectory ``run[j]``;
+    the arrays are compacted, in order, when a trajectory stops), the constants per column ``C[k, j]``.  A
+    step in which no entry substeps runs every loop over the entries 0..m-1 (contiguous); otherwise per
+    substep the entries still stepping (a trajectory with k substeps takes part in the first k; one that
+    stopped in this step drops out) are a second list ``act``.  Every stage gathers its entries' states
+    inside the clearance and calls ``fn`` once on them.  A chunk starts from the state carried in ``run``
+    (``BatchRun``: rows x1, x2, v1, v2 and the largest |X|^2 so far, the current time ``t_stop`` and the
+    running trajectories ``status``, in order: the list a single call would hold at that step), and leaves
+    it there."""
     step0, step1, n_steps = steps
-    n = state.shape[0]
-    X1 = np.empty(n)
-    X2 = np.empty(n)
-    V1 = np.empty(n)
-    V2 = np.empty(n)
-    T = np.empty(n)
-    run = np.empty(n, dtype=np.int64)
-    C = np.empty((11, n))  # consts per column, the stopping radius^2 (eps_stop^2 c^2) and 1/c^2 (domain count)
-    n_run = 0
-    for p in range(n):
-        if step0 == 0:
-            _start_row(p, state, t0, out_x, out_v, n_rec, status, t_stop, evals)
-        if status[p] != OK:
-            continue
-        j = n_run
-        X1[j], X2[j], V1[j], V2[j], T[j] = state[p, 0], state[p, 1], state[p, 2], state[p, 3], t_stop[p]
-        run[j] = p
-        for k in range(9):
-            C[k, j] = consts[p, k]
-        C[9, j] = eps_stop * eps_stop * consts[p, 6]
-        C[10, j] = consts[p, 9]
-        n_run += 1
-    K = np.empty(n, dtype=np.int64)   # per entry: substeps of this step
-    NE = np.zeros((2, n), dtype=np.int64)  # per entry: force evaluations of this step, and those outside the domain
-    ST = np.empty(n, dtype=np.int64)  # per entry: status of this step
-    act = np.empty(n, dtype=np.int64)
-    qx1, qx2, qv1, qv2, tq = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    a1, a2, b1, b2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    c1, c2, d1, d2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    ok1 = np.empty(n, dtype=np.bool_)
-    ok2 = np.empty(n, dtype=np.bool_)
-    ok3 = np.empty(n, dtype=np.bool_)
-    ok4 = np.empty(n, dtype=np.bool_)
-    rows = np.empty(n, dtype=np.int64)
-    xs = np.empty(2 * n)  # flat buffers of the kernel's column-major states and forces (_accelerations)
-    vs = np.empty(2 * n)
-    fs = np.empty(2 * n)
-    es2 = eps_substep * eps_substep
+    E, n_run = _load_entries(consts, rule.eps_stop, rule.t0, step0, run)
+    W = _stage_work(run.state.shape[0])
+    es2 = rule.eps_substep * rule.eps_substep
     for step in range(step0, step1):
         if n_run == 0:
             break
-        far = 0
-        for j in range(n_run):
-            far += 1 if (X1[j] * X1[j] + X2[j] * X2[j]) / C[6, j] > es2 else 0
-            K[j] = 1
-            ST[j] = OK
-            NE[0, j] = 0
-            NE[1, j] = 0
-        kmax = 1
-        if far > 0:
-            for j in range(n_run):
-                e2 = (X1[j] * X1[j] + X2[j] * X2[j]) / C[6, j]
-                if e2 > es2:
-                    k = int(math.ceil(((1.0 - es2) / (1.0 - e2)) ** 1.5))
-                    if k > max_substeps:
-                        k = max_substeps
-                    K[j] = k
-                    if k > kmax:
-                        kmax = k
+        kmax = _substep_counts(E, n_run, es2, rule.max_substeps)
         if kmax == 1:
-            _substep(fn, bp, C, dom, act, True, n_run, 0, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE, qx1,
-                     qx2, qv1, qv2, tq, a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs, rows)
+            _substep(fn, bp, dom, E, W, n_run, True, 0, step, rule)
         else:
             for sub in range(kmax):
-                m = 0
-                for j in range(n_run):
-                    if K[j] > sub and ST[j] == OK:
-                        act[m] = j
-                        m += 1
+                m = _stepping(E, W.act, n_run, sub)
                 if m == 0:
                     break
-                _substep(fn, bp, C, dom, act, False, m, sub, step, t0, dt, K, ST, X1, X2, V1, V2, T, NE,
-                         qx1, qx2, qv1, qv2, tq, a1, a2, b1, b2, c1, c2, d1, d2, ok1, ok2, ok3, ok4, xs, vs, fs,
-                         rows)
-        # record, and compact the running entries (in order)
-        keep = 0
-        for j in range(n_run):
-            p = run[j]
-            evals[p, 0] += NE[0, j]
-            evals[p, 1] += NE[1, j]
-            t_stop[p] = T[j]  # the trajectory's current time (its stopping time once it stops)
-            state[p, 4] = max(state[p, 4], X1[j] * X1[j] + X2[j] * X2[j])
-            st = ST[j]
-            if st != 0:
-                status[p] = st
-            if st != 0 or (step + 1) % record_every == 0:
-                _record_row(p, out_x, out_v, n_rec, X1[j], X2[j], V1[j], V2[j])
-            if st == 0:
-                if keep != j:
-                    run[keep] = p
-                    X1[keep], X2[keep], V1[keep], V2[keep], T[keep] = X1[j], X2[j], V1[j], V2[j], T[j]
-                    for k in range(11):
-                        C[k, keep] = C[k, j]
-                keep += 1
-        n_run = keep
+                _substep(fn, bp, dom, E, W, m, False, sub, step, rule)
+        n_run = _end_step(E, n_run, step, rule.record_every, run)
+    state, ent, X1, X2, V1, V2 = run.state, E.run, E.X1, E.X2, E.V1, E.V2
     for j in range(n_run):  # the running trajectories' states, for the next chunk
-        p = run[j]
+        p = ent[j]
         state[p, 0], state[p, 1], state[p, 2], state[p, 3] = X1[j], X2[j], V1[j], V2[j]
     if step1 == n_steps:
-        _fill_unrecorded(out_x, out_v, n_rec)
+        _fill_unrecorded(run)
 
 
 _rk4_stages_uncached = _uncached(_rk4_stages, _substep=_uncached(_substep, _accelerations=_uncached(_accelerations)))
@@ -591,11 +727,12 @@ def _stages_loop(fn, bp, loop_args):
 
 
 @contextlib.contextmanager
-def _stage_chunks(model, precision, n_threads, consts, *args):
+def _stage_chunks(model, precision, n_threads, consts, dom, rule, run):
     """``_rk4_stages`` over ``n_threads`` contiguous chunks of the batch, as ``advance(steps)`` (one chunk of
     steps, ``(step0, step1, n_steps)``): each chunk of trajectories in its own thread with its own private
     batched-kernel parameters (their own counters: nothing mutable is shared), the counts merged into the
-    model's at the end.  ``args``: the loop's arguments after ``consts``, ``steps`` as None."""
+    model's at the end.  Each chunk takes its rows of ``consts`` and ``run``; the domain table ``dom`` and the
+    ``rule`` are the whole batch's."""
     n = consts.shape[0]
     edges = np.linspace(0, n, n_threads + 1).round().astype(int)
     kernels = []
@@ -603,15 +740,10 @@ def _stage_chunks(model, precision, n_threads, consts, *args):
         kernel = model.batch_force_kernel(precision, private=True)
         assert kernel is not None  # checked by the caller
         kernels.append(kernel)
-    at = _steps_at(args)
 
     def chunk_args(c: int, steps: tuple) -> tuple:
         lo, hi = int(edges[c]), int(edges[c + 1])
-        # the per-trajectory arrays, not the domain table (args[0], the whole batch's even where it has n rows)
-        rows = [a[lo:hi] if k > 0 and isinstance(a, np.ndarray) and a.shape[:1] == (n,) else a
-                for k, a in enumerate(args)]
-        rows[at] = steps
-        return (consts[lo:hi], *rows)
+        return consts[lo:hi], dom, rule, steps, _run_rows(run, lo, hi)
 
     # compiled (or loaded from the cache) here, before any thread starts; every chunk has the same types
     loop = _stages_loop(kernels[0][0], kernels[0][1], chunk_args(0, (0, 0, 0)))
@@ -643,11 +775,13 @@ class _StepCheck:
     step is within a factor 2 of the limit so found (and the one with the smallest) get the one-state check
     whose verdict and words are ``simulate``'s.  Per-trajectory settings: the one-state check for each."""
 
-    def __init__(self, model, kernel, params, setting, settings_arr, consts, c, dt, omega, eps_substep,
-                 max_substeps, per_setting: bool, precision: str):
-        self.model, self.kernel, self.params, self.setting = model, kernel, params, setting
-        self.settings_arr, self.consts, self.c, self.dt = settings_arr, consts, c, dt
-        self.rule = (omega, eps_substep, max_substeps)
+    def __init__(self, model, force: tuple, setting, settings_arr, consts, c, rule: StepRule, omega: float,
+                 per_setting: bool, precision: str):
+        """``force``: the model's one-state ``(kernel, params)``; ``rule``: the run's (its dt, eps_substep and
+        max_substeps); ``omega``: the shaft speed of the limit's per-period rule."""
+        self.model, (self.kernel, self.params), self.setting = model, force, setting
+        self.settings_arr, self.consts, self.c, self.dt = settings_arr, consts, c, rule.dt
+        self.rule = (omega, rule.eps_substep, rule.max_substeps)
         self.batched = None
         if not per_setting and isinstance(model, BatchForceModel):
             self.batched = model.batch_force_kernel(precision, private=True)
@@ -705,9 +839,10 @@ class _StepCheck:
                              f"(trajectory {p} at its start, eccentricity {np.hypot(*x0[p]) / self.c[p]:.3g}; rule: "
                              f"{lim.rule}). Use dt <= {lim.dt_max:.3g} or check_step=False (experts)")
 
-    def along(self, state, status, out_x, out_v, n_rec, s1: int, record_every: int) -> dict:
+    def along(self, run: BatchRun, s1: int, record_every: int) -> dict:
         """The check at the end of a chunk (step ``s1``): each running trajectory that the step no longer
         resolves ends "unresolved" (status ``UNRESOLVED``, its state recorded); returns {p: StepLimit} of those."""
+        state, status = run.state, run.status
         idx = np.flatnonzero(status == OK)
         if idx.size == 0:
             return {}
@@ -716,7 +851,7 @@ class _StepCheck:
         for p in bad:
             status[p] = UNRESOLVED
             if s1 % record_every:  # the state at the check is not a recorded row yet
-                _record_row(p, out_x, out_v, n_rec, state[p, 0], state[p, 1], state[p, 2], state[p, 3])
+                _record_row(p, run.out_x, run.out_v, run.n_rec, state[p, 0], state[p, 1], state[p, 2], state[p, 3])
         return bad
 
 
@@ -752,6 +887,48 @@ def _domain_texts(model, texts: list, evals, eps_reached, strict: bool) -> list:
     warnings.warn(f"{model.name}: {note} during the batch", RuntimeWarning, stacklevel=3)
     return [f"{OUTSIDE_DOMAIN}: reached the end time; {note} (whole batch)" if s == "ok" and counted else
             f"{s}; {note} (whole batch)" for s in out]
+
+
+def _rotor_constants(rotors: list, omega: float, c: np.ndarray, inv_c2) -> np.ndarray:
+    """``consts`` (N, 10) of the loops, a row per rotor: 1/m, the imbalance force m_u d omega^2, omega, the
+    imbalance direction, the static load (gravity in column 5), c^2, the final imbalance force and the ramp
+    time of a ramped imbalance (0: none), and 1/c^2 as the kernels hold it (``inv_c2``)."""
+    # column by column (a row per trajectory: building rows of Python floats cost ~0.9 ms per 1024 rotors,
+    # ~1 % of a surrogate batch's run); the same IEEE operations as one rotor's
+    mass, imb, imb_final, direction, ext, gravity, ramp = (np.array(col, dtype=float) for col in zip(*[
+        (r.mass, r.imbalance, np.nan if r.imbalance_final is None else r.imbalance_final, r.imbalance_direction,
+         r.external_force, r.gravity, r.ramp_time) for r in rotors]))
+    ramped = ~np.isnan(imb_final)
+    consts = np.empty((len(rotors), 10))
+    consts[:, 0] = 1.0 / mass
+    consts[:, 1] = imb * omega**2
+    consts[:, 2] = omega
+    consts[:, 3] = direction
+    consts[:, 4] = ext[:, 0]
+    consts[:, 5] = ext[:, 1] + mass * gravity
+    consts[:, 6] = c**2
+    consts[:, 7] = np.where(ramped, imb_final, imb) * omega**2
+    consts[:, 8] = np.where(ramped, ramp, 0.0)
+    consts[:, 9] = inv_c2
+    return consts
+
+
+def _stop_texts(run: BatchRun, c: np.ndarray, eps_stop: float, dt: float, unresolved: dict) -> tuple[list, np.ndarray]:
+    """Each trajectory's status text before the domain count ("ok", contact, unresolved, diverged: as
+    ``simulate``'s) and its stopping time (NaN where it reached the end)."""
+    status, t_stop, state = run.status, run.t_stop, run.state
+    texts = ["ok"] * len(status)
+    t_stop_out = np.full(len(status), np.nan)
+    for p in np.flatnonzero(status != OK):
+        t_stop_out[p] = t_stop[p]
+        if status[p] in (CONTACT, CONTACT_STAGE):
+            texts[p] = f"contact: eccentricity reached eps_stop={eps_stop} at t={t_stop[p]:.6g} s"
+        elif status[p] == UNRESOLVED:
+            texts[p] = unresolved_text(t_stop[p], np.hypot(*state[p, :2]) / c[p], dt, unresolved[p],
+                                       "simulate(..., dt=None) (adaptive)")
+        else:
+            texts[p] = f"diverged: non-finite state after t={t_stop[p]:.6g} s"
+    return texts, t_stop_out
 
 
 def _rows(value, n: int, what: str) -> np.ndarray:
@@ -860,24 +1037,8 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         raise ValueError(f"initial eccentricity of trajectory {int(np.argmax(eccentric))} is not below "
                          f"eps_stop={eps_stop}")
     omega = bearing.omega
-    # the per-rotor constants, column by column (a row per trajectory: building rows of Python floats cost
-    # ~0.9 ms per 1024 rotors, ~1 % of a surrogate batch's run); the same IEEE operations as one rotor's
-    mass, imb, imb_final, direction, ext, gravity, ramp = (np.array(col, dtype=float) for col in zip(*[
-        (r.mass, r.imbalance, np.nan if r.imbalance_final is None else r.imbalance_final, r.imbalance_direction,
-         r.external_force, r.gravity, r.ramp_time) for r in rotor_list]))
-    ramped = ~np.isnan(imb_final)
-    consts = np.empty((n, 10))
-    consts[:, 0] = 1.0 / mass
-    consts[:, 1] = imb * omega**2
-    consts[:, 2] = omega
-    consts[:, 3] = direction
-    consts[:, 4] = ext[:, 0]
-    consts[:, 5] = ext[:, 1] + mass * gravity
-    consts[:, 6] = c**2
-    consts[:, 7] = np.where(ramped, imb_final, imb) * omega**2
-    consts[:, 8] = np.where(ramped, ramp, 0.0)
     # 1/c^2 as the kernels hold it (a surrogate's setting row 0), for the per-trajectory domain count
-    consts[:, 9] = settings_arr[:, 0] if settings is not None else 1.0 / c**2
+    consts = _rotor_constants(rotor_list, omega, c, settings_arr[:, 0] if settings is not None else 1.0 / c**2)
     record_every = int(record_every)
     n_out = n_steps // record_every + 2
     # empty: the compiled loops write every row, the recorded ones and NaN past them (_fill_unrecorded)
@@ -895,32 +1056,32 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     if not isinstance(check_step, (bool, np.bool_)):
         raise ValueError(f"check_step must be True or False, got {check_step!r}")
     saved = setting.copy()
-    check = _StepCheck(model, kernel, params, setting, settings_arr, consts, c, float(dt), float(omega),
-                       float(eps_substep), int(max_substeps), settings is not None, precision) if check_step else None
+    # the loops' arguments after ``consts`` and ``dom``; each chunk brings its ``steps`` (step0, step1, n_steps)
+    rule = StepRule(float(t0), float(dt), record_every, float(eps_stop), float(eps_substep), int(max_substeps))
+    run = BatchRun(state, out_x, out_v, n_rec, status, t_stop, evals)
+    check = _StepCheck(model, (kernel, params), setting, settings_arr, consts, c, rule, float(omega),
+                       settings is not None, precision) if check_step else None
     if check is not None:
         check.start(x0, v0)
     if stage_batched is None:
         stage_batched = n >= STAGE_BATCHED_MIN_N
     staged = stage_batched and settings is None and isinstance(model, BatchForceModel) and \
         model.batch_force_kernel(precision) is not None
-    # the loops' arguments after ``consts``; ``steps`` (None here) is each chunk's (step0, step1, n_steps)
-    args = (dom, state, float(t0), float(dt), None, record_every, float(eps_stop), float(eps_substep),
-            int(max_substeps), out_x, out_v, n_rec, status, t_stop, evals)
     chunk = max(integrate.CHUNK_MIN_STEPS, -(-n_steps // integrate.MAX_CHUNKS))  # as simulate's
     unresolved: dict = {}
     model.reset_domain_counter()
     t_start = time.perf_counter()
     bar = _progress_bar(progress, n_steps, "simulate_batch")
     try:
-        with (_stage_chunks(model, precision, n_threads, consts, *args) if staged else
-              _lockstep_chunks(kernel, params, setting, settings_arr, consts, *args)) as advance:
+        with (_stage_chunks(model, precision, n_threads, consts, dom, rule, run) if staged else
+              _lockstep_chunks(kernel, params, setting, settings_arr, consts, dom, rule, run)) as advance:
             for s0 in range(0, n_steps, chunk):
                 s1 = min(s0 + chunk, n_steps)
                 advance((s0, s1, n_steps))
                 if bar is not None:
                     bar.update(s1 - s0)
                 if check is not None:
-                    unresolved.update(check.along(state, status, out_x, out_v, n_rec, s1, record_every))
+                    unresolved.update(check.along(run, s1, record_every))
     finally:
         setting[:] = saved
         if bar is not None:
@@ -931,17 +1092,7 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
     t_grid[0] = t0
     steps = np.arange(1, n_out) * record_every
     t_grid[1:] = t0 + (steps - 1 + 1.0) * dt
-    texts = ["ok"] * n
-    t_stop_out = np.full(n, np.nan)
-    for p in np.flatnonzero(status != OK):
-        t_stop_out[p] = t_stop[p]
-        if status[p] in (CONTACT, CONTACT_STAGE):
-            texts[p] = f"contact: eccentricity reached eps_stop={eps_stop} at t={t_stop[p]:.6g} s"
-        elif status[p] == UNRESOLVED:
-            texts[p] = unresolved_text(t_stop[p], np.hypot(*state[p, :2]) / c[p], dt, unresolved[p],
-                                       "simulate(..., dt=None) (adaptive)")
-        else:
-            texts[p] = f"diverged: non-finite state after t={t_stop[p]:.6g} s"
+    texts, t_stop_out = _stop_texts(run, c, eps_stop, dt, unresolved)
     if unresolved:
         warnings.warn(f"{len(unresolved)} of {n} trajectories ended unresolved: dt={dt!r} s no longer resolves "
                       f"them along the run (their status names the largest safe step)", RuntimeWarning, stacklevel=2)
