@@ -1,6 +1,6 @@
-"""Force models and states for the golden-value test (tests/test_force_model.py).
+"""Force models and states for the golden-value test (tests/core/test_force_model.py).
 
-``python tests/golden_models.py`` writes ``tests/data/golden_forces.npz``; it was run once on the
+``python tests/golden_models.py`` writes ``tests/core/golden_forces.npz``; it was run once on the
 code before the force-model interface and the named kernel parameters were introduced, so the
 test compares today's forces with that earlier implementation (a second, independent version of
 the same code), not with themselves.
@@ -18,7 +18,7 @@ from fluidfilm.rotor import LinearBearing
 from fluidfilm.surrogate import Scaling, SurrogateForceModel
 
 ROOT = Path(__file__).resolve().parents[1]
-GOLDEN = Path(__file__).with_name("data") / "golden_forces.npz"
+GOLDEN = Path(__file__).resolve().parent / "core" / "golden_forces.npz"
 CONICAL = dict(name="conical", kind="conical", length=0.064, diameter_small=0.03665, diameter_large=0.04335,
                clearance=120.0e-6, speed_rpm=3000.0, viscosity=6.53e-4, density=992.0, supply_pressure=0.0,
                clearance_taper=0.0, sleeve_min=-0.8e-3, sleeve_max=0.8e-3)

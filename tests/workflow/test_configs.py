@@ -11,7 +11,7 @@ from fluidfilm.workflow.config import bearing_from_cfg, reference_from_cfg, solv
 from fluidfilm.data import DatasetSpec
 from fluidfilm.rotor.cases import rotor_for_case
 
-CONF = Path(__file__).resolve().parents[1] / "conf"
+CONF = Path(__file__).resolve().parents[2] / "conf"
 PRIMARY = sorted(p.stem for p in CONF.glob("*.yaml"))
 # which primary config composes each group, and under which key it lands
 GROUPS = {

@@ -18,7 +18,7 @@ import yaml
 from fluidfilm import ReynoldsSolver, paper_bearing
 from fluidfilm.data import DatasetConfigError, DatasetSpec, generate_dataset, random_test_set
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REFERENCE = {"coarse": [30, 30], "dense": [55, 55], "eps_threshold": 0.9, "cavitation": "gumbel"}
 
 

@@ -15,7 +15,7 @@ from fluidfilm import paper_bearing
 from fluidfilm.perf.speed import best_shaped_surrogate
 from fluidfilm.surrogate import kernels
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 # one process's forces: the best-shaped surrogate's batched kernel (float32 networks, what simulate_batch runs)
 # and its one-state kernel, on fixed states; the numba cache statistics of both

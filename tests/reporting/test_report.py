@@ -13,7 +13,7 @@ import pytest
 
 from fluidfilm.reporting import report
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _traj(verdicts: dict) -> pd.DataFrame:

@@ -79,7 +79,7 @@ def test_an_interrupted_study_resumes_at_the_next_seed_with_the_finished_seeds_u
     from fluidfilm.surrogate.training import read_dataset
 
     frame, meta = read_dataset(quick_data[0])
-    protocol = yaml.safe_load((Path(__file__).parents[1] / "conf" / "protocol" / "paper.yaml").read_text())
+    protocol = yaml.safe_load((Path(__file__).parents[2] / "conf" / "protocol" / "paper.yaml").read_text())
     protocol["max_epochs"] = 15
     args = dict(frame=frame, meta=meta, protocol=protocol, boundaries=[0.5, 0.7], n_samples=900, target_hw=0.0,
                 n_jobs=1, n_resamples=100, budget_s=math.inf, cache_dir=tmp_path)

@@ -723,7 +723,7 @@ def test_the_config_sets_the_fits_settings_by_their_names():
 
     from pathlib import Path
 
-    train = yaml.safe_load((Path(__file__).resolve().parents[1] / "conf" / "universal.yaml").read_text())["train"]
+    train = yaml.safe_load((Path(__file__).resolve().parents[2] / "conf" / "universal.yaml").read_text())["train"]
     fields = {f.name: f.default for f in dataclasses.fields(UniversalFitSettings)}
     own = {"rules", "workers"}
     assert set(train) - own <= set(fields), sorted(set(train) - own - set(fields))

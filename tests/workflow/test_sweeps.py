@@ -7,7 +7,7 @@ from pathlib import Path
 
 import mlflow
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_two_job_joblib_multirun_nests_both_runs_under_one_parent(quick_data, tmp_path):

@@ -11,7 +11,7 @@ import pytest
 from fluidfilm.surrogate import contract
 from fluidfilm.surrogate.scaling import Scaling
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+SRC = Path(__file__).resolve().parents[2] / "src"
 CONTRACT = SRC / "fluidfilm" / "surrogate" / "contract.py"
 NAMES = {n for n in contract.__all__ if n.startswith(("ROW_", "REGION_"))}
 

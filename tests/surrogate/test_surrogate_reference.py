@@ -26,7 +26,7 @@ from fluidfilm.surrogate.kernels import batch_params, forces_batch, reference_fo
 from fluidfilm.surrogate.kernels.jacobian import surrogate_jacobian
 from fluidfilm.surrogate.universal import UNIVERSAL_RULES, universal_bearing
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SAVED = sorted(ROOT.glob("models/**/model.json"))
 
 

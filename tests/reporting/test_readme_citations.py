@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from test_docs import _SHORT, _resolves
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 README_PY = ROOT / "src" / "fluidfilm" / "reporting" / "readme.py"
 
 

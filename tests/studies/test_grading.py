@@ -23,7 +23,7 @@ from fluidfilm.studies import grading_study as grading
 from fluidfilm.data import DatasetConfigError, DatasetSpec
 from fluidfilm.rotor.cases import run_case
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REFERENCE = {"coarse": [30, 30], "dense": [55, 55], "eps_threshold": 0.9, "cavitation": "gumbel"}
 
 

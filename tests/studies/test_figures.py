@@ -20,7 +20,7 @@ from fluidfilm.studies import plots  # noqa: E402
 from fluidfilm.reporting.captions import CAPTIONS  # noqa: E402
 from fluidfilm.studies.figure_style import limit_with_outliers, readable_log_ticks  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _labels(axis):
