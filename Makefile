@@ -216,4 +216,4 @@ ross-adapter: setup ross-env
 
 # the adapter's tests in the ROSS environment (in .venv they are skipped: no ROSS there)
 test-ross: ross-env
-	$(ROSS_VENV)/bin/python -m pytest tests/test_ross_adapter.py -m slow -p no:cacheprovider
+	$(ROSS_VENV)/bin/python -m pytest tests/interop/test_ross_adapter.py -m slow -p no:cacheprovider

@@ -31,7 +31,7 @@ def _states(count, seed, eps_max=0.9):
 
 
 def _kernel_field(params, n, nz, x, v, fixed, project, transform):
-    """As tests/test_active_set.py's fields_both_ways: the linear field, clipped, the held columns set."""
+    """As tests/reynolds/test_active_set.py's fields_both_ways: the linear field, clipped, the held columns set."""
     from fluidfilm.reynolds import kernels
 
     p = np.empty((n, params.full_basis.shape[0] + 2))

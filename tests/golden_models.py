@@ -47,7 +47,7 @@ def models() -> dict:
         "gumbel_30": (ReynoldsSolver(jb, 30, 30, "gumbel"), None),
         "none_20": (ReynoldsSolver(jb, 20, 24, "none"), None),
         # the golden values are projected SOR's (converged to 1e-10): pinned to it; the default active-set
-        # solver agrees with it to PSOR's convergence (tests/test_active_set.py)
+        # solver agrees with it to PSOR's convergence (tests/reynolds/test_active_set.py)
         "swift_stieber_12": (ReynoldsSolver(jb, 12, 12, "swift-stieber", method="psor"), None),
         "pressurised_16": (ReynoldsSolver(bearing_from_dict({**jb.to_dict(), "supply_pressure": 2e4}), 16, 17),
                            None),

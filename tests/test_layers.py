@@ -244,7 +244,7 @@ def test_the_ross_element_without_ross_names_the_extra():
     import importlib.util
 
     if importlib.util.find_spec("ross") is not None:
-        pytest.skip("ROSS is installed here: tests/test_ross_adapter.py checks the element itself")
+        pytest.skip("ROSS is installed here: tests/interop/test_ross_adapter.py checks the element itself")
     from fluidfilm.interop import ross as fr
 
     assert not isinstance(object(), fr.FluidFilmBearingElement)

@@ -1,6 +1,6 @@
 """Every force model against values computed by the code before the interface refactor.
 
-``tests/data/golden_forces.npz`` was written by ``tests/golden_models.py`` on the earlier
+``tests/core/golden_forces.npz`` was written by ``tests/golden_models.py`` on the earlier
 implementation (positional kernel tuples, duck-typed models); the forces, pressures, axial forces
 and short orbits of every model must agree with it to 1e-12 relative.
 """

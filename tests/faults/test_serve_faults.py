@@ -49,7 +49,7 @@ def test_serve_stops_its_whole_server_group_on_a_signal(tmp_path, sig):
     proc = subprocess.Popen([sys.executable, "-m", "fluidfilm.workflow.pipeline", "serve", "--port", str(port)],
                             cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
                             # the signals at their default action, as in a user's terminal (a suite started in
-                            # the background inherits SIGINT ignored: tests/test_review_tools.py)
+                            # the background inherits SIGINT ignored: tests/workflow/test_review_tools.py)
                             preexec_fn=lambda: [signal.signal(s, signal.SIG_DFL) for s in (signal.SIGINT,
                                                                                             signal.SIGTERM)])
     seen, pgid = [], None

@@ -1,7 +1,7 @@
 """The surrogates' fast kernels (``fluidfilm.surrogate.kernels``) against the generic kernel and libm.
 
 The generic kernel ``inference.surrogate_force`` is the specification (it is itself checked against the
-pre-refactor values in tests/test_force_model.py and against the Lightning module in test_surrogate.py);
+pre-refactor values in tests/core/test_force_model.py and against the Lightning module in test_surrogate.py);
 the kernels generated per model shape must give its forces to round-off, count the same states outside
 the training domain, and drive ``simulate`` along the same orbit.
 """

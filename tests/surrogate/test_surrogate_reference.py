@@ -5,7 +5,7 @@ model (``tests/golden_models.py``: every frame, scaling kind, structure and acti
 the generic one-state kernel, the generated one-state kernel, the generic and the generated batched kernels
 and the exact Jacobian's value equal the reference to round-off in float64; the float32 networks are within
 1e-4 of it relative to the larger of |F| and the states' RMS force (the states reach beyond the trained
-models' domains, where float32's rounding grows; inside them tests/test_surrogate_kernels.py holds float32 to
+models' domains, where float32's rounding grows; inside them tests/surrogate/test_surrogate_kernels.py holds float32 to
 1e-5).  The paper's trained min-max networks (affine scalings: raw inputs in metres and m/s, the
 standardisation folded into the first layer) lose far more in float32: up to 1e-2 relative even inside their
 training domain (measured 2026-12-06 on the models under models/); their float32 bound here is a regression
