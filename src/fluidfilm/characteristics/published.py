@@ -18,7 +18,7 @@ check corrected four L/D = 1/4 entries first typed from memory (flow 5.02,
 5.73, 6.08, 6.37 -> 4.99, 5.60, 5.91, 6.12; attitude 21.64, 12.42 -> 21.85,
 12.22): the corrected flows respect the bound Q <= pi (1 + eps) (the Couette
 inflow at the maximum film thickness), which the first typing broke.  Other
-checks: the L/D = 1 rows at eps 0.6/0.8/0.9 match tests/test_reynolds.py, and
+checks: the L/D = 1 rows at eps 0.6/0.8/0.9 match tests/reynolds/test_reynolds.py, and
 the rows satisfy the full-shear friction identity
 (R/c) f = 2 pi^2 S / sqrt(1 - eps^2) + eps sin(phi) / 2 to 0.5 % except
 L/D = 1, eps = 0.4 (1.3 %, present in every copy of the table).

@@ -116,8 +116,9 @@ class BatchedMPC:
             return costs
         rotor = env.rotor_with(env.present_imbalance())
         t_end = env.t + self.horizon * sc.control_interval
-        # the prediction's step is coarse on purpose (50 per revolution, its own eps_substep; tests/test_control.py
-        # measures what that costs): the step check, made for trajectories that are results, is off here
+        # the prediction's step is coarse on purpose (50 per revolution, its own eps_substep;
+        # tests/control/test_control.py measures what that costs): the step check, made for trajectories that are
+        # results, is off here
         kw = dict(eps_stop=sc.eps_stop, record_every=self.record_every, eps_substep=self.eps_substep, t0=env.t,
                   check_step=False)
         if self.batched:

@@ -21,7 +21,7 @@ of N, and the environments' transitions are the single environment's:
   ``info["terminal_observation"]``, ``info["TimeLimit.truncated"]`` says a time limit ended it, and the
   observation returned is the reset one.
 
-``tests/test_control.py`` checks the transitions against ``DummyVecEnv`` over single environments.
+``tests/control/test_control.py`` checks the transitions against ``DummyVecEnv`` over single environments.
 """
 from __future__ import annotations
 

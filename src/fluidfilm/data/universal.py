@@ -64,7 +64,7 @@ N_THETA_LADDER = (48, 72, 96, 144, 192, 288, 384)
 
 def canonical_bearing(slenderness: float) -> JournalBearing:
     """The bearing the dimensionless forces are computed on: D = 40 mm, c/R = 0.002, 3000 rpm, 0.01 Pa s,
-    L = ``slenderness`` D (any other choice gives the same G: the scaling is exact, tests/test_universal.py).
+    L = ``slenderness`` D (any other choice gives the same G: the scaling is exact, tests/surrogate/test_universal.py).
 
     Parameters
     ----------

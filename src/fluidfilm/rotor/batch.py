@@ -27,7 +27,7 @@ with more substeps: it ends the trajectory as a contact):
   models each force is exactly the one-state kernel's, so a batch equals
   ``simulate``'s runs to the last bit; a surrogate's batched kernel equals
   its one-state kernel to round-off (float64) or within 1e-5 relative
-  (float32 networks); tests/test_batch.py bounds the trajectories'
+  (float32 networks); tests/rotor/test_batch.py bounds the trajectories'
   difference.  ``threads``: contiguous chunks of the batch, one thread each
   (the loop releases the GIL), each with its own kernel parameters and
   domain counter; trajectories do not depend on the chunking.
@@ -670,7 +670,7 @@ def _first_class_compile():
     """Silence exactly numba's "First-class function type feature is experimental" warning while the
     stage-batched loop compiles: the loop takes the force kernel as a first-class function by design (see
     ``_stages_loop``), numba prints that warning at every such compilation, and it would land in a user's
-    run as noise about our code, not theirs (``tests/test_batch.py`` holds the loop's trajectories equal to
+    run as noise about our code, not theirs (``tests/rotor/test_batch.py`` holds the loop's trajectories equal to
     ``simulate``'s).  Any other warning still shows."""
     from numba.core.errors import NumbaExperimentalFeatureWarning
 
@@ -970,7 +970,7 @@ def simulate_batch(model, rotors, t_end: float, dt: float = 1e-5, x0=None, v0=No
         depend on it.
     precision : {"float32", "float64"}, default "float32"
         Arithmetic of a surrogate's networks in the stage-batched path (its batched kernel: float32 keeps
-        the forces within 1e-5 relative of float64 and costs about half as much; tests/test_batch.py bounds
+        the forces within 1e-5 relative of float64 and costs about half as much; tests/rotor/test_batch.py bounds
         the trajectories' difference); a reference model computes in float64 either way.
     stage_batched : bool or None, default None
         True: the stage-batched loop wherever the model has a batched kernel; False: the per-trajectory

@@ -29,7 +29,7 @@ def run_cases(model, runs, integrator_cfg: Mapping, threads: int | None = None) 
     One ``simulate_batch`` over all of them, stage-batched whatever their number (the force kernel called
     once per RK4 stage for every running trajectory, ``threads`` across the batch; None: every core), so a
     study of many reference orbits uses both cores.  The reference solvers' batched path equals ``simulate``
-    to the last bit (tests/test_batch.py); a surrogate's runs in float64 here, as ``simulate``'s.
+    to the last bit (tests/rotor/test_batch.py); a surrogate's runs in float64 here, as ``simulate``'s.
     """
     from fluidfilm.rotor.batch import _thread_count, simulate_batch
 

@@ -16,7 +16,7 @@ is split into k = ceil(((1 - eps_substep^2)/(1 - eps^2))^1.5) equal substeps,
 which keeps lambda*dt at the level it has at eps_substep.  With the paper's
 bearing, m = 1-3 kg and dt = 1e-5 s (2000 steps per revolution), lambda*dt
 stays below ~0.3 up to eps_substep = 0.8; the step-halving test shows the
-settled orbits converge (tests/test_rotor.py).
+settled orbits converge (tests/rotor/test_rotor.py).
 
 The loop is compiled with numba and calls the model's compiled force kernel
 ``fn(params, x1, x2, v1, v2) -> (F1, F2)`` directly, so the integrator's own

@@ -4,7 +4,7 @@
 Like for like: the three rules run on one grid, one feed (an axial groove at the top, theta = pi, opposite a
 load along gravity, at the bearing's supply pressure) and one solver (``reynolds.elrod_adams.ElrodAdamsSolver``
 with ``cavitation="jfo" | "swift-stieber" | "gumbel"``; its Guembel and Swift-Stieber films equal the grooved
-direct solver's, tests/test_elrod_adams.py), so a difference is the rule's and nothing else.  The film
+direct solver's, tests/reynolds/test_elrod_adams.py), so a difference is the rule's and nothing else.  The film
 must be fed somewhere under mass conservation (docs); the groove is the feed of the comparison.
 
 Parts:

@@ -22,7 +22,7 @@ An activation is one ``Activation`` entry:
 
 Adding an activation: its compiled forms and derivatives here, one ``Activation`` entry in
 ``REGISTRY``, one branch in each of the three dispatchers (``exact64``, ``unit64``, ``unit32``:
-numba dispatches on the code at run time), and its tests (``tests/test_activations.py`` checks every
+numba dispatches on the code at run time), and its tests (``tests/surrogate/test_activations.py`` checks every
 entry's forms against each other and that every code dispatches to its own forms).
 
 ``pade_tanh`` is tanh's [5/4] Pade approximant (a convergent of Lambert's continued fraction) taken as an
@@ -154,7 +154,7 @@ TANH64_CLAMP = 19.5
 @njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def tanh64(x):
     """tanh in float64 from arithmetic only (vectorises); within 1.5e-15 relative of ``math.tanh`` (libm's own
-    error included; tests/test_surrogate_kernels.py), exactly odd, exactly x for tiny x."""
+    error included; tests/surrogate/test_surrogate_kernels.py), exactly odd, exactly x for tiny x."""
     x = min(max(x, -TANH64_CLAMP), TANH64_CLAMP)
     x2 = x * x
     p = x * (_P1 + x2 * (_P3 + x2 * (_P5 + x2 * (_P7 + x2 * _P9))))
@@ -298,7 +298,7 @@ _TANH, _RELU, _SILU, _SIGMOID, _PADE_TANH = (REGISTRY[n].code for n in ("tanh", 
                                                                         "pade_tanh"))
 
 
-# numba dispatches on the code at run time: one branch per entry (tests/test_activations.py checks each code
+# numba dispatches on the code at run time: one branch per entry (tests/surrogate/test_activations.py checks each code
 # reaches its own form)
 @njit(cache=True, inline="always")
 def exact64(code, x):

@@ -3,7 +3,7 @@
 ``Scaling.kernel_row()`` flattens one network's input and output scaling (``surrogate.scaling``) into
 ``ROW_LENGTH`` = 22 float64 entries, the form the numba kernels take (a (R, 22) array for R regions).
 This module is the only place that knows where each field sits; every other module indexes a row with
-the names below (``tests/test_surrogate_contract.py`` fails on a bare integer index into a row
+the names below (``tests/surrogate/test_surrogate_contract.py`` fails on a bare integer index into a row
 anywhere else in ``src/``).
 
 ====== ====================== ===================================================================

@@ -41,7 +41,7 @@ active bearing) follow the state inputs and are standardised like them.
 With ``sleeve_gain`` = dc_r/dS (tan(alpha) of a conical bearing) the
 clearance used everywhere above is the sleeve position's own,
 c_r = c + S tan(alpha), and the physics force scale carries (c/c_r)^2: by the
-film's similarity law (tests/test_conical.py) the scaled target then hardly
+film's similarity law (tests/reynolds/test_conical.py) the scaled target then hardly
 depends on S at all, and the network only learns what the law leaves over.
 
 How the compiled kernels read a scaling (``Scaling.kernel_row``: 22 float64 entries) is laid out and

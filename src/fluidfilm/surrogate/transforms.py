@@ -6,7 +6,7 @@ Each function uses only arithmetic and ``np.sqrt``, so the same source runs
 - compiled by numba on scalars inside the force kernel (``inference._region_force``: the
   ``_nb`` twins below are these very functions, jitted).
 
-A test (tests/test_surrogate.py) checks the two paths agree to round-off on random states.
+A test (tests/surrogate/test_surrogate.py) checks the two paths agree to round-off on random states.
 """
 from __future__ import annotations
 

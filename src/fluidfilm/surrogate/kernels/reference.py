@@ -11,7 +11,7 @@ What every compiled kernel computes (``generic``, ``generated``, ``generic_batch
    damping structure adds C(z) w, w the raw velocity inputs;
 4. back to forces: ``Scaling.forces`` (un-standardise, the physics gain, the frame).
 
-It does not count states outside the training domain (the kernels do).  ``tests/test_surrogate_kernels``
+It does not count states outside the training domain (the kernels do).  ``tests/surrogate/test_surrogate_kernels``
 checks every compiled path against it on random states of every shipped, trained and test model: equal to
 round-off in float64 (1e-9 of the states' RMS force), within float32's precision (1e-5) in float32.
 

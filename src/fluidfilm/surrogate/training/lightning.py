@@ -38,7 +38,7 @@ class _TanhFunction(torch.autograd.Function):
     Why: torch 2.13's CPU ``tanh`` is not vectorised while ``sigmoid`` is, so this form takes a third off the
     training step (benchmarks/bench_training_step.py; the timings are in docs/dataset_and_surrogates.md).  It differs from ``torch.tanh`` by at most 1.8e-7 (absolute,
     float32), the rounding of the float32 sum 2 s - 1
-    (tests/test_surrogate.py::test_training_layers_equal_torchs_own_in_value_and_gradient).
+    (tests/surrogate/test_surrogate.py::test_training_layers_equal_torchs_own_in_value_and_gradient).
     """
 
     @staticmethod

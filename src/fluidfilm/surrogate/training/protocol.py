@@ -58,7 +58,7 @@ PROTOCOLS = ("paper", "adam")
 #: What the weights of a network trained here depend on in the code, for the caches of runs that take hours
 #: (``studies.paper_scale`` keys its records and LM checkpoints by it, with the data, the point and the
 #: protocol). Give it a new value with any change to this module, ``levenberg_marquardt`` or ``scaling``
-#: that changes the weights a run ends with; ``tests/test_protocol.py`` pins the result of a whole LM run made
+#: that changes the weights a run ends with; ``tests/surrogate/test_protocol.py`` pins the result of a whole LM run made
 #: with the code of 2026-12-04 to catch one made without it. Its value is the SHA-256 of those three files as
 #: they were then: the key the records and checkpoints committed before it were made with (until then the
 #: key hashed the files' bytes, so a comment or a new device path would have discarded hours of training).

@@ -622,7 +622,7 @@ def train_region(z: np.ndarray, y: np.ndarray, *, width: int = 64, steps: int = 
 @dataclass(frozen=True)
 class UniversalFitSettings:
     """The settings of a universal fit and their defaults, written once: ``train_universal``'s and the pipeline's
-    (conf/universal.yaml's ``train`` block names these fields: tests/test_universal.py checks it).
+    (conf/universal.yaml's ``train`` block names these fields: tests/surrogate/test_universal.py checks it).
 
     Parameters
     ----------
