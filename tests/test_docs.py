@@ -152,3 +152,16 @@ def test_every_test_the_docs_cite_exists():
             if name and current and name not in tests[current]:
                 bad.append((page.name, f"{current}::{name}"))
     assert not bad, bad
+
+
+def test_every_test_path_the_workspace_cites_exists():
+    """A path into tests/ (``tests/rotor/test_batch.py``) named in the code, the docs, the Makefile, CI or the
+    configs is where that file is (the changelog keeps the paths of its time)."""
+    files = [ROOT / "README.md", ROOT / "Makefile", ROOT / "pyproject.toml", ROOT / "dvc.yaml",
+             *sorted((ROOT / "docs").glob("*.md")), *sorted((ROOT / ".ci").iterdir()),
+             *sorted((ROOT / "src").rglob("*.py")), *sorted((ROOT / "benchmarks").glob("*.py")),
+             *sorted((ROOT / "tests").rglob("*.py")), *sorted((ROOT / "conf").rglob("*.yaml"))]
+    bad = [(f.relative_to(ROOT).as_posix(), path) for f in files if f.is_file()
+           for path in re.findall(r"(?<![\w/.-])(tests/[\w/]+\.(?:py|npz))", f.read_text())
+           if not (ROOT / path).exists()]
+    assert not bad, bad

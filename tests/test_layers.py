@@ -13,6 +13,7 @@ without the lazy re-exports of a package's module ``__getattr__``.
 from __future__ import annotations
 
 import ast
+import re
 
 import pytest
 from test_dvc_deps import SRC, _module_file
@@ -303,25 +304,114 @@ def test_each_room_imports_only_what_its_row_allows(room):
 
 
 def test_the_architecture_page_states_the_rooms_rules():
-    """docs/architecture.md's table names each room's allowed imports as ROOMS does."""
-    import re
-
+    """docs/architecture.md's table names each room's allowed imports as ROOMS does, and its tests' folder
+    (tests/<room>/); the page names every module of ``TOP_LEVEL``."""
     page = (SRC.parent / "docs" / "architecture.md").read_text()
-    rows = {}
+    rows, tests = {}, {}
     for line in page.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(cells) == 3 and re.fullmatch(r"`\w+`", cells[0]) and cells[0].strip("`") in ROOMS:
+        if len(cells) == 4 and re.fullmatch(r"`\w+`", cells[0]) and cells[0].strip("`") in ROOMS:
             allowed = cells[2]
             rows[cells[0].strip("`")] = (tuple(ROOMS) if allowed == "every room" else
                                          tuple(re.findall(r"`(\w+)`", allowed)))
+            tests[cells[0].strip("`")] = cells[3]
     assert set(rows) == set(ROOMS), sorted(set(ROOMS) ^ set(rows))
     for room, allowed in ROOMS.items():
         want = set(allowed) if room != "studies" else set(ROOMS) - {"studies"}
         got = set(rows[room]) - {room}
         assert got == want, (room, sorted(got), sorted(want))
+        assert tests[room] == f"`tests/{room}/`", (room, tests[room])
+    assert not [name for name in TOP_LEVEL if f"`{name}`" not in page], "a TOP_LEVEL test the page does not name"
 
 
 def test_the_room_check_sees_a_real_import():
     """It can fail: the rotor's integrator imports core, the dataset's generator the solver."""
     assert "core" in _room_imports("fluidfilm.rotor.integrate")
     assert "reynolds" in _room_imports("fluidfilm.data.generate")
+
+
+# --- the tests mirror the rooms ---------------------------------------------------------------------------
+TESTS = SRC.parent / "tests"
+#: the test modules at the top of tests/, each spanning the rooms by design (docs/architecture.md says why);
+#: every other test module sits in tests/<room>/ (or the fault-injection suite, tests/faults/)
+TOP_LEVEL = {
+    "test_docs.py": "the README and docs: their names, links, cited tests and worked example, every room's",
+    "test_docstrings.py": "the public API of every room: its docstrings",
+    "test_doctests.py": "the public API of every room: its Examples",
+    "test_layers.py": "the rooms' import rules, and this mirror",
+    "test_dvc_deps.py": "every stage of dvc.yaml, whatever rooms it imports",
+    "test_pipeline.py": "`make reproduce` end to end",
+    "test_quickstart.py": "the README's quickstart in a fresh clone, the citation and licence files",
+    "test_slow.py": "the slow suite (`make test-slow`): the paper-scale dataset and every benchmark script",
+    "test_tooling.py": "the repository's tooling: the root's io (stage tables) and DVC's settings",
+}
+OTHER_FOLDERS = ("faults", "__pycache__")
+
+
+def _package_names() -> dict[str, str]:
+    """The room of each name ``fluidfilm/__init__.py`` re-exports (``from fluidfilm import X``), read statically."""
+    out = {}
+    for node in ast.parse((SRC / "fluidfilm" / "__init__.py").read_text()).body:
+        if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("fluidfilm."):
+            out |= {a.asname or a.name: node.module.split(".")[1] for a in node.names}
+    return out
+
+
+def _rooms_a_test_imports(path) -> set[str]:
+    """The rooms a test module imports anything of (every import statement, module level or not)."""
+    names = _package_names()
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            out |= {a.name.split(".")[1] for a in node.names if a.name.startswith("fluidfilm.")}
+        elif isinstance(node, ast.ImportFrom) and not node.level:
+            module = node.module or ""
+            if module.startswith("fluidfilm."):
+                out.add(module.split(".")[1])
+            elif module == "fluidfilm":
+                out |= {names.get(a.name, a.name) for a in node.names}
+    return out & set(ROOMS)
+
+
+def _misplaced(path) -> str | None:
+    """Why a test module in tests/<room>/ does not look like that room's: it imports the library but nothing of
+    the room; or, importing nothing of the library (it runs entry points, reads files), its docstring does not
+    name the room (``reporting/readme.py``, ``workflow.entry``).  None where it does."""
+    room = path.parent.name
+    imported = _rooms_a_test_imports(path)
+    if room in imported:
+        return None
+    if imported:
+        return f"imports {sorted(imported)}, nothing of {room}"
+    doc = ast.get_docstring(ast.parse(path.read_text())) or ""
+    return None if re.search(rf"\b{room}[./]\w", doc) else f"imports nothing of the library; its docstring names no {room}"
+
+
+def test_the_tests_mirror_the_rooms():
+    """tests/<room>/ for every room and no other folder (but tests/faults); each holds test modules of its room
+    (``_misplaced``), and a test module at the top of tests/ is one of ``TOP_LEVEL``."""
+    folders = sorted(p.name for p in TESTS.iterdir() if p.is_dir() and p.name not in OTHER_FOLDERS)
+    assert folders == sorted(ROOMS), f"tests/ folders that are no room, or rooms without tests/<room>/: " \
+                                     f"{sorted(set(folders) ^ set(ROOMS))}"
+    empty = [room for room in ROOMS if not list((TESTS / room).glob("test_*.py"))]
+    assert not empty, f"rooms without a test module in tests/<room>/: {empty}"
+    top = sorted(p.name for p in TESTS.glob("test_*.py"))
+    assert top == sorted(TOP_LEVEL), f"put a room's test in tests/<room>/ (or list a test spanning the rooms in " \
+                                     f"TOP_LEVEL, with the reason): {sorted(set(top) ^ set(TOP_LEVEL))}"
+    wrong = {str(p.relative_to(TESTS)): why for room in ROOMS for p in sorted((TESTS / room).glob("test_*.py"))
+             if (why := _misplaced(p))}
+    assert not wrong, f"test modules in another room's folder (move them to the room they test): {wrong}"
+
+
+def test_the_mirror_check_sees_a_misplaced_test(tmp_path):
+    """It can fail: the solver's test in surrogate/ is misplaced, in reynolds/ it is not; a module importing
+    nothing of the library is placed by its docstring."""
+    solver_test = (TESTS / "reynolds" / "test_reynolds.py").read_text()
+    assert _misplaced(TESTS / "reynolds" / "test_reynolds.py") is None
+    for room, body, placed in (("surrogate", solver_test, False), ("reynolds", solver_test, True),
+                               ("workflow", '"""Every entry point runs (``workflow.entry``)."""\n', True),
+                               ("studies", '"""Every entry point runs."""\n', False)):
+        (tmp_path / room).mkdir(exist_ok=True)
+        path = tmp_path / room / "test_probe.py"
+        path.write_text(body)
+        assert (_misplaced(path) is None) == placed, (room, _misplaced(path))

@@ -1,4 +1,5 @@
-"""Every entry point's --help says what its study does, its main options and an example."""
+"""Every entry point's --help (``experiments/*.py``, run through ``workflow.entry``) says what its study does,
+its main options and an example."""
 from __future__ import annotations
 
 import subprocess
