@@ -258,6 +258,7 @@ def test_parallel_jobs_wanting_one_grading_make_it_once(tmp_path):
     import subprocess
     import sys
 
+    here = str(Path(__file__).resolve().parent)  # this module, imported by the children
     code = ("import json, sys; sys.path.insert(0, %r)\n"
             "from fluidfilm import paper_bearing\n"
             "from fluidfilm.studies import grading_study as grading\n"
@@ -265,7 +266,7 @@ def test_parallel_jobs_wanting_one_grading_make_it_once(tmp_path):
             "import test_grading as t\n"
             "p, m, reused = grading.cached_dataset(paper_bearing(), t.REFERENCE, DatasetSpec.from_cfg(t._tiny_cfg()), %r,"
             " scheduler='inline', progress=False)\n"
-            "print(json.dumps({'reused': reused, 'path': str(p)}))" % (str(ROOT / "tests"), str(tmp_path)))
+            "print(json.dumps({'reused': reused, 'path': str(p)}))" % (here, str(tmp_path)))
     procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True) for _ in range(2)]
     outs = [json.loads(p.communicate(timeout=300)[0].strip().splitlines()[-1]) for p in procs]
     assert sorted(o["reused"] for o in outs) == [False, True] and outs[0]["path"] == outs[1]["path"]
