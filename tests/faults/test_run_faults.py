@@ -58,6 +58,26 @@ def test_the_step_the_check_refuses_is_really_wrong_and_the_safe_one_is_right(he
     assert good.ok and np.hypot(*(good.x[-1] - x_eq)) < 1e-3 * c
 
 
+@pytest.mark.parametrize("dt", [1e-3, 1e-2])
+def test_a_film_with_memory_gets_the_step_check_at_the_start(heavy, dt):
+    """The mass-conserving film is refused the step the Reynolds film is refused, with the safe step of its own
+    quasi-static force; check_step=False lets an expert through."""
+    from fluidfilm.reynolds.elrod_adams import ElrodAdamsSolver
+
+    _, _, x0 = heavy
+    film = ElrodAdamsSolver(HEAVY, 16, 9)
+    with pytest.raises(ValueError, match=rf"dt={dt!r} s cannot resolve this run: the largest safe step is "
+                                         r"0\.000\d+ s") as err:
+        simulate(film, Rotor(mass=MASS), t_end=0.5, dt=dt, x0=x0)
+    safe = float(str(err.value).split("largest safe step is ")[1].split(" s")[0])
+    fn, params = film.force_kernel
+    lim = integrate.rk4_step_limit(lambda *s: fn(params, *s), x0, np.zeros(2), 1.0 / MASS, HEAVY.clearance,
+                                   HEAVY.omega)
+    assert safe == pytest.approx(lim.dt_max, rel=1e-3)
+    run = simulate(film, Rotor(mass=MASS), t_end=3 * dt, dt=dt, x0=x0, check_step=False)
+    assert run.t.size >= 2   # it ran (what it ran into is the expert's to read in its status)
+
+
 def test_the_adaptive_run_needs_no_dt_and_lands_on_the_equilibrium(heavy):
     solver, x_eq, x0 = heavy
     traj = simulate(solver, Rotor(mass=MASS), t_end=0.5, dt=None, x0=x0, rtol=1e-7)

@@ -27,7 +27,7 @@ from fluidfilm.reynolds.jfo_cases import (AUSAS_P0, AUSAS_SIGMA_MAX, AUSAS_T_RUP
 
 def test_steady_film_equals_swift_stieber_where_the_groove_feeds_the_pressure_zone():
     b = paper_bearing()
-    film = ElrodAdamsSolver(b, 30, 30, tol_commit=1e-13)
+    film = ElrodAdamsSolver(b, 30, 30, tol_commit=1e-13, tol_steady=1e-13)
     ss = GroovedReynoldsSolver(b, 30, 30, cavitation="swift-stieber", groove_angle=math.pi)
     # the thickest film at or past the groove (theta = pi) in the sense of rotation: the cavity runs into the
     # groove, which refills the film, so the liquid reaching the pressure zone is full
@@ -51,7 +51,7 @@ def test_full_film_transient_force_equals_the_linear_reynolds_solver_with_the_sq
     equation with dH/dt = -V.(sin, cos) / c exactly (the lagged-gap content)."""
     b = JournalBearing(length=0.064, diameter=0.040, clearance=120e-6, speed_rpm=3000.0, viscosity=6.53e-4,
                        supply_pressure=2e6)
-    film = ElrodAdamsSolver(b, 30, 30, tol_commit=1e-13)
+    film = ElrodAdamsSolver(b, 30, 30, tol_commit=1e-13, tol_steady=1e-13)
     lin = GroovedReynoldsSolver(b, 30, 30, cavitation="none", groove_angle=math.pi)
     ep = film.params
     x, v = (10e-6, 30e-6), (0.02, -0.03)
@@ -64,9 +64,11 @@ def test_full_film_transient_force_equals_the_linear_reynolds_solver_with_the_sq
     assert abs(f1 - g[0]) + abs(f2 - g[1]) <= 1e-7 * np.hypot(*g), ((f1, f2), g)
 
 
-def test_the_committed_step_conserves_mass_to_round_off_along_a_whirl():
+@pytest.mark.parametrize("tol_commit", [1e-13, 1e-5, 1e-3])
+def test_the_committed_step_conserves_mass_to_round_off_along_a_whirl(tol_commit):
+    # at any tolerance of the commit's solve: close_content derives the content from each node's balance
     b = paper_bearing()
-    film = ElrodAdamsSolver(b, 30, 30, tol_commit=1e-13)
+    film = ElrodAdamsSolver(b, 30, 30, tol_commit=tol_commit, tol_steady=1e-13)
     ep = film.params
     dt, r, w = 1e-5, 50e-6, 150.0
 
@@ -91,7 +93,7 @@ def test_the_committed_step_conserves_mass_to_round_off_along_a_whirl():
         total_inflow += inflow
         th_n[:] = th
     assert th.min() < 0.9                 # the whirl runs through a cavity
-    assert worst < 1e-10, worst
+    assert worst < 1e-10, worst            # round-off of ~1e3 nodes; unclosed, tol 1e-5 leaves ~1e-6
     assert abs(total_change - total_inflow) < 1e-9 * abs(total_inflow), (total_change, total_inflow)
 
 
@@ -125,7 +127,7 @@ def test_force_and_cavity_boundary_converge_with_the_grid():
     x = [0.0, 84e-6]  # eps 0.7
     forces, ruptures = [], []
     for n, nz in ((24, 13), (48, 25), (96, 49)):
-        film = ElrodAdamsSolver(b, n, nz, tol_commit=1e-12)
+        film = ElrodAdamsSolver(b, n, nz, tol_commit=1e-12, tol_steady=1e-12)
         forces.append(film.forces(x, [0.0, 0.0]))
         p, th = film.steady_field(x)
         mid = th[:, nz // 2]
@@ -141,7 +143,7 @@ def test_force_and_cavity_boundary_converge_with_the_grid():
 def test_simulate_carries_the_film_and_a_full_film_orbit_equals_the_reynolds_solvers():
     b = JournalBearing(length=0.064, diameter=0.040, clearance=120e-6, speed_rpm=3000.0, viscosity=6.53e-4,
                        supply_pressure=3e6)
-    film = ElrodAdamsSolver(b, 30, 30, tol=1e-10, tol_commit=1e-12)
+    film = ElrodAdamsSolver(b, 30, 30, tol=1e-10, tol_commit=1e-12, tol_steady=1e-12)
     assert isinstance(film, TransientFilmModel)
     lin = GroovedReynoldsSolver(b, 30, 30, cavitation="none", groove_angle=math.pi)
     rotor = Rotor(mass=2.5, imbalance=1e-4)
@@ -151,12 +153,13 @@ def test_simulate_carries_the_film_and_a_full_film_orbit_equals_the_reynolds_sol
     assert a.ok and g.ok
     assert np.ptp(g.x, axis=0).max() > 0.1 * b.clearance
     assert np.abs(a.x - g.x).max() < 1e-8 * b.clearance
-    assert a.meta["film_content"].min() == 1.0
+    # full everywhere: the content is 1 up to the commit's residual (close_content)
+    assert np.abs(a.meta["film_content"] - 1.0).max() < 1e-9
 
 
 def test_orbit_converges_in_dt_at_first_order_or_better():
     b = paper_bearing()
-    film = ElrodAdamsSolver(b, 24, 13, tol=1e-9, tol_commit=1e-11)
+    film = ElrodAdamsSolver(b, 24, 13, tol=1e-9, tol_commit=1e-11, tol_steady=1e-11)
     rotor = Rotor(mass=2.5, imbalance=2.5e-4)
     ends = [simulate(film, rotor, t_end=0.01, dt=dt, x0=(0.0, 40e-6)).x[-1] for dt in (4e-5, 2e-5, 1e-5)]
     e1 = np.linalg.norm(ends[1] - ends[0])
@@ -190,7 +193,7 @@ def test_the_non_conserving_rules_on_the_same_grid_equal_the_grooved_solver(rule
     """The like-for-like comparison's other arms: the same solver with the content held full is the grooved
     finite-difference solver's Swift-Stieber or Guembel film (direct sparse solves), moving journal included."""
     b = paper_bearing()
-    film = ElrodAdamsSolver(b, 30, 30, tol_commit=1e-13, cavitation=rule)
+    film = ElrodAdamsSolver(b, 30, 30, tol_commit=1e-13, tol_steady=1e-13, cavitation=rule)
     ref = GroovedReynoldsSolver(b, 30, 30, cavitation=rule, groove_angle=math.pi)
     for x, v in (([0.0, 60e-6], [0.0, 0.0]), ([-30e-6, 96e-6], [0.0, 0.0]), ([20e-6, 70e-6], [0.01, -0.02])):
         f, g = film.forces(x, v), ref.forces(x, v)
@@ -199,7 +202,7 @@ def test_the_non_conserving_rules_on_the_same_grid_equal_the_grooved_solver(rule
 
 def test_side_flow_balances_the_groove_in_a_steady_film_and_friction_matches_petroff_when_centred():
     b = paper_bearing()
-    film = ElrodAdamsSolver(b, 30, 31, tol_commit=1e-13)
+    film = ElrodAdamsSolver(b, 30, 31, tol_commit=1e-13, tol_steady=1e-13)
     p, th = film.steady_field([0.0, 1e-12])       # centred: no pressure, a full film
     q, power = film.flows([0.0, 1e-12], p, th)
     petroff = b.viscosity * b.omega * b.radius / b.clearance * b.omega * b.radius * 2.0 * math.pi * b.radius * b.length
@@ -214,7 +217,7 @@ def test_side_flow_balances_the_groove_in_a_steady_film_and_friction_matches_pet
     change, inflow, scale = ea.flow_balance(ep, ep.k_omega, h, hf, 0.0, np.zeros_like(p), p, th)
     assert change == 0.0 and abs(inflow) < 1e-9 * scale
     q, power = film.flows(x, p, th)
-    full = ElrodAdamsSolver(b, 30, 31, tol_commit=1e-13, cavitation="swift-stieber")
+    full = ElrodAdamsSolver(b, 30, 31, tol_commit=1e-13, tol_steady=1e-13, cavitation="swift-stieber")
     q_ss, power_ss = full.flows(x, *full.steady_field(x))
     # the same pressure zone (the groove feeds it full), so the same leakage; the cavity's striated film shears
     # less than the full film the non-conserving rule assumes
@@ -223,7 +226,7 @@ def test_side_flow_balances_the_groove_in_a_steady_film_and_friction_matches_pet
 
 
 def test_a_film_solve_that_does_not_converge_ends_the_run_as_diverged_never_ok():
-    film = ElrodAdamsSolver(paper_bearing(), 16, 9, max_sweeps=2, tol=1e-12, tol_commit=1e-12)
+    film = ElrodAdamsSolver(paper_bearing(), 16, 9, max_sweeps=2, tol=1e-12, tol_commit=1e-12, tol_steady=1e-12)
     # the steady start already needs more than two sweeps: refused with the position named
     with pytest.raises(RuntimeError, match="did not converge"):
         simulate(film, Rotor(mass=2.5, imbalance=5e-4), t_end=1e-3, dt=1e-5, x0=(0.0, 50e-6))

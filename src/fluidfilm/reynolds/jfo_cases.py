@@ -47,7 +47,7 @@ def squeeze_params(nx: int, p0: float = AUSAS_P0) -> tuple[ea.EAParams, np.ndarr
                        cos_face=np.cos(th), inv_c=1.0, inv_dtheta=1.0, inv_dtheta2=1.0,
                        inv_dzeta2=1.0 / (x[1] - x[0]) ** 2, k_omega=0.0, kvc=2.0, a_sin=np.zeros(n), a_cos=np.zeros(n),
                        w_z=np.zeros(nx), w_cell=1.0, p_supply=p0, p_end=p0, fixed=np.zeros(n, dtype=np.bool_),
-                       sor_omega=1.9, tol=1e-10, tol_commit=1e-10, max_sweeps=200_000, coarse_every=3,
+                       sor_omega=1.9, tol=1e-10, tol_commit=1e-10, tol_steady=1e-10, max_sweeps=200_000, coarse_every=3,
                        mode_shape=np.sin(np.pi * x), rule=ea.RULE_JFO, mu=1.0, radius=1.0, clearance=1.0,
                        dz=float(x[1] - x[0])), x
 

@@ -975,6 +975,10 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float | None = 1
         if dt is None:
             raise ValueError("dt=None (the adaptive integrator) does not carry a film's content; give a film with "
                              "memory a fixed dt")
+        if not isinstance(check_step, (bool, np.bool_)):
+            raise ValueError(f"check_step must be True or False, got {check_step!r}")
+        if check_step:
+            _check_film_step(model, rotor, dt, x0, v0, t0, speed, eps_substep, max_substeps)
         return simulate_film(model, rotor, t_end, dt, x0, v0, eps_stop=eps_stop, record_every=record_every,
                              eps_substep=eps_substep, max_substeps=max_substeps, t0=t0, speed=speed,
                              film_content=film_content, strict=strict)
@@ -1068,6 +1072,36 @@ def simulate(model: ForceModel, rotor: Rotor, t_end: float, dt: float | None = 1
     return Trajectory(t=out_t[:n_rec].copy(), x=out_x[:n_rec].copy(), v=out_v[:n_rec].copy(), status=text,
                       t_stop=t_stop, n_force_evals=int(n_evals), wall_time_s=run["wall"],
                       meta=meta, n_outside_domain=n_outside)
+
+
+def _check_film_step(model, rotor: Rotor, dt, x0, v0, t0, speed, eps_substep, max_substeps) -> None:
+    """A film with memory gets ``simulate``'s step check at the start state, on its force with the content
+    held at its steady value (``force_kernel``): the fast rates of the film-rotor system are its damping's
+    and stiffness', which the content's memory does not speed up.  Along the run the check is not repeated
+    (the linearisation would need the content's own dynamics)."""
+    try:
+        xs = np.zeros(2) if x0 is None else np.asarray(x0, dtype=float).reshape(2)
+        vs = np.zeros(2) if v0 is None else np.asarray(v0, dtype=float).reshape(2)
+        dt_f = float(dt)
+    except (TypeError, ValueError):
+        return  # simulate_film names the bad argument
+    c = float(model.clearance)
+    if not (np.isfinite(xs).all() and np.isfinite(vs).all() and np.hypot(*xs) < c and math.isfinite(dt_f)
+            and dt_f > 0.0):
+        return
+    kernel, params, _ = one_state_kernel(model, "float64")
+    omega = float(model.bearing.omega)
+    omega_max = omega if speed is None else float(np.abs(np.asarray(speed.omega)).max())
+    counters = [a.copy() for a in _integer_arrays(params, [])]
+    lim = rk4_step_limit(lambda x1, x2, v1, v2: kernel(params, x1, x2, v1, v2), xs, vs, 1.0 / rotor.mass, c,
+                         omega_max, eps_substep, max_substeps)
+    for a, kept in zip(_integer_arrays(params, []), counters):
+        a[...] = kept   # the check's evaluations are not the run's (a surrogate's domain counter)
+    if dt_f > lim.dt_max * (1.0 + 1e-9):
+        raise ValueError(
+            f"dt={dt!r} s cannot resolve this run: the largest safe step is {lim.dt_max:.3g} s at the start state "
+            f"(eccentricity {np.hypot(*xs) / c:.3g}; rule: {lim.rule}). Use dt <= {lim.dt_max:.3g}, or "
+            f"check_step=False (experts)")
 
 
 def unresolved_text(t: float, eps: float, dt, lim: StepLimit, remedy: str) -> str:

@@ -296,8 +296,11 @@ def plot_orbits(rows: list[dict], clearance: float, t_settle: float):
         # a static orbit is a point: mark both ends, and show at least 0.05 c round it
         ax.plot(r["_xref"][-1, 0] / clearance, r["_xref"][-1, 1] / clearance, "ko", ms=6, mfc="none")
         ax.plot(r["_x"][-1, 0] / clearance, r["_x"][-1, 1] / clearance, "x", color="tab:red", ms=6)
-        mid = r["_xref"][r["_tref"] >= t_settle].mean(axis=0) / clearance
-        span = max(0.05, float(np.ptp(r["_xref"][r["_tref"] >= t_settle] / clearance, axis=0).max()) * 0.6)
+        # the box round both settled orbits (centred on it, not on the orbit's mean: a lopsided orbit is not cut)
+        both = np.vstack([r["_xref"][r["_tref"] >= t_settle], r["_x"][r["_t"] >= t_settle]]) / clearance
+        lo, hi = both.min(axis=0), both.max(axis=0)
+        mid = 0.5 * (lo + hi)
+        span = max(0.05, 0.55 * float((hi - lo).max()))
         ax.set_xlim(mid[0] - span, mid[0] + span)
         ax.set_ylim(mid[1] + span, mid[1] - span)  # gravity down the page
         ax.set_title(f"{r['case']}: RMS {r['rms_pct']:.2f} % c")
