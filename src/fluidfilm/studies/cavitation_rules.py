@@ -252,23 +252,41 @@ def plot_orbits(results: list[dict], clearance: float, t_settle: float, cases: l
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     n = len(cases)
     cols = min(n, 4)
     rows = int(math.ceil(n / cols))
     fig, axes = plt.subplots(rows, cols, figsize=(3.3 * cols, 3.3 * rows), squeeze=False)
     by = {(r["case"], r["rule"]): r for r in results}
+    marker = {"gumbel": "x", "swift-stieber": "+", "jfo": "o"}
     for ax, case in zip(axes.flat, cases):
+        points = []
         for rule in RULES:
             res = by.get((case, rule))
             if res is None or not res["status"].startswith("ok"):
                 continue
             m = res["t"] >= t_settle
             # gravity down the page: X1 across, X2 downwards
-            ax.plot(res["x"][m, 0] / clearance, -res["x"][m, 1] / clearance, color=COLOUR[rule], lw=1.2 if rule == "jfo" else 0.9,
-                    label=LABEL[rule], ls="-" if rule == "jfo" else "--")
+            x1, x2 = res["x"][m, 0] / clearance, -res["x"][m, 1] / clearance
+            points.append(np.column_stack([x1, x2]))
+            style = dict(color=COLOUR[rule], label=LABEL[rule])
+            if max(np.ptp(x1), np.ptp(x2)) < 1e-3:
+                # a settled equilibrium: a line of zero length would not show, so a marker at the point
+                ax.plot([x1.mean()], [x2.mean()], ls="none", marker=marker[rule], ms=7, mfc="none", **style)
+            else:
+                ax.plot(x1, x2, lw=1.2 if rule == "jfo" else 0.9, ls="-" if rule == "jfo" else "--", **style)
+        if points:
+            # one square window round every rule's orbit (at least 0.05 c across), so that none is cut
+            allp = np.vstack(points)
+            lo, hi = allp.min(axis=0), allp.max(axis=0)
+            centre, half = 0.5 * (lo + hi), max(0.55 * float(np.max(hi - lo)), 0.025)
+            ax.set_xlim(centre[0] - half, centre[0] + half)
+            ax.set_ylim(centre[1] - half, centre[1] + half)
         ax.set_title(f"{case}: {labels.get(case, '')}", fontsize=8)
         ax.set_aspect("equal")
+        ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
+        ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
     for ax in list(axes.flat)[n:]:
