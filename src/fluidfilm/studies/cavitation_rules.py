@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 
 from fluidfilm.core.bearing import JournalBearing
+from fluidfilm.studies.figure_style import square_window
 from fluidfilm.characteristics.static import load_along_gravity
 from fluidfilm.characteristics.stability import threshold_speed
 from fluidfilm.reynolds import elrod_adams as ea
@@ -278,11 +279,7 @@ def plot_orbits(results: list[dict], clearance: float, t_settle: float, cases: l
                 ax.plot(x1, x2, lw=1.2 if rule == "jfo" else 0.9, ls="-" if rule == "jfo" else "--", **style)
         if points:
             # one square window round every rule's orbit (at least 0.05 c across), so that none is cut
-            allp = np.vstack(points)
-            lo, hi = allp.min(axis=0), allp.max(axis=0)
-            centre, half = 0.5 * (lo + hi), max(0.55 * float(np.max(hi - lo)), 0.025)
-            ax.set_xlim(centre[0] - half, centre[0] + half)
-            ax.set_ylim(centre[1] - half, centre[1] + half)
+            square_window(ax, np.vstack(points), 0.025)
         ax.set_title(f"{case}: {labels.get(case, '')}", fontsize=8)
         ax.set_aspect("equal")
         ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))

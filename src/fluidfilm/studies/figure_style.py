@@ -81,3 +81,13 @@ def reference_range(values, pad: float = 0.15, log: bool = False, include: Seque
     a, b = float(v.min()), float(v.max())
     span = max(b - a, 1e-12 + 0.1 * max(abs(a), abs(b)))
     return a - pad * span, b + pad * span
+
+
+def square_window(ax, points: np.ndarray, min_half: float, y_down: bool = False) -> None:
+    """A square window round every point of ``points`` (n x 2), centred on their box (not their mean, so that a
+    lopsided orbit is not cut), at least ``2 min_half`` across; ``y_down`` puts the y axis's larger values at
+    the bottom (gravity down the page)."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    mid, half = 0.5 * (lo + hi), max(min_half, 0.55 * float((hi - lo).max()))
+    ax.set_xlim(mid[0] - half, mid[0] + half)
+    ax.set_ylim(*((mid[1] + half, mid[1] - half) if y_down else (mid[1] - half, mid[1] + half)))

@@ -32,6 +32,7 @@ from fluidfilm.rotor.integrate import Trajectory, simulate
 from fluidfilm.rotor.metrics import compare_orbits, is_satisfactory, orbit_stats
 from fluidfilm.rotor.model import Rotor
 from fluidfilm.surrogate.film_memory import MemorySurrogate, film_gain, memory_inputs
+from fluidfilm.studies.figure_style import square_window
 
 INPUTS = ()
 OUTPUTS = {"model_dir": ["."], "report_dir": ["jfo_surrogate.json", "jfo_surrogate_cases.csv"],
@@ -298,11 +299,7 @@ def plot_orbits(rows: list[dict], clearance: float, t_settle: float):
         ax.plot(r["_x"][-1, 0] / clearance, r["_x"][-1, 1] / clearance, "x", color="tab:red", ms=6)
         # the box round both settled orbits (centred on it, not on the orbit's mean: a lopsided orbit is not cut)
         both = np.vstack([r["_xref"][r["_tref"] >= t_settle], r["_x"][r["_t"] >= t_settle]]) / clearance
-        lo, hi = both.min(axis=0), both.max(axis=0)
-        mid = 0.5 * (lo + hi)
-        span = max(0.05, 0.55 * float((hi - lo).max()))
-        ax.set_xlim(mid[0] - span, mid[0] + span)
-        ax.set_ylim(mid[1] + span, mid[1] - span)  # gravity down the page
+        square_window(ax, both, 0.05, y_down=True)  # gravity down the page
         ax.set_title(f"{r['case']}: RMS {r['rms_pct']:.2f} % c")
         ax.set_aspect("equal", adjustable="box")
         ax.set_xlabel("X1 / c")
