@@ -18,6 +18,9 @@
 #   make ross-peer                 ROSS 3.1 (external peer, its own .venv-ross, Python 3.13) vs ours:
 #                                  benchmarks/bench_ross_peer.py, then the ROSS adapter's report (bench_ross_adapter.py)
 #   make ross-env / test-ross      build .venv-ross only / run the ROSS adapter's tests in it
+#   make variants                  the long variants outside the pipeline's budget, each to a committed report:
+#                                  universal-train, jfo-surrogate-seeds, train-time-ranking, paper-scale-ablation
+#                                  (below, beside their targets)
 #   make universal-weights         copy the trained universal surrogate (models/universal) into the package
 #   make kernel-source             the generated kernels of the universal surrogate, as Python files to read:
 #                                  build/kernels/ (fluidfilm.surrogate.kernels.write_kernel_sources)
@@ -128,8 +131,44 @@ ROSS_FF_STAMP   := $(ROSS_VENV)/.fluidfilm
 # +-10-point interval; this runs the same study (same data, protocol and seeds) at three times the subsample
 # until its interval reaches the same target: does the result hold at a larger size? Interrupted, it
 # resumes at the next seed (cache/train_time_ci).
-# the universal surrogate's shipped weights: copy the pipeline's trained ones (models/universal, stage
-# universal_train) into the package, with their checksums; commit them, then `dvc repro universal_evaluate`
+# The long variants, outside `make reproduce` (its budget is 60 min on the project's two cores), each writing a
+# committed report that the pipeline's report and the README read (with the machine and date it ran on):
+#   universal-train       the universal surrogate's dataset and training (~15 min): models/universal, and
+#                         reports/universal_train.json: are they the shipped weights, bit for bit?
+#   jfo-surrogate-seeds   the JFO surrogate's fit from four more seeds, each through the seven cases (~6 min;
+#                         the training paths come from build/jfo_surrogate_paths when the stage ran here):
+#                         reports/jfo_surrogate_seeds.json
+#   train-time-ranking    the training-time study at twice the subsample (24 seeds): the same ranking?
+#                         (~3 min after the stage, whose seeds it takes from cache/train_time):
+#                         reports/train_time_ranking.json
+#   paper-scale-ablation  the paper's split network at 40 k samples, one ingredient changed at a time (~5 min):
+#                         reports/paper_scale_ablation.json
+.PHONY: universal-train jfo-surrogate-seeds train-time-ranking paper-scale-ablation variants
+variants: universal-train jfo-surrogate-seeds train-time-ranking paper-scale-ablation
+
+universal-train: setup
+	$(PY) experiments/universal.py part=dataset
+	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/universal.py part=train
+	$(PY) -m fluidfilm.reporting.readme
+
+jfo-surrogate-seeds: setup
+	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/jfo_surrogate.py 'jfo_surrogate.other_seeds=[1,2,3,4]' \
+	    model_dir=build/jfo_surrogate_seeds/model report_dir=build/jfo_surrogate_seeds \
+	    figure_dir=build/jfo_surrogate_seeds seeds_out=reports/jfo_surrogate_seeds.json
+	$(PY) -m fluidfilm.reporting.readme
+
+train-time-ranking: setup
+	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/train_time.py ranking_check.enabled=true \
+	    out=reports/train_time_ranking.json
+	$(PY) -m fluidfilm.reporting.readme
+
+paper-scale-ablation: setup
+	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/paper_scale.py 'sizes=[]' ablation.enabled=true \
+	    out=reports/paper_scale_ablation.json figure=build/paper_scale_ablation.png
+	$(PY) -m fluidfilm.reporting.readme
+
+# the universal surrogate's shipped weights: copy the trained ones (models/universal, `make universal-train`)
+# into the package, with their checksums; commit them, then `dvc repro universal_evaluate`
 .PHONY: universal-weights
 universal-weights: setup
 	$(PY) -c "from fluidfilm.studies.universal_study import install_weights; install_weights('models/universal', 'src/fluidfilm/surrogate/universal_weights')"

@@ -420,3 +420,20 @@ def test_a_stopped_pipeline_keeps_the_times_of_the_stages_it_finished(tmp_path, 
     assert full["stage_runs"]["dataset"]["date"] != "2026-12-01" and set(full["stage_runs"]) == {
         "dataset", "train_best", "ablation"}
     assert full["stages_total_s"] == pytest.approx(sum(full["stages"].values()), abs=0.05)
+
+
+def test_a_stage_that_left_dvc_yaml_leaves_the_pipelines_total(tmp_path):
+    """A long variant moved out of dvc.yaml (to a make target) must not count in make reproduce's total."""
+    from fluidfilm.workflow import pipeline
+
+    (tmp_path / "dvc.yaml").write_text("stages:\n  dataset:\n    cmd: c\n  train_best_seeds:\n    foreach: [1]\n"
+                                       "    do:\n      cmd: c\n")
+    (tmp_path / "reports").mkdir()
+    (tmp_path / "reports" / "reproduce_timing.json").write_text(json.dumps(
+        {"full": {"stages": {"dataset": 10.0, "train_best_seeds@1": 20.0, "universal_train": 900.0},
+                  "stage_runs": {k: {"date": "d", "machine": "m"} for k in ("dataset", "train_best_seeds@1",
+                                                                              "universal_train")}}}))
+    pipeline.record_timing(tmp_path, "full", {"dataset": 12.0})
+    full = json.loads((tmp_path / "reports" / "reproduce_timing.json").read_text())["full"]
+    assert full["stages"] == {"dataset": 12.0, "train_best_seeds@1": 20.0} and set(full["stage_runs"]) == set(full["stages"])
+    assert full["stages_total_s"] == 32.0

@@ -690,7 +690,7 @@ def test_the_configured_step_counts_refit_the_shipped_weights_bit_for_bit(tmp_pa
         np.testing.assert_array_equal(b, bs)
 
 
-def test_the_evaluation_says_whether_the_pipelines_training_gave_the_shipped_weights(tmp_path):
+def test_the_readme_says_whether_the_training_gave_the_shipped_weights(tmp_path):
     from fluidfilm.reporting.readme import _weights_reproduced
     from fluidfilm.studies.universal_study import compare_weights
     from fluidfilm.surrogate.universal import WEIGHTS_DIR
@@ -705,8 +705,9 @@ def test_the_evaluation_says_whether_the_pipelines_training_gave_the_shipped_wei
     assert found["gumbel"] == {"identical": True, "max_rel_diff": 0.0}
     assert not found["swift-stieber"]["identical"]
     assert found["swift-stieber"]["max_rel_diff"] == pytest.approx(1e-3, rel=1e-9)
-    text = _weights_reproduced(found)
+    text = _weights_reproduced({"weights_reproduced": found, "machine": "M", "date": "D"})
     assert "gumbel: the shipped weights, bit for bit" in text and "swift-stieber: other weights" in text
+    assert "(`make universal-train`, outside the pipeline's budget; M, D)" in text and _weights_reproduced(None) == ""
     assert compare_weights(tmp_path / "nothing")["gumbel"] == {"missing": True}
 
 

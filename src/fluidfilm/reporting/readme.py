@@ -548,7 +548,7 @@ def _jfo_surrogate_clause(reports: Path) -> str:
     """The README's clause on the JFO film's surrogate with memory, where its stage ran."""
     if not (reports / "jfo_surrogate.json").exists():
         return ""
-    js = _load(reports, "jfo_surrogate.json")
+    js = report.with_variants(reports, "jfo_surrogate.json")
     m = js["metrics"]
     others = [len(v["satisfactory_cases"]) for k, v in js.get("seeds", {}).items() if k != str(js.get("seed", 0))]
     spread = (f"{min(others)}-{max(others)}" if min(others) != max(others) else f"{min(others)}") if others else ""
@@ -565,7 +565,7 @@ def render_jfo_surrogate(reports: Path) -> str:
     and the wall times side by side."""
     import pandas as pd
 
-    js = _load(reports, "jfo_surrogate.json")
+    js = report.with_variants(reports, "jfo_surrogate.json")
     cases = pd.read_csv(reports / "jfo_surrogate_cases.csv")
     st = js["settings"]
     rows = [[r.case, _num(r.ref_span, ".3f"), _num(r.rms_pct, ".2f"), _num(r.hausdorff_pct, ".2f"),
@@ -584,7 +584,9 @@ def render_jfo_surrogate(reports: Path) -> str:
                       "surrogate [ms]", "speed-up"], rows)
             + f"\n\n**{m['satisfactory_cases_jfo_surrogate']} of {len(rows)} cases satisfactory** "
             f"({js['satisfactory_cases'] or 'none'}); median speed-up per trajectory "
-            f"{m['speedup_trajectory_jfo_surrogate']:,.0f}x. The same fit from other seeds: "
+            f"{m['speedup_trajectory_jfo_surrogate']:,.0f}x. The same fit from other seeds"
+            + "".join(sorted({f" (`make jfo-surrogate-seeds`: {v['from']})" for v in js.get("seeds", {}).values()
+                              if "from" in v})) + ": "
             + "; ".join(f"seed {k}: {len(v['satisfactory_cases'])} of {len(rows)} ({v['satisfactory_cases'] or 'none'}), "
                         f"largest RMS {v['rms_pct_max']:.2f} % of c, held-out force error {100 * v['val_rel_rmse']:.1f} %"
                         for k, v in js.get("seeds", {}).items() if k != str(js.get("seed", 0)))
@@ -716,14 +718,19 @@ def render_universal(reports: Path) -> str:
     return (_table(["quantity", "measured", "goal", "met"], rows)
             + f"\nPer cavitation rule: {by_rule}. Against the published table (its feed at the maximum film "
               f"thickness, our plain bearing none): S within {rb['max_S_err_pct']:.1f} %, attitude within "
-              f"{rb['max_phi_err_pct']:.1f} %.\n" + _weights_reproduced(u.get("weights_reproduced")))
+              f"{rb['max_phi_err_pct']:.1f} %.\n" + _weights_reproduced(_optional(reports, "universal_train.json")))
 
 
-def _weights_reproduced(found: Mapping | None) -> str:
-    """Whether the pipeline's own training gave the shipped weights (``weights_reproduced``: evaluations since
-    2026-12-04, sixth session)."""
-    if not found:
+def _optional(reports: Path, name: str) -> dict | None:
+    return _load(reports, name) if (reports / name).exists() else None
+
+
+def _weights_reproduced(record: Mapping | None) -> str:
+    """Whether the training gave the shipped weights: ``reports/universal_train.json``, committed by
+    ``make universal-train`` (``weights_reproduced`` per rule, the machine and the date)."""
+    if not record:
         return ""
+    found = record["weights_reproduced"]
 
     def says(rule: str, r: Mapping) -> str:
         if r.get("missing"):
@@ -734,7 +741,8 @@ def _weights_reproduced(found: Mapping | None) -> str:
             return f"{rule}: networks of another shape (a smaller profile's)"
         return f"{rule}: other weights (differences up to {r['max_rel_diff']:.3g} x an array's largest entry)"
 
-    return ("\nThe pipeline's own training (`universal_train`, `models/universal`) against the shipped weights: "
+    return ("\nThe training (`make universal-train`, outside the pipeline's budget; "
+            f"{record['machine']}, {record['date']}) against the shipped weights: "
             + "; ".join(says(rule, r) for rule, r in found.items()) + ".\n")
 
 
@@ -759,7 +767,7 @@ def _paper_26_in(study: Mapping) -> str:
 
 
 def render_train_time(reports: Path) -> str:
-    tt = _load(reports, "train_time.json")
+    tt = report.with_variants(reports, "train_time.json")
     lines = [
         f"Protocol `{tt['train_time_protocol']}`, {tt['train_time_samples_per_seed']:,} samples per seed drawn from the "
         f"{tt['dataset_samples']:,}-sample paper dataset, {tt['train_time_seeds']} seeds; every network stopped by the "

@@ -39,6 +39,11 @@ OUTPUTS = {"model_dir": ["."], "report_dir": ["jfo_surrogate.json", "jfo_surroga
            "figure_dir": ["jfo_surrogate_orbits.png"]}
 
 
+def outputs(cfg) -> dict:
+    """``OUTPUTS``, and ``seeds_out`` where given (``make jfo-surrogate-seeds``: the committed per-seed record)."""
+    return OUTPUTS | ({"seeds_out": [""]} if cfg.get("seeds_out") else {})
+
+
 def tracking_run(cfg):
     return "jfo_surrogate", None
 
@@ -394,5 +399,13 @@ def run(cfg):
                            "jfo_surrogate_orbit_rms_pct_c_max": float(table.rms_pct.max()),
                            "jfo_surrogate_val_rel_rmse": res["val_rel_rmse"]}}
     io.write_json(report_dir / "jfo_surrogate.json", summary)
+    if cfg.get("seeds_out"):
+        # the per-seed record on its own (make jfo-surrogate-seeds; the pipeline runs the shipped seed only, within
+        # its budget): the report merges it into the stage's (reporting.report.with_variants)
+        from fluidfilm.perf.benchmarking import machine
+
+        io.write_json(Path(cfg["seeds_out"]), {"seeds": summary["seeds"], "settings": summary["settings"],
+                                               "n_paths": summary["n_paths"], "machine": machine(),
+                                               "date": time.strftime("%Y-%m-%d"), "wall_s": summary["wall_s"]})
     print(table[["case", "status", "rms_pct", "hausdorff_pct", "satisfactory", "speedup"]].to_string(index=False))
     return summary
