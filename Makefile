@@ -164,7 +164,8 @@ train-time-ranking: setup
 
 paper-scale-ablation: setup
 	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/paper_scale.py 'sizes=[]' ablation.enabled=true \
-	    out=reports/paper_scale_ablation.json figure=build/paper_scale_ablation.png
+	    cache_dir=cache/paper_scale_ablation out=reports/paper_scale_ablation.json \
+	    figure=build/paper_scale_ablation.png
 	$(PY) -m fluidfilm.reporting.readme
 
 # the universal surrogate's shipped weights: copy the trained ones (models/universal, `make universal-train`)
@@ -206,11 +207,13 @@ train-time-full-scale: setup
 #                         project's two cores)
 LM_DEVICE ?= null
 CURVE_BUDGET_S ?= null
+# (its own figure goes to build/: reports/figures/paper_scale_curve.png is the report stage's, drawn from every
+# paper_scale report, and a target outside the pipeline writes no stage's output)
 paper-scale-curve: setup
 	$(PY) experiments/paper_scale.py 'sizes=[160000,640000,2560000]' ablation.enabled=false \
 	    'size_budget_s=$(CURVE_BUDGET_S)' protocol.device=$(LM_DEVICE) \
 	    cache_dir=models/paper_scale_curve out=reports/paper_scale_curve.json \
-	    figure=reports/figures/paper_scale_curve.png \
+	    figure=build/paper_scale_curve.png \
 	    'include_reports=[reports/paper_scale.json,reports/paper_full_scale.json]'
 
 FULL_SCALE_BUDGET_S ?= null

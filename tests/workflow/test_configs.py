@@ -305,3 +305,34 @@ def test_every_makefile_study_command_composes(target, study, overrides):
 def test_the_makefile_runs_every_long_variant():
     targets = {t for t, _, _ in _makefile_study_commands()}
     assert {"universal-train", "jfo-surrogate-seeds", "train-time-ranking", "paper-scale-ablation"} <= targets
+
+
+def _dvc_outs() -> list[Path]:
+    import yaml
+
+    stages = yaml.safe_load((CONF.parent / "dvc.yaml").read_text())["stages"]
+    outs = []
+    for st in stages.values():
+        for o in (st.get("do") or st).get("outs") or []:
+            name = o if isinstance(o, str) else next(iter(o))
+            if "${" not in name:
+                outs.append(Path(name))
+    return outs
+
+
+@pytest.mark.parametrize("target,study,overrides", _makefile_study_commands(),
+                         ids=lambda v: v if isinstance(v, str) else None)
+def test_no_makefile_study_command_writes_into_a_stage_output(target, study, overrides):
+    """A variant outside the pipeline must not write into a DVC stage's output: paper-scale-ablation once kept
+    its finished models in paper_scale's persistent cache/paper_scale, and `dvc repro` then reran that stage."""
+    import importlib
+
+    cfg = _compose(study, overrides)
+    mod = importlib.import_module(f"fluidfilm.studies.{study}" if study != "universal" else "fluidfilm.studies.universal_study")
+    written = mod.outputs(cfg) if hasattr(mod, "outputs") else getattr(mod, "OUTPUTS", {})
+    outs = _dvc_outs()
+    for key in {*written, "cache_dir"}:   # what the study says it writes, and its resume cache
+        value = cfg.get(key)
+        if value:
+            p = Path(str(value))
+            assert not any(p == o or o in p.parents for o in outs), f"make {target}: {key}={value} is a stage's output"
