@@ -153,7 +153,7 @@ universal-train: setup
 
 jfo-surrogate-seeds: setup
 	FLUIDFILM_UPDATE_TRACKED=1 $(PY) experiments/jfo_surrogate.py 'jfo_surrogate.other_seeds=[1,2,3,4]' \
-	    model_dir=build/jfo_surrogate_seeds/model report_dir=build/jfo_surrogate_seeds \
+	    jfo_surrogate.timing_repeats=0 model_dir=build/jfo_surrogate_seeds/model report_dir=build/jfo_surrogate_seeds \
 	    figure_dir=build/jfo_surrogate_seeds seeds_out=reports/jfo_surrogate_seeds.json
 	$(PY) -m fluidfilm.reporting.readme
 

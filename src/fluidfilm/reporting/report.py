@@ -72,9 +72,26 @@ def _load(path: Path) -> Any:
     return json.loads(Path(path).read_text())
 
 
-#: the long variants outside the pipeline's 60-minute budget: a stage's report and the committed report of the
-#: Makefile target that runs its variant (each with the machine and date it ran on)
-VARIANT_REPORTS = {"train_time.json": "train_time_ranking.json", "jfo_surrogate.json": "jfo_surrogate_seeds.json"}
+def _merge_ranking_check(out: dict, variant: dict, source: str) -> None:
+    """``make train-time-ranking``'s ranking check, where the stage's own run has none."""
+    if "ranking_check" not in out and "ranking_check" in variant:
+        out["ranking_check"] = dict(variant["ranking_check"], **{"from": source})
+
+
+def _merge_seeds(out: dict, variant: dict, source: str) -> None:
+    """``make jfo-surrogate-seeds``'s other training seeds, and the least count of satisfactory cases over all."""
+    seeds = dict(out.get("seeds", {}))
+    for k, rec in variant.get("seeds", {}).items():
+        seeds.setdefault(k, dict(rec, **{"from": source}))
+    out["seeds"] = seeds
+    out.setdefault("metrics", {})["satisfactory_cases_jfo_surrogate_min_over_seeds"] = min(
+        len(s["satisfactory_cases"]) for s in seeds.values())
+
+
+#: the long variants outside the pipeline's 60-minute budget: a stage's report -> the committed report of the
+#: Makefile target that runs its variant (with the machine and date it ran on), and how its part is merged in
+VARIANT_REPORTS = {"train_time.json": ("train_time_ranking.json", _merge_ranking_check),
+                   "jfo_surrogate.json": ("jfo_surrogate_seeds.json", _merge_seeds)}
 
 
 def with_variants(report_dir: Path | str, name: str) -> dict:
@@ -99,21 +116,11 @@ def with_variants(report_dir: Path | str, name: str) -> dict:
     """
     rd = Path(report_dir)
     out = _load(rd / name)
-    extra = VARIANT_REPORTS.get(name)
+    extra, merge = VARIANT_REPORTS.get(name, (None, None))
     if extra is None or not (rd / extra).exists():
         return out
     v = _load(rd / extra)
-    source = f"reports/{extra} ({v['machine']}, {v['date']})"
-    if name == "train_time.json" and "ranking_check" not in out and "ranking_check" in v:
-        out["ranking_check"] = dict(v["ranking_check"], **{"from": source})
-    if name == "jfo_surrogate.json":
-        seeds = dict(out.get("seeds", {}))
-        for k, rec in v.get("seeds", {}).items():
-            if k not in seeds:
-                seeds[k] = dict(rec, **{"from": source})
-        out["seeds"] = seeds
-        out.setdefault("metrics", {})["satisfactory_cases_jfo_surrogate_min_over_seeds"] = min(
-            len(s["satisfactory_cases"]) for s in seeds.values())
+    merge(out, v, f"reports/{extra} ({v['machine']}, {v['date']})")
     return out
 
 
