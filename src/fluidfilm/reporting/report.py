@@ -10,7 +10,7 @@ calls these.
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -90,8 +90,9 @@ def _merge_seeds(out: dict, variant: dict, source: str) -> None:
 
 #: the long variants outside the pipeline's 60-minute budget: a stage's report -> the committed report of the
 #: Makefile target that runs its variant (with the machine and date it ran on), and how its part is merged in
-VARIANT_REPORTS = {"train_time.json": ("train_time_ranking.json", _merge_ranking_check),
-                   "jfo_surrogate.json": ("jfo_surrogate_seeds.json", _merge_seeds)}
+VARIANT_REPORTS: dict[str, tuple[str, Callable[[dict, dict, str], None]]] = {
+    "train_time.json": ("train_time_ranking.json", _merge_ranking_check),
+    "jfo_surrogate.json": ("jfo_surrogate_seeds.json", _merge_seeds)}
 
 
 def with_variants(report_dir: Path | str, name: str) -> dict:
@@ -116,8 +117,10 @@ def with_variants(report_dir: Path | str, name: str) -> dict:
     """
     rd = Path(report_dir)
     out = _load(rd / name)
-    extra, merge = VARIANT_REPORTS.get(name, (None, None))
-    if extra is None or not (rd / extra).exists():
+    if name not in VARIANT_REPORTS:
+        return out
+    extra, merge = VARIANT_REPORTS[name]
+    if not (rd / extra).exists():
         return out
     v = _load(rd / extra)
     merge(out, v, f"reports/{extra} ({v['machine']}, {v['date']})")
