@@ -107,15 +107,77 @@ def run_scenario(name: str, sc: dict, cfg: dict, seeds) -> dict:
            "eps_true_max": float(np.max(np.hypot(x_true[:, 0], x_true[:, 1])) / b_plant.clearance),
            "orbit_pk_pk_um": [float(np.ptp(x_true[:, 0]) * 1e6), float(np.ptp(x_true[:, 1]) * 1e6)],
            "seeds": seeds}
+    res["bound"] = _bound(orbit, sc, cfg, model, told)
     per_seed, series = [], None
     for seed in seeds:
-        one, ser = _score_seed(orbit, seed, sc, cfg, model, told)
+        one, ser = _score_seed(orbit, seed, sc, cfg, model, told, batch=res["bound"] is not None)
         per_seed.append(one)
         series = series or ser
     res.update({k: per_seed[0][k] for k in ("n_samples", "t_eval_s", "n_eval")})
     res.update(aggregate(per_seed))
     res["per_seed"] = per_seed
     return {"result": res, "series": series}
+
+
+#: an efficient estimator's median |error| over noise draws is at least this many of the bound's standard deviation
+#: (the median of |e| for e ~ N(0, sigma^2); a window's RMS of an error that wanders within it is larger)
+EFFICIENT_MEDIAN = 0.6745
+
+
+def _bound(orbit, sc: dict, cfg: dict, model, told) -> dict | None:
+    """The record's information bound (``estimation.bound``) where the scenario's parameters are constant and its
+    model is the estimator's (no change, no force the model lacks, not a blind spot): one standard deviation of the
+    relative load, imbalance and viscosity errors at ``eval_after_s``, as the RMS over the evaluation window and at
+    the record's end, and what ``bound_long_s`` of the same record would give (the bound's model continues the
+    orbit); with the slow-roll vector exact and with the benchmark's error."""
+    from fluidfilm.estimation.bound import information_bound
+
+    scenario = orbit.scenario
+    vals = np.asarray(scenario.values, dtype=float)
+    if (np.ptp(vals, axis=0).max() > 0.0 or sc.get("trip") or sc.get("blind_spot") or sc.get("changes")
+            or scenario.force_2x or orbit.stopped_early):
+        return None
+    plant = cfg["plant"]
+    t_eval = float(cfg["eval_after_s"])
+    t_end = float(orbit.t[-1])
+    if t_end <= t_eval:
+        return None
+    t_long = max(float(cfg.get("bound_long_s", 4.0)), t_end)
+    grid = np.arange(t_eval, t_end + 0.5 / scenario.fs, 0.005)
+    out: dict = {"long_s": t_long}
+    keys = ("load_rel", "imbalance_rel", "viscosity_rel")
+    for label, err in (("exact_runout", 0.0), ("slow_roll_error", float(plant["slow_roll_error"]))):
+        b = information_bound(model, scenario.speed_rpm, told.mass, vals[0], orbit.x_true[0, :2],
+                              orbit.x_true[0, 2:], t_long, scenario.fs, scenario.noise, scenario.lsb, err,
+                              sgn=scenario.sgn, times=np.append(grid, t_long))
+        n = grid.size
+        out[label] = {"at_eval": {k: float(b[k][0]) for k in keys}, "end": {k: float(b[k][n - 1]) for k in keys},
+                      "window_rms": {k: float(np.sqrt(np.mean(b[k][:n] ** 2))) for k in keys},
+                      "long": {k: float(b[k][-1]) for k in keys}}
+    return out
+
+
+def _batch(rec, known, est, model, told, plant: dict) -> dict | None:
+    """The batch maximum a posteriori fit (``estimation.bound.batch_fit``) of a constant-parameter record, started
+    from the filter: its relative errors at the record's end (it uses the whole record, as the bound's ``end``)."""
+    from fluidfilm.estimation.bound import batch_fit
+    from fluidfilm.estimation.estimator import shaft_angle
+    from fluidfilm.estimation.plant import runout_signal
+
+    sc = rec.scenario
+    f = rec.frame
+    t = f["time"].to_numpy(dtype=float)
+    y = f[["x", "y"]].to_numpy(dtype=float) - runout_signal(known, shaft_angle(t, f["speed"].to_numpy(dtype=float)))
+    z0 = est.zs[0] if est.zs is not None else est.z[0]
+    theta0 = np.concatenate([z0[:4], est.z[-1, 4:9]])
+    tic = time.perf_counter()
+    fit = batch_fit(t, y, model, sc.speed_rpm, told.mass, theta0, sc.noise, sc.lsb, float(plant["slow_roll_error"]),
+                    sgn=sc.sgn)
+    th, tv = fit["theta"], rec.truth[-1]
+    return {"load_rel_err": float(math.hypot(th[4] - tv[0], th[5] - tv[1]) / math.hypot(tv[0], tv[1])),
+            "imbalance_rel_err": float(abs(math.hypot(th[6], th[7]) / math.hypot(tv[2], tv[3]) - 1.0)),
+            "viscosity_rel_err": float(abs(th[8] / tv[4] - 1.0)), "iterations": int(fit["iterations"]),
+            "fit_s": time.perf_counter() - tic}
 
 
 ERROR_KEYS = ("load_rel_err", "imbalance_rel_err", "imbalance_phase_err_deg", "viscosity_rel_err")
@@ -132,6 +194,12 @@ def aggregate(per_seed: list[dict]) -> dict:
         if rows:
             out[label] = {k: float(np.median([r[k] for r in rows])) for k in ERROR_KEYS}
             out[label + "_worst"] = {k: float(max(r[k] for r in rows)) for k in ERROR_KEYS}
+    for label in ("filter_end", "batch"):
+        rows = [p[label] for p in per_seed if p.get(label)]
+        if rows:
+            keys = ("load_rel_err", "imbalance_rel_err", "viscosity_rel_err")
+            out[label] = {k: float(np.median([r[k] for r in rows])) for k in keys}
+            out[label + "_rms"] = {k: float(np.sqrt(np.mean([r[k] ** 2 for r in rows]))) for k in keys}
     b = [p["baseline"]["load_rel_err"] for p in per_seed]
     out["baseline"] = {"load_rel_err": float(np.median(b)), "load_rel_err_worst": float(max(b)),
                        "viscosity_assumed": per_seed[0]["baseline"]["viscosity_assumed"]}
@@ -151,9 +219,10 @@ def aggregate(per_seed: list[dict]) -> dict:
     return out
 
 
-def _score_seed(orbit, seed: int, sc: dict, cfg: dict, model, told) -> tuple[dict, dict]:
+def _score_seed(orbit, seed: int, sc: dict, cfg: dict, model, told, batch: bool = False) -> tuple[dict, dict]:
     """One noise seed of a scenario: the probe record, the estimator and the baseline on it, and the errors over
-    the evaluation window."""
+    the evaluation window; where ``batch`` (a constant-parameter record), also the filter's and the batch fit's
+    errors at the record's end (what the bound's ``end`` compares with)."""
     from fluidfilm.estimation import EstimatorSettings, estimate
     from fluidfilm.estimation.plant import probe_record
 
@@ -193,6 +262,13 @@ def _score_seed(orbit, seed: int, sc: dict, cfg: dict, model, told) -> tuple[dic
         rms = lambda e: float(np.sqrt(np.mean(e[win] ** 2)))   # noqa: E731
         res[label] = {"load_rel_err": rms(load_err), "imbalance_rel_err": rms(imb_err),
                       "imbalance_phase_err_deg": rms(phase_err), "viscosity_rel_err": rms(visc_err)}
+    if batch:
+        tv, zl = truth[-1], est.z[-1]
+        res["filter_end"] = {
+            "load_rel_err": float(math.hypot(zl[4] - tv[0], zl[5] - tv[1]) / math.hypot(tv[0], tv[1])),
+            "imbalance_rel_err": float(abs(math.hypot(zl[6], zl[7]) / math.hypot(tv[2], tv[3]) - 1.0)),
+            "viscosity_rel_err": float(abs(zl[8] / tv[4] - 1.0))}
+        res["batch"] = _batch(rec, known, est, model, told, plant)
     zl, sl = est.z[-1], est.sd[-1]
     res["sd_end"] = {   # the filter's own 1-sigma at the record's end, relative: what the data resolve (observability)
         "load_rel": float(math.hypot(zl[4] * sl[4], zl[5] * sl[5]) / max(math.hypot(zl[4], zl[5]) ** 2, 1e-30)),
@@ -254,6 +330,20 @@ def summarise(results: dict, cfg: dict) -> dict:
         "estimator_trip_flag_rate": float(np.mean(fired)) if fired else float("nan"),
         "estimator_noise_seeds": int(min(len(r["per_seed"]) for r in results.values())),
     })
+    # what the records resolve at best (estimation.bound): the largest window-RMS bound over the scenarios it
+    # covers (constant parameters), with the benchmark's slow-roll error, and whether the goal lies below what an
+    # efficient estimator would reach at the median there
+    bounded = [n for n in normal if results[n].get("bound")]
+    below = {}
+    for key, short in (("load_rel_err", "load_rel"), ("imbalance_rel_err", "imbalance_rel"),
+                       ("viscosity_rel_err", "viscosity_rel")):
+        if bounded:
+            worst_b = max(bounded, key=lambda n: results[n]["bound"]["slow_roll_error"]["window_rms"][short])
+            sig = results[worst_b]["bound"]["slow_roll_error"]["window_rms"][short]
+            metrics[f"estimator_{key}_bound"] = sig
+            below[key.removesuffix("_rel_err")] = {
+                "scenario": worst_b, "bound_sd": sig, "efficient_median_at_least": EFFICIENT_MEDIAN * sig,
+                "goal_out_of_reach": bool(EFFICIENT_MEDIAN * sig > cfg["goals"][key])}
     goals = cfg["goals"]
     met = {
         "load": metrics["estimator_load_rel_err"] <= goals["load_rel_err"],
@@ -264,7 +354,7 @@ def summarise(results: dict, cfg: dict) -> dict:
         "flags": (metrics["estimator_false_flag_rate"] <= goals["false_flag_rate"]
                   and metrics["estimator_trip_flag_rate"] >= 1.0),
     }
-    return {"metrics": metrics, "goals_met": met, "ratios": ratios, "worst_scenario": {
+    return {"metrics": metrics, "goals_met": met, "ratios": ratios, "information_bound": below, "worst_scenario": {
         key: max(normal, key=lambda n: results[n]["filter"][key])
         for key in ("load_rel_err", "imbalance_rel_err", "viscosity_rel_err")}}
 
@@ -356,6 +446,7 @@ def run(cfg):
     summary = summarise(results, c)
     report = {"metrics": summary["metrics"], "goals": c["goals"], "goals_met": summary["goals_met"],
               "ratios_vs_centreline": summary["ratios"], "worst_scenario": summary["worst_scenario"],
+              "information_bound": summary["information_bound"],
               "scenarios": results, "description": c["description"], "plant": {k: v for k, v in c["plant"].items()},
               "estimator": c["estimator"], "eval_after_s": c["eval_after_s"], "wall_s": time.perf_counter() - tic,
               "machine": _machine()}
