@@ -89,6 +89,26 @@ def test_a_load_step_is_followed_and_the_mismatch_flag_stays_quiet(reference, mo
     assert not est.mismatch.any()
 
 
+def test_a_coast_down_is_followed_with_the_speed_signal(reference, model):
+    # the speed falls 25 % over the record: the film force at the measured speed, the imbalance's push with
+    # (omega^2 + i alpha) in plant and filter alike; the parameters stay those of the steady run
+    row = (0.0, W, 1e-3 * math.cos(0.6), 1e-3 * math.sin(0.6), 1.0)
+    sc = Scenario(name="coast_down", times=(0.0, 1.0), values=(row, row), speed_rpm=6000.0, mass=MASS, t_end=0.3,
+                  runout_known_error=0.0, speed_knots=((0.0, 6000.0), (0.3, 4500.0)))
+    rec = simulate_plant(reference, sc, dt=2e-5, seed=4)
+    assert rec.frame["speed"].iloc[0] == pytest.approx(6000.0) and rec.frame["speed"].iloc[-1] == pytest.approx(4500.0)
+    est = estimate(rec.frame, model, MASS, runout=rec.runout_supplied, settings=EstimatorSettings(smooth=False))
+    late = est.t >= 0.2
+    z = est.z[late]
+    assert np.sqrt(np.mean((np.hypot(z[:, 4], z[:, 5] - W) / W) ** 2)) < 0.03
+    assert np.sqrt(np.mean((np.hypot(z[:, 6], z[:, 7]) / 1e-3 - 1.0) ** 2)) < 0.03
+    assert np.sqrt(np.mean((z[:, 8] - 1.0) ** 2)) < 0.03
+    assert not est.mismatch.any()
+    # the imbalance's phase is tied to the speed signal's integral: a steady-speed angle would drift by radians
+    phase = np.degrees(np.arctan2(z[:, 7], z[:, 6]))
+    assert np.all(np.abs(phase - math.degrees(0.6)) < 3.0)
+
+
 def test_the_mismatch_flag_fires_on_a_force_the_model_lacks(reference, model):
     rec = simulate_plant(reference, _scenario("misalignment", force_2x=150.0, t_end=0.3), dt=2e-5, seed=3)
     est = estimate(rec.frame, model, MASS, runout=rec.runout_supplied, settings=EstimatorSettings(smooth=False))

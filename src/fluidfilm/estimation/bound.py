@@ -27,25 +27,29 @@ PARAMETERS = ("x1", "x2", "v1", "v2", "W1", "W2", "a", "b", "s",
               "rx1c", "rx1s", "rx2c", "rx2s", "ry1c", "ry1s", "ry2c", "ry2s")
 
 
-def _trajectory(kernel, params, omega, mass, sgn, dt, n_steps, every, x0, v0, theta_p, clear2):
+def _trajectory(kernel, params, table, mass, sgn, dt, n_steps, every, x0, v0, theta_p, clear2):
     from fluidfilm.estimation.plant import _plant_loop
 
     kv = np.vstack([theta_p, theta_p]).astype(float)
     out = np.zeros((n_steps // every + 1, 4))
-    n = _plant_loop(kernel, params, omega, mass, float(sgn), 0.0, dt, n_steps, every, 0.0,
+    n = _plant_loop(kernel, params, *table, mass, float(sgn), 0.0, dt, n_steps, every, 0.0,
                     np.asarray(x0, float), np.asarray(v0, float), np.array([0.0, 1.0e9]), kv, clear2, out)
     if n < out.shape[0]:
         raise ValueError("the bound's rotor reached the sleeve: the scenario is outside the force model")
     return out[:, :2]
 
 
-def sensitivities(kernel, params, clearance: float, speed_rpm: float, mass: float, theta, n_samples: int,
+def sensitivities(kernel, params, clearance: float, speed_rpm, mass: float, theta, n_samples: int,
                   fs: float, sgn: int = 1, substeps: int = 5, runout: bool = True):
     """The probes' noise-free signal (n_samples, 2) at ``theta`` = (x1, x2, v1, v2, W1, W2, a, b, s[, runout
     errors]) and its derivatives (n_samples, 2, 9 or 17) by central differences of the rotor (RK4, ``substeps``
     per sample) in the speed kernel's force model; the runout errors' columns are cos and sin of the shaft angle's
-    1x and 2x per axis (the signal includes their values)."""
-    omega = speed_rpm * 2.0 * math.pi / 60.0
+    1x and 2x per axis (the signal includes their values). ``speed_rpm``: a steady speed or knots ((t, rpm), ...)
+    (``plant.speed_table``)."""
+    from fluidfilm.estimation.plant import shaft_speed, speed_table
+
+    table = speed_table(speed_rpm)
+    omega = float(np.max(table[1]))
     c = clearance
     th = np.asarray(theta, dtype=float)
     dt = 1.0 / fs / substeps
@@ -58,7 +62,7 @@ def sensitivities(kernel, params, clearance: float, speed_rpm: float, mass: floa
     clear2 = (0.999 * c) ** 2
 
     def traj(t9):
-        return _trajectory(kernel, params, omega, mass, sgn, dt, n_steps, substeps, t9[:2], t9[2:4], t9[4:9], clear2)
+        return _trajectory(kernel, params, table, mass, sgn, dt, n_steps, substeps, t9[:2], t9[2:4], t9[4:9], clear2)
 
     n_par = 17 if runout else 9
     S = np.zeros((n_samples, 2, n_par))
@@ -69,7 +73,7 @@ def sensitivities(kernel, params, clearance: float, speed_rpm: float, mass: floa
         lo[j] -= steps[j]
         S[:, :, j] = (traj(hi) - traj(lo)) / (2.0 * steps[j])
     if runout:
-        phase = omega * np.arange(n_samples) / fs
+        _, phase = shaft_speed(speed_rpm, np.arange(n_samples) / fs)
         for axis in range(2):
             for order in (1, 2):
                 col = 9 + 4 * axis + 2 * (order - 1)
@@ -80,7 +84,7 @@ def sensitivities(kernel, params, clearance: float, speed_rpm: float, mass: floa
     return y, S
 
 
-def information_bound(model, speed_rpm: float, mass: float, values, x0, v0, t_end: float, fs: float,
+def information_bound(model, speed_rpm, mass: float, values, x0, v0, t_end: float, fs: float,
                       noise: float, lsb: float = 0.0, slow_roll_error: float = 0.0, sgn: int = 1,
                       substeps: int = 5, times=None) -> dict:
     """The Cramér-Rao bound of the relative load, imbalance and viscosity errors from ``t_end`` s of probes.
@@ -88,7 +92,8 @@ def information_bound(model, speed_rpm: float, mass: float, values, x0, v0, t_en
     Parameters
     ----------
     model : a force model with a speed kernel (the estimator's: the universal surrogate at mu0).
-    speed_rpm, mass : the steady shaft speed [rpm] and the rotor mass per bearing [kg].
+    speed_rpm, mass : the shaft speed [rpm], steady or knots ((t [s], rpm), ...) linear between
+        (``plant.speed_table``), and the rotor mass per bearing [kg].
     values : (W1, W2, a, b, s), the true constant parameters ([N], [N], [kg m], [kg m], mu/mu0).
     x0, v0 : the journal's true position [m] and velocity [m/s] at the record's first sample.
     t_end, fs : the record's length [s] and the probes' sampling [Hz].
@@ -123,7 +128,10 @@ def information_bound(model, speed_rpm: float, mass: float, values, x0, v0, t_en
     if sk is None:
         raise ValueError(f"{model.name}: the bound needs a force model with a speed kernel")
     kernel, params = sk
-    for name, v in (("t_end", t_end), ("fs", fs), ("noise", noise), ("mass", mass), ("speed_rpm", speed_rpm)):
+    checks = [("t_end", t_end), ("fs", fs), ("noise", noise), ("mass", mass)]
+    if np.ndim(speed_rpm) == 0:
+        checks.append(("speed_rpm", speed_rpm))
+    for name, v in checks:
         if not (math.isfinite(v) and v > 0.0):
             raise ValueError(f"information_bound: {name} = {v!r}; a positive number is needed")
     if not (math.isfinite(slow_roll_error) and slow_roll_error >= 0.0):
@@ -152,13 +160,13 @@ def information_bound(model, speed_rpm: float, mass: float, values, x0, v0, t_en
     gW[4:6] = p[:2] / W ** 2          # d(|W|/|W|)/d(W1, W2): the load's relative error
     gu = np.zeros(n_par)
     gu[6:8] = p[2:4] / u ** 2
-    out = {"load_rel": [], "imbalance_rel": [], "viscosity_rel": []}
+    out: dict[str, list[float]] = {"load_rel": [], "imbalance_rel": [], "viscosity_rel": []}
     scale = np.sqrt(np.maximum(np.diagonal(info[-1]), 1e-300)) + np.sqrt(prior)   # conditioning of the inverse
     for k in keep:
         J = (info[k] + np.diag(prior)) / np.outer(scale, scale)
         C = np.linalg.pinv(J, rcond=1e-14, hermitian=True) / np.outer(scale, scale)
-        out["load_rel"].append(math.sqrt(max(gW @ C @ gW, 0.0)))
-        out["imbalance_rel"].append(math.sqrt(max(gu @ C @ gu, 0.0)))
+        out["load_rel"].append(math.sqrt(max(float(gW @ C @ gW), 0.0)))
+        out["imbalance_rel"].append(math.sqrt(max(float(gu @ C @ gu), 0.0)))
         out["viscosity_rel"].append(math.sqrt(max(C[8, 8], 0.0)) / p[4])
     res: dict = {"t": t[keep]}
     res.update({k: np.asarray(v) for k, v in out.items()})
@@ -171,15 +179,15 @@ def information_bound(model, speed_rpm: float, mass: float, values, x0, v0, t_en
     return res
 
 
-def batch_fit(t, y, model, speed_rpm: float, mass: float, theta0, noise: float, lsb: float = 0.0,
+def batch_fit(t, y, model, speed_rpm, mass: float, theta0, noise: float, lsb: float = 0.0,
               slow_roll_error: float = 0.0, sgn: int = 1, substeps: int = 3, iterations: int = 8) -> dict:
     """The offline batch counterpart that attains the bound: a maximum a posteriori fit of constant parameters.
 
     Gauss-Newton on the probes' residual over the whole record (``t`` (N,) [s] at a steady sampling, ``y`` (N, 2)
     [m] with the supplied slow-roll runout already removed), with the slow-roll vector's error as 8 parameters
     under a Gaussian prior of ``slow_roll_error`` [m] (left out where 0); ``theta0`` = (x1, x2, v1, v2, W1, W2, a,
-    b, s) the start (the filter's estimate). Assumes what the bound assumes: the parameters constant over the
-    record, the speed steady. Returns ``theta`` (the fit), ``cov`` (its covariance: the bound at the fit),
+    b, s) the start (the filter's estimate); ``speed_rpm`` steady or knots ((t, rpm), ...). Assumes what the bound
+    assumes: the parameters constant over the record. Returns ``theta`` (the fit), ``cov`` (its covariance: the bound at the fit),
     ``iterations`` and the residual's RMS per probe [m].
     """
     sk = model.speed_kernel()

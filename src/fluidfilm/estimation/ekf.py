@@ -12,8 +12,9 @@ as a ratio s = mu / mu0 to the description's mu0.
 Process model (the rotor of ``fluidfilm.rotor.integrate``, paper eq. 4), with F0 the force model's film force
 at the description's viscosity and the measured shaft speed omega::
 
-    m dV/dt = s F0(X, V; omega) + W + omega^2 (a cos p - b sin p, sgn (a sin p + b cos p)),  dX/dt = V,
-    p = the shaft's angle (the speed signal's integral), W, a, b, s: random walks.
+    m dV/dt = s F0(X, V; omega) + W + Re/Im[(omega^2 + i alpha) (a + i b) e^{ip}] (Im times sgn),  dX/dt = V,
+    p = the shaft's angle (the speed signal's integral), alpha = d omega/dt (0 at a steady speed: the imbalance's
+    tangential push while the speed changes), W, a, b, s: random walks.
 
 ``s F0`` is exact for the universal model and the Reynolds solvers without supply pressure: the film
 pressure is linear in mu for both cavitation rules (docs/universal.md). The imbalance term is linear in
@@ -51,22 +52,23 @@ def _force(kernel, params, omega, x1, x2, v1, v2, r_max):
 
 
 @njit(cache=True, inline="always")
-def _deriv(kernel, params, z, omega, p, inv_m, sgn, r_max, out):
-    """dz/dt into ``out`` (the process model of the module docstring) at shaft angle ``p``."""
+def _deriv(kernel, params, z, omega, alpha, p, inv_m, sgn, r_max, out):
+    """dz/dt into ``out`` (the process model of the module docstring) at shaft angle ``p``, speed ``omega`` and
+    angular acceleration ``alpha`` (the imbalance's tangential push while the speed changes)."""
     f1, f2 = _force(kernel, params, omega, z[0], z[1], z[2], z[3], r_max)
     w2 = omega * omega
     cp = math.cos(p)
     sp = math.sin(p)
     out[0] = z[2]
     out[1] = z[3]
-    out[2] = (z[8] * f1 + z[4] + w2 * (z[6] * cp - z[7] * sp)) * inv_m
-    out[3] = (z[8] * f2 + z[5] + sgn * w2 * (z[6] * sp + z[7] * cp)) * inv_m
+    out[2] = (z[8] * f1 + z[4] + z[6] * (w2 * cp - alpha * sp) - z[7] * (w2 * sp + alpha * cp)) * inv_m
+    out[3] = (z[8] * f2 + z[5] + sgn * (z[6] * (w2 * sp + alpha * cp) + z[7] * (w2 * cp - alpha * sp))) * inv_m
     for i in range(4, N_STATE):
         out[i] = 0.0
 
 
 @njit(cache=True, inline="always")
-def _jacobian(kernel, params, z, omega, p, inv_m, sgn, r_max, hx, hv, A):
+def _jacobian(kernel, params, z, omega, alpha, p, inv_m, sgn, r_max, hx, hv, A):
     """A = d(dz/dt)/dz at z (central differences of the force in X and V)."""
     for i in range(N_STATE):
         for j in range(N_STATE):
@@ -100,10 +102,10 @@ def _jacobian(kernel, params, z, omega, p, inv_m, sgn, r_max, hx, hv, A):
     sp = math.sin(p)
     A[2, 4] = inv_m
     A[3, 5] = inv_m
-    A[2, 6] = w2 * cp * inv_m
-    A[2, 7] = -w2 * sp * inv_m
-    A[3, 6] = sgn * w2 * sp * inv_m
-    A[3, 7] = sgn * w2 * cp * inv_m
+    A[2, 6] = (w2 * cp - alpha * sp) * inv_m
+    A[2, 7] = -(w2 * sp + alpha * cp) * inv_m
+    A[3, 6] = sgn * (w2 * sp + alpha * cp) * inv_m
+    A[3, 7] = sgn * (w2 * cp - alpha * sp) * inv_m
     A[2, 8] = f1 * inv_m
     A[3, 8] = f2 * inv_m
 
@@ -120,7 +122,7 @@ def _matmul(A, B, out):
 
 
 @njit(cache=True)
-def _propagate(kernel, params, z, omega, p0, T, nsub, inv_m, sgn, r_max, hx, hv, Phi, A, M, T1, T2, k1, k2, k3,
+def _propagate(kernel, params, z, omega, alpha, p0, T, nsub, inv_m, sgn, r_max, hx, hv, Phi, A, M, T1, T2, k1, k2, k3,
                k4, zt):
     """Advance the mean ``z`` by T (nsub RK4 substeps) and return its transition matrix in ``Phi``."""
     n = N_STATE
@@ -129,7 +131,7 @@ def _propagate(kernel, params, z, omega, p0, T, nsub, inv_m, sgn, r_max, hx, hv,
             Phi[i, j] = 1.0 if i == j else 0.0
     # substeps: at least nsub, more where the film's fastest rate (the velocity block of A) makes the step stiff
     # (the squeeze damping grows like (1 - eps^2)^-1.5): |lambda| h <= 1 keeps RK4 and the Taylor series accurate
-    _jacobian(kernel, params, z, omega, p0, inv_m, sgn, r_max, hx, hv, A)
+    _jacobian(kernel, params, z, omega, alpha, p0, inv_m, sgn, r_max, hx, hv, A)
     rate = abs(A[2, 2]) + abs(A[3, 3]) + abs(A[2, 3]) + abs(A[3, 2])
     rate = max(rate, math.sqrt(abs(A[2, 0]) + abs(A[3, 1]) + abs(A[2, 1]) + abs(A[3, 0])))
     n_sub = max(nsub, int(math.ceil(rate * T)))
@@ -139,7 +141,7 @@ def _propagate(kernel, params, z, omega, p0, T, nsub, inv_m, sgn, r_max, hx, hv,
     for sub in range(n_sub):
         p = p0 + omega * sub * h
         if sub > 0:
-            _jacobian(kernel, params, z, omega, p, inv_m, sgn, r_max, hx, hv, A)
+            _jacobian(kernel, params, z, omega, alpha, p, inv_m, sgn, r_max, hx, hv, A)
         # M = I + Ah + (Ah)^2/2 + (Ah)^3/6 + (Ah)^4/24 (Horner: I + Ah(I + Ah/2(I + Ah/3(I + Ah/4))))
         for i in range(n):
             for j in range(n):
@@ -154,26 +156,26 @@ def _propagate(kernel, params, z, omega, p0, T, nsub, inv_m, sgn, r_max, hx, hv,
             for j in range(n):
                 Phi[i, j] = T2[i, j]
         # RK4 of the mean
-        _deriv(kernel, params, z, omega, p, inv_m, sgn, r_max, k1)
+        _deriv(kernel, params, z, omega, alpha, p, inv_m, sgn, r_max, k1)
         for i in range(n):
             zt[i] = z[i] + 0.5 * h * k1[i]
-        _deriv(kernel, params, zt, omega, p + 0.5 * omega * h, inv_m, sgn, r_max, k2)
+        _deriv(kernel, params, zt, omega, alpha, p + 0.5 * omega * h, inv_m, sgn, r_max, k2)
         for i in range(n):
             zt[i] = z[i] + 0.5 * h * k2[i]
-        _deriv(kernel, params, zt, omega, p + 0.5 * omega * h, inv_m, sgn, r_max, k3)
+        _deriv(kernel, params, zt, omega, alpha, p + 0.5 * omega * h, inv_m, sgn, r_max, k3)
         for i in range(n):
             zt[i] = z[i] + h * k3[i]
-        _deriv(kernel, params, zt, omega, p + omega * h, inv_m, sgn, r_max, k4)
+        _deriv(kernel, params, zt, omega, alpha, p + omega * h, inv_m, sgn, r_max, k4)
         for i in range(n):
             z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
 @njit(cache=True)
-def run_filter(kernel, params, y, omega, phase, dt, mass, sgn, nsub, z0, P0, q, r_var, r_max, hx, hv,
+def run_filter(kernel, params, y, omega, alpha, phase, dt, mass, sgn, nsub, z0, P0, q, r_var, r_max, hx, hv,
                out_z, out_P, out_nis, store, Phi_all, Ppred_all, zpred_all, p_inflate, inflate_thr, inflate_tau,
                inflate_cooldown, out_inflated):
-    """The EKF over a record: y (N, 2) probe positions [m] (runout removed), omega (N,) [rad/s], phase (N,)
-    [rad] at each sample, sample interval dt [s]; q (9,) process noise densities (per second), r_var the
+    """The EKF over a record: y (N, 2) probe positions [m] (runout removed), omega (N,) [rad/s], alpha (N,)
+    [rad/s^2] (the speed's rate of change), phase (N,) [rad] at each sample, sample interval dt [s]; q (9,) process noise densities (per second), r_var the
     probes' noise variance [m^2]. Writes the filtered mean (N, 9), covariance (N, 9, 9) and the normalised
     innovation squared (N,); where ``store``, the transitions, predicted covariances and means for the
     smoother (``run_smoother``).
@@ -205,8 +207,8 @@ def run_filter(kernel, params, y, omega, phase, dt, mass, sgn, nsub, z0, P0, q, 
     for k in range(N):
         out_inflated[k] = False
         if k > 0:
-            _propagate(kernel, params, z, omega[k - 1], phase[k - 1], dt, nsub, inv_m, sgn, r_max, hx, hv, Phi, A,
-                       M, T1, T2, k1, k2, k3, k4, zt)
+            _propagate(kernel, params, z, omega[k - 1], alpha[k - 1], phase[k - 1], dt, nsub, inv_m, sgn, r_max, hx,
+                       hv, Phi, A, M, T1, T2, k1, k2, k3, k4, zt)
             # P = Phi P Phi^T + Q dt
             _matmul(Phi, P, T1)
             for i in range(n):

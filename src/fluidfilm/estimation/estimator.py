@@ -139,6 +139,8 @@ def estimate(frame: pd.DataFrame, model, mass: float, runout=None, settings: Est
     if runout is not None:
         y = y - runout_signal(runout, phase)
     omega = speed * 2.0 * math.pi / 60.0
+    # the speed's rate of change: the imbalance's tangential push in a run-up or coast-down (0 at a steady speed)
+    alpha = np.gradient(omega, t) if t.size > 1 else np.zeros_like(omega)
     dt = float(np.median(np.diff(t)))
     c = model.clearance
     sk = model.speed_kernel()
@@ -181,10 +183,10 @@ def estimate(frame: pd.DataFrame, model, mass: float, runout=None, settings: Est
     tau = max(1.0, st.inflate_tau_s / dt)
     cool = max(1, int(round(st.inflate_cooldown_s / dt)))
     r_max = 0.99 * c
-    args = (kernel, params, y, omega, phase, dt, float(mass), float(sgn), int(st.nsub), z0, P0, q, r_var, r_max, hx, hv,
+    args = (kernel, params, y, omega, alpha, phase, dt, float(mass), float(sgn), int(st.nsub), z0, P0, q, r_var, r_max, hx, hv,
             out_z, out_P, nis, store, Phi_all, Ppred_all, zpred_all, p_infl, float(st.inflate_threshold), tau, cool,
             inflated)
-    ekf.run_filter(*args[:2], y[:2], omega[:2], phase[:2], *args[5:16], out_z[:2], out_P[:2], nis[:2], store,
+    ekf.run_filter(*args[:2], y[:2], omega[:2], alpha[:2], phase[:2], *args[6:17], out_z[:2], out_P[:2], nis[:2], store,
                    Phi_all[:2] if store else Phi_all, Ppred_all[:2] if store else Ppred_all,
                    zpred_all[:2] if store else zpred_all, p_infl, float(st.inflate_threshold), tau, cool,
                    inflated[:2])          # compile outside the timing

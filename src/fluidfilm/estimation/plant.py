@@ -25,7 +25,9 @@ class Scenario:
     """One synthetic plant record.
 
     ``times`` (K,) [s] and ``values`` (K, 5) [W1, W2, a, b, s]: the true parameters, linear between the knots
-    and held outside; ``speed_rpm`` the (steady) shaft speed; ``mass`` the rotor mass per bearing [kg];
+    and held outside; ``speed_rpm`` the shaft speed, or ``speed_knots`` ((t, rpm), ...) a profile linear between
+    its knots and held outside (a run-up, a coast-down; the imbalance then also pushes tangentially with the
+    shaft's angular acceleration); ``mass`` the rotor mass per bearing [kg];
     ``t_end`` [s] of record after ``t_warm`` [s] of settling (not recorded); probe settings: ``fs`` [Hz],
     ``noise`` [m] (standard deviation), ``lsb`` [m] (quantisation step), ``runout`` [m] per axis as
     ((c1, s1), (c2, s2)) harmonics of the shaft angle; ``runout_known_error``: the fraction of the runout the
@@ -47,6 +49,7 @@ class Scenario:
     runout_known_error: float = 0.05
     sgn: int = 1
     force_2x: float = 0.0                         # N, a twice-per-rev force the estimator's model lacks
+    speed_knots: tuple = ()                       # ((t [s], rpm), ...): a speed profile, linear between; () steady
     bearing: dict = field(default_factory=dict)   # overrides of the description's bearing (the plant's own)
     description: str = ""
 
@@ -57,25 +60,81 @@ class Scenario:
         return np.stack([np.interp(t, tt, vv[:, j]) for j in range(vv.shape[1])], axis=-1)
 
 
+def speed_table(speed) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The shaft's speed as the compiled loops read it: knot times [s] (the first at 0), the angular speed at
+    each [rad/s] and the shaft angle there [rad] (0 at t = 0). ``speed``: a steady speed [rpm], or knots
+    ((t, rpm), ...) linear between and held outside.
+
+    >>> st, sw, sp = speed_table(((0.0, 6000.0), (0.1, 3000.0)))
+    >>> round(float(sp[-1]), 6) == round(0.1 * (6000.0 + 3000.0) / 2 * 2 * math.pi / 60.0, 6)
+    True
+    """
+    if np.ndim(speed) == 0:
+        w = float(speed) * 2.0 * math.pi / 60.0
+        return np.array([0.0, 1.0]), np.array([w, w]), np.array([0.0, w])
+    k = np.asarray(speed, dtype=float)
+    if k.ndim != 2 or k.shape[1] != 2 or k.shape[0] < 1 or np.any(np.diff(k[:, 0]) <= 0) or k[0, 0] < 0.0:
+        raise ValueError(f"speed knots {speed!r}: rows (t [s], rpm) at increasing times from t >= 0 expected")
+    if np.any(k[:, 1] <= 0.0) or not np.all(np.isfinite(k)):
+        raise ValueError(f"speed knots {speed!r}: positive, finite speeds [rpm] expected")
+    if k[0, 0] > 0.0:
+        k = np.vstack([[0.0, k[0, 1]], k])
+    if k.shape[0] == 1:
+        k = np.vstack([k, [k[0, 0] + 1.0, k[0, 1]]])
+    st = k[:, 0].copy()
+    sw = k[:, 1] * 2.0 * math.pi / 60.0
+    sp = np.concatenate([[0.0], np.cumsum(0.5 * (sw[1:] + sw[:-1]) * np.diff(st))])
+    return st, sw, sp
+
+
+def shaft_speed(speed, t) -> tuple[np.ndarray, np.ndarray]:
+    """The angular speed [rad/s] and the shaft angle [rad] at times ``t`` [s] (``speed`` as ``speed_table``)."""
+    st, sw, sp = speed_table(speed)
+    t = np.asarray(t, dtype=float)
+    w = np.empty(t.size)
+    p = np.empty(t.size)
+    for i, ti in enumerate(t.ravel()):
+        w[i], _, p[i] = _speed(ti, st, sw, sp)
+    return w.reshape(t.shape), p.reshape(t.shape)
+
+
 @njit(cache=True, inline="always")
-def _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t, x1, x2, v1, v2):
+def _speed(t, st, sw, sp):
+    """(omega, d omega/dt, shaft angle) at t: omega linear between the knots (st, sw), held outside; sp the angle
+    at each knot."""
+    n = st.size
+    if t <= st[0]:
+        return sw[0], 0.0, sp[0] + sw[0] * (t - st[0])
+    if t >= st[n - 1]:
+        return sw[n - 1], 0.0, sp[n - 1] + sw[n - 1] * (t - st[n - 1])
+    k = np.searchsorted(st, t) - 1
+    alpha = (sw[k + 1] - sw[k]) / (st[k + 1] - st[k])
+    d = t - st[k]
+    return sw[k] + alpha * d, alpha, sp[k] + sw[k] * d + 0.5 * alpha * d * d
+
+
+@njit(cache=True, inline="always")
+def _acc(kernel, params, st, sw, sp, inv_m, sgn, f2x, kt, kv, t, x1, x2, v1, v2):
     W1 = np.interp(t, kt, kv[:, 0])
     W2 = np.interp(t, kt, kv[:, 1])
     ua = np.interp(t, kt, kv[:, 2])
     ub = np.interp(t, kt, kv[:, 3])
     s = np.interp(t, kt, kv[:, 4])
+    omega, alpha, p = _speed(t, st, sw, sp)
     f1, f2 = kernel(params, omega, x1, x2, v1, v2)
     w2 = omega * omega
-    cp = math.cos(omega * t)
-    sp = math.sin(omega * t)
-    c2p = math.cos(2.0 * omega * t)
-    s2p = math.sin(2.0 * omega * t)
-    return ((s * f1 + W1 + w2 * (ua * cp - ub * sp) + f2x * c2p) * inv_m,
-            (s * f2 + W2 + sgn * w2 * (ua * sp + ub * cp) + f2x * s2p) * inv_m)
+    cp = math.cos(p)
+    sn = math.sin(p)
+    c2p = math.cos(2.0 * p)
+    s2p = math.sin(2.0 * p)
+    # the imbalance (ua + i ub) e^{ip} pushes with (omega^2 + i alpha): centrifugal and, while the speed changes,
+    # tangential
+    return ((s * f1 + W1 + ua * (w2 * cp - alpha * sn) - ub * (w2 * sn + alpha * cp) + f2x * c2p) * inv_m,
+            (s * f2 + W2 + sgn * (ua * (w2 * sn + alpha * cp) + ub * (w2 * cp - alpha * sn)) + f2x * s2p) * inv_m)
 
 
 @njit(cache=True)
-def _plant_loop(kernel, params, omega, mass, sgn, f2x, dt, n_steps, record_every, t0, x0, v0, kt, kv, clear2, out):
+def _plant_loop(kernel, params, st, sw, sp, mass, sgn, f2x, dt, n_steps, record_every, t0, x0, v0, kt, kv, clear2, out):
     """RK4 at fixed dt from t0; ``out`` rows: x1, x2, v1, v2 at t0 and every ``record_every`` steps after.
     Returns the rows written (fewer where the journal reached the sleeve: the run stops there)."""
     x1, x2, v1, v2 = x0[0], x0[1], v0[0], v0[1]
@@ -85,16 +144,16 @@ def _plant_loop(kernel, params, omega, mass, sgn, f2x, dt, n_steps, record_every
     for step in range(n_steps):
         t = t0 + step * dt
         h = dt
-        a1, a2 = _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t, x1, x2, v1, v2)
-        b1, b2 = _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t + 0.5 * h, x1 + 0.5 * h * v1, x2 + 0.5 * h * v2,
+        a1, a2 = _acc(kernel, params, st, sw, sp, inv_m, sgn, f2x, kt, kv, t, x1, x2, v1, v2)
+        b1, b2 = _acc(kernel, params, st, sw, sp, inv_m, sgn, f2x, kt, kv, t + 0.5 * h, x1 + 0.5 * h * v1, x2 + 0.5 * h * v2,
                       v1 + 0.5 * h * a1, v2 + 0.5 * h * a2)
         kx1 = v1 + 0.5 * h * a1
         kx2 = v2 + 0.5 * h * a2
-        c1, c2 = _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t + 0.5 * h, x1 + 0.5 * h * kx1, x2 + 0.5 * h * kx2,
+        c1, c2 = _acc(kernel, params, st, sw, sp, inv_m, sgn, f2x, kt, kv, t + 0.5 * h, x1 + 0.5 * h * kx1, x2 + 0.5 * h * kx2,
                       v1 + 0.5 * h * b1, v2 + 0.5 * h * b2)
         lx1 = v1 + 0.5 * h * b1
         lx2 = v2 + 0.5 * h * b2
-        d1, d2 = _acc(kernel, params, omega, inv_m, sgn, f2x, kt, kv, t + h, x1 + h * lx1, x2 + h * lx2,
+        d1, d2 = _acc(kernel, params, st, sw, sp, inv_m, sgn, f2x, kt, kv, t + h, x1 + h * lx1, x2 + h * lx2,
                       v1 + h * c1, v2 + h * c2)
         mx1 = v1 + h * c1
         mx2 = v2 + h * c2
@@ -166,7 +225,8 @@ def plant_orbit(model, scenario: Scenario, dt: float = 5e-6) -> PlantOrbit:
     if sk is None:
         raise ValueError(f"{model.name}: the plant needs a force model with a speed kernel")
     kernel, params = sk
-    omega = scenario.speed_rpm * 2.0 * math.pi / 60.0
+    st, sw, sp = speed_table(scenario.speed_knots or scenario.speed_rpm)
+    omega = float(sw[0])
     omega_ref = model.bearing.speed_rpm * 2.0 * math.pi / 60.0
     vals = np.asarray(scenario.values, dtype=float)
     w0 = vals[0, :2] / vals[0, 4] * (omega_ref / omega)   # the load the model at its own speed and mu0 sees
@@ -180,7 +240,7 @@ def plant_orbit(model, scenario: Scenario, dt: float = 5e-6) -> PlantOrbit:
     kt = np.asarray(scenario.times, dtype=float)
     out = np.zeros((n_steps // record_every + 1, 4))
     tic = time.perf_counter()
-    n = _plant_loop(kernel, params, omega, scenario.mass, float(scenario.sgn), float(scenario.force_2x), dt, n_steps, record_every, t0, x0,
+    n = _plant_loop(kernel, params, st, sw, sp, scenario.mass, float(scenario.sgn), float(scenario.force_2x), dt, n_steps, record_every, t0, x0,
                     np.zeros(2), kt, vals, model.clearance ** 2, out)
     wall = time.perf_counter() - tic
     t_all = t0 + np.arange(n) * record_every * dt
@@ -194,13 +254,13 @@ def probe_record(orbit: PlantOrbit, seed: int = 0) -> PlantRecord:
     """What the probes and the speed pickup record of ``orbit``: runout, noise drawn from ``seed``, quantisation."""
     scenario, t, xs = orbit.scenario, orbit.t, orbit.x_true
     rng = np.random.default_rng(seed)
-    phase = scenario.speed_rpm * 2.0 * math.pi / 60.0 * t
+    w, phase = shaft_speed(scenario.speed_knots or scenario.speed_rpm, t)
     ro = runout_signal(scenario.runout, phase)
     meas = xs[:, :2] + ro + rng.normal(0.0, scenario.noise, size=(t.size, 2))
     if scenario.lsb > 0.0:
         meas = np.round(meas / scenario.lsb) * scenario.lsb
     frame = pd.DataFrame({"time": t, "x": meas[:, 0], "y": meas[:, 1],
-                          "speed": np.full(t.size, scenario.speed_rpm)})
+                          "speed": w * 60.0 / (2.0 * math.pi)})
     known = tuple(tuple((c * (1.0 - scenario.runout_known_error), s * (1.0 - scenario.runout_known_error))
                         for c, s in axis) for axis in scenario.runout)
     return PlantRecord(scenario, frame, scenario.truth(t), xs, known, orbit.wall_s, orbit.stopped_early)

@@ -1065,9 +1065,11 @@ def render_online_assessment(reports: Path) -> str:
         role = "made to trip: " + r["trip"].replace("_", " ") if r.get("trip") else (
             "blind spot" if r.get("blind_spot") else "")
         both = lambda k: f"{_pct(f.get(k))} / {_pct(fw.get(k))}"   # noqa: E731
+        bound = (r.get("bound") or {}).get("slow_roll_error", {}).get("window_rms")
         rows.append([f"`{name}`" + (f" ({role})" if role else ""), both("load_rel_err"), both("imbalance_rel_err"),
                      _num(f.get("imbalance_phase_err_deg"), ".2f", "°"), both("viscosity_rel_err"),
                      _pct(r["sd_end"]["viscosity_rel"]),
+                     f"{_pct(bound['load_rel'])} / {_pct(bound['viscosity_rel'])}" if bound else "n/a",
                      f"{_pct(r['baseline']['load_rel_err'])} / {_pct(r['baseline'].get('load_rel_err_worst'))}",
                      ", ".join(fired) or "none", _num(r["us_per_sample"], ".1f")])
     m = oa["metrics"]
@@ -1088,11 +1090,55 @@ def render_online_assessment(reports: Path) -> str:
             f"{m['estimator_trip_flag_rate']:.0%}. Goals met: "
             + ", ".join(k.replace("_", " ") for k, v in met.items() if v) + "; missed: "
             + (", ".join(k.replace("_", " ") for k, v in met.items() if not v) or "none")
-            + f". Measured on {oa['machine']}.")
+            + f". Measured on {oa['machine']}." + _bound_sentence(oa))
     return (_table(["scenario", "load: median / worst", "imbalance: median / worst", "phase (median)",
                     "viscosity: median / worst", "viscosity 1σ at the end (filter's own)",
+                    "information bound 1σ, load / viscosity (window RMS)",
                     "centreline baseline, load: median / worst", "flags (seeds fired)", "µs per sample"], rows)
             + "\n\n" + keys)
+
+
+def _bound_sentence(oa: dict) -> str:
+    """Which accuracy goals lie beyond what the records hold (the information bound, ``estimation.bound``)."""
+    ib = oa.get("information_bound") or {}
+    if not ib:
+        return ""
+    parts = []
+    for key in ("load", "imbalance", "viscosity"):
+        b = ib.get(key)
+        if b:
+            parts.append(f"{key} {_pct(b['bound_sd'])} on `{b['scenario']}`, where an efficient estimator's median "
+                         f"over noise draws would be about {_pct(b['efficient_median'])}: the goal "
+                         + ("lies beyond the record" if b["goal_out_of_reach"] else "is within its reach"))
+    return (" The records' information bound (Cramér-Rao, with the slow-roll vector's error; 1σ as the window's RMS, "
+            "the largest over the constant-parameter scenarios): " + "; ".join(parts) + ".")
+
+
+def render_online_assessment_bound(reports: Path) -> str:
+    """The information bound on other records than the benchmark's: what would close the goals the benchmark's
+    record cannot reach (``bound_what_if`` of the stage)."""
+    oa = _load(reports, "online_assessment.json")
+    what = oa.get("bound_what_if") or {}
+    if not what:
+        return "(no bound_what_if in reports/online_assessment.json)"
+    names = list(what)
+    variants = list(what[names[0]])
+    rows = []
+    for v in variants:
+        first = what[names[0]][v]
+        cells = [f"`{v}`", first["what"], f"{first['t_end']:g} s"]
+        for n in names:
+            r = what[n][v]
+            cells.append(f"{_pct(r['at_eval']['load_rel'])} / {_pct(r['at_eval']['viscosity_rel'])}")
+            cells.append(f"{_pct(r['end']['load_rel'])} / {_pct(r['end']['viscosity_rel'])}")
+        rows.append(cells)
+    head = ["record", "what", "length"]
+    for n in names:
+        head += [f"`{n}`: load / viscosity 1σ at {oa['eval_after_s']:g} s", f"`{n}`: at the record's end"]
+    goals = oa["goals"]
+    return (_table(head, rows) + "\n\n" + f"Goals: load {_pct(goals['load_rel_err'])}, viscosity "
+            f"{_pct(goals['viscosity_rel_err'])}; an efficient estimator's median error over noise draws is about "
+            f"0.67 of the bound's 1σ (the median of |e| for e ~ N(0, σ²)).")
 
 
 def render_online_assessment_summary(reports: Path) -> str:
@@ -1113,7 +1159,11 @@ def render_online_assessment_summary(reports: Path) -> str:
             f"scenarios (" + ", ".join(f"`{n}`" for n in good) + "), where the plants' centreline-to-Sommerfeld "
             f"estimate misses the load by {_pct(base([n for n in good if sc[n]['dynamic']]))} or more; on `{worst}`, "
             f"whose film outweighs the rotor's inertia, it misses by {_pct(sc[worst]['filter']['load_rel_err'])} "
-            f"(the baseline, told the right viscosity, {_pct(sc[worst]['baseline']['load_rel_err'])}). "
+            f"(the baseline, told the right viscosity, {_pct(sc[worst]['baseline']['load_rel_err'])})"
+            + (f", and there the record itself resolves the load to no better than "
+               f"{_pct(oa['information_bound']['load']['bound_sd'])} (1σ, the Cramér-Rao bound of any unbiased "
+               f"estimator)" if (oa.get("information_bound") or {}).get("load", {}).get("scenario") == worst else "")
+            + ". "
             f"{m['estimator_us_per_sample']:.0f} µs per sample on one core; the mismatch and out-of-domain flags "
             + ("fire on the scenarios made to trip them and on no other" if m["estimator_false_flag_rate"] == 0.0
                and m["estimator_trip_flag_rate"] == 1.0 else
@@ -1156,6 +1206,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "figures": render_figures,
     "online_assessment": render_online_assessment,
     "online_assessment_summary": render_online_assessment_summary,
+    "online_assessment_bound": render_online_assessment_bound,
 }
 
 
