@@ -71,6 +71,14 @@ def _descr(cfg_description: dict, overrides) -> dict:
     return d
 
 
+def _told(descr: dict):
+    """The ``BearingDescription`` of a description mapping (its bearing keys; the scenario's extras left out)."""
+    from fluidfilm.estimation.probes import BearingDescription
+
+    keys = ("length", "diameter", "clearance", "speed_rpm", "viscosity", "mass", "cavitation")
+    return BearingDescription.from_mapping({k: v for k, v in descr.items() if k in keys})
+
+
 def scenario_seeds(plant: dict, k: int) -> list[int]:
     """The noise seeds of the ``k``-th scenario: ``plant.seed + k + 100 j`` for j < ``plant.n_seeds`` (j = 0 the
     stage's single seed of before; each seed draws the probes' noise and the slow-roll vector's errors, never the
@@ -82,7 +90,6 @@ def run_scenario(name: str, sc: dict, cfg: dict, seeds) -> dict:
     """Plant, estimator and baseline on one scenario, the plant's orbit once and its probe record once per noise
     seed: the errors, flags and timings per seed, their median and worst over the seeds, and the first seed's
     series for the figure."""
-    from fluidfilm.estimation.probes import BearingDescription
     from fluidfilm.estimation.plant import plant_orbit
     from fluidfilm.reynolds import ReynoldsSolver
     from fluidfilm.surrogate.universal import universal_bearing
@@ -90,10 +97,8 @@ def run_scenario(name: str, sc: dict, cfg: dict, seeds) -> dict:
     seeds = [int(x) for x in (seeds if isinstance(seeds, (list, tuple)) else [seeds])]
     plant = cfg["plant"]
     descr = _descr(cfg["description"], sc.get("bearing"))
-    keys = ("length", "diameter", "clearance", "speed_rpm", "viscosity", "mass", "cavitation")
-    told = BearingDescription.from_mapping({k: v for k, v in descr.items() if k in keys})
-    plant_descr = BearingDescription.from_mapping({k: v for k, v in _descr(descr, sc.get("plant_bearing")).items()
-                                                   if k in keys})
+    told = _told(descr)
+    plant_descr = _told(_descr(descr, sc.get("plant_bearing")))
     scenario = scenario_from_cfg(name, sc, plant, descr)
     b_plant = plant_descr.journal_bearing()
     n_theta = int(plant["grid"][0])
@@ -166,13 +171,11 @@ def what_if(name: str, sc: dict, cfg: dict) -> dict:
     bound needs the start state alone)."""
     from fluidfilm.estimation.bound import information_bound
     from fluidfilm.estimation.plant import plant_orbit
-    from fluidfilm.estimation.probes import BearingDescription
     from fluidfilm.surrogate.universal import universal_bearing
 
     plant = cfg["plant"]
     descr = _descr(cfg["description"], sc.get("bearing"))
-    keys = ("length", "diameter", "clearance", "speed_rpm", "viscosity", "mass", "cavitation")
-    told = BearingDescription.from_mapping({k: v for k, v in descr.items() if k in keys})
+    told = _told(descr)
     model = universal_bearing(told.journal_bearing(), cavitation=told.cavitation)
     scenario = scenario_from_cfg(name, sc, plant, descr)
     vals = np.asarray(scenario.values, dtype=float)
@@ -213,11 +216,15 @@ def _batch(rec, known, est, model, told, plant: dict) -> dict | None:
     tic = time.perf_counter()
     fit = batch_fit(t, y, model, sc.speed_knots or sc.speed_rpm, told.mass, theta0, sc.noise, sc.lsb, float(plant["slow_roll_error"]),
                     sgn=sc.sgn)
-    th, tv = fit["theta"], rec.truth[-1]
-    return {"load_rel_err": float(math.hypot(th[4] - tv[0], th[5] - tv[1]) / math.hypot(tv[0], tv[1])),
-            "imbalance_rel_err": float(abs(math.hypot(th[6], th[7]) / math.hypot(tv[2], tv[3]) - 1.0)),
-            "viscosity_rel_err": float(abs(th[8] / tv[4] - 1.0)), "iterations": int(fit["iterations"]),
-            "fit_s": time.perf_counter() - tic}
+    return dict(_end_errors(fit["theta"], rec.truth[-1]), iterations=int(fit["iterations"]),
+                fit_s=time.perf_counter() - tic)
+
+
+def _end_errors(z, truth) -> dict:
+    """Relative errors of one estimate ``z`` (state order of ``ekf.STATE_NAMES``) against the true (W1, W2, a, b, s)."""
+    return {"load_rel_err": float(math.hypot(z[4] - truth[0], z[5] - truth[1]) / math.hypot(truth[0], truth[1])),
+            "imbalance_rel_err": float(abs(math.hypot(z[6], z[7]) / math.hypot(truth[2], truth[3]) - 1.0)),
+            "viscosity_rel_err": float(abs(z[8] / truth[4] - 1.0))}
 
 
 ERROR_KEYS = ("load_rel_err", "imbalance_rel_err", "imbalance_phase_err_deg", "viscosity_rel_err")
@@ -303,11 +310,7 @@ def _score_seed(orbit, seed: int, sc: dict, cfg: dict, model, told, batch: bool 
         res[label] = {"load_rel_err": rms(load_err), "imbalance_rel_err": rms(imb_err),
                       "imbalance_phase_err_deg": rms(phase_err), "viscosity_rel_err": rms(visc_err)}
     if batch:
-        tv, zl = truth[-1], est.z[-1]
-        res["filter_end"] = {
-            "load_rel_err": float(math.hypot(zl[4] - tv[0], zl[5] - tv[1]) / math.hypot(tv[0], tv[1])),
-            "imbalance_rel_err": float(abs(math.hypot(zl[6], zl[7]) / math.hypot(tv[2], tv[3]) - 1.0)),
-            "viscosity_rel_err": float(abs(zl[8] / tv[4] - 1.0))}
+        res["filter_end"] = _end_errors(est.z[-1], truth[-1])
         res["batch"] = _batch(rec, known, est, model, told, plant)
     zl, sl = est.z[-1], est.sd[-1]
     res["sd_end"] = {   # the filter's own 1-sigma at the record's end, relative: what the data resolve (observability)
